@@ -1,0 +1,51 @@
+// The data model shared by readers, backends, writers and verify.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace cdtgpu {
+
+struct Point3 {
+  double x = 0, y = 0, z = 0;
+  friend bool operator==(const Point3&, const Point3&) = default;
+};
+
+// A constraint polyline as read: a contour (open) or a ring such as a building footprint (closed; the
+// closing edge from the last point back to the first is implied, the first point is not repeated).
+struct Polyline {
+  std::vector<Point3> points;
+  bool closed = false;
+  uint32_t source = 0;  // index into InputSet::sources
+  uint64_t record = 0;  // 1-based record (shapefile) or line (text) in that source, for messages
+};
+
+// What readers repaired instead of dropping; every count is reported in the stats.
+struct Repairs {
+  uint64_t repeated_vertices = 0;    // consecutive equal vertices in a polyline or ring (zero-length segments)
+  uint64_t rings_closed = 0;         // rings whose last vertex did not repeat the first
+  uint64_t degenerate_lines = 0;     // polylines left with one distinct vertex: kept as a point
+  uint64_t null_shapes = 0;          // shapefile NULL shapes (carry no geometry)
+  uint64_t nodata_cells = 0;         // grid cells equal to NODATA_value
+};
+
+struct InputSet {
+  std::vector<std::string> sources;  // file names in the order they were read
+  std::vector<Point3> points;        // loose vertices: DEM points, grid cells, point features
+  std::vector<Polyline> lines;       // constraints
+  Repairs repairs;
+  std::string source_crs_wkt;        // WKT1 of the first .prj seen, if any
+};
+
+using Triangle = std::array<uint32_t, 3>;  // vertex indices, counter-clockwise
+using Edge = std::array<uint32_t, 2>;
+
+// A TIN. Canonical order (canonical.hpp): vertices sorted by (x, y); each triangle starts at its smallest
+// index and stays counter-clockwise; triangles sorted lexicographically.
+struct Mesh {
+  std::vector<Point3> vertices;
+  std::vector<Triangle> triangles;
+};
+
+}  // namespace cdtgpu

@@ -1,0 +1,31 @@
+// What a run reports with --stats: counts, CRS and time per stage.
+#pragma once
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace cdtgpu {
+
+struct RunStats {
+  nlohmann::ordered_json counts = nlohmann::ordered_json::object();
+  std::string crs;
+  std::string backend;
+  std::vector<std::pair<std::string, double>> stage_ms;  // in run order
+  nlohmann::ordered_json gpu_stage_ms = nlohmann::ordered_json::object();  // device timestamps, if any
+
+  nlohmann::ordered_json to_json() const {
+    nlohmann::ordered_json j;
+    j["counts"] = counts;
+    j["crs"] = crs;
+    j["backend"] = backend;
+    nlohmann::ordered_json s = nlohmann::ordered_json::object();
+    for (const auto& [k, v] : stage_ms) s[k] = v;
+    j["stage_ms"] = s;
+    if (!gpu_stage_ms.empty()) j["gpu_stage_ms"] = gpu_stage_ms;
+    return j;
+  }
+};
+
+}  // namespace cdtgpu
