@@ -1,1 +1,64 @@
-// Placeholder replaced by the readers helper.
+// read_input: picks a reader from the file's extension and opens the file, so that every reader sees
+// either a stream (text formats) or a path (shapefiles, which come as several files).
+#include "io/readers.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "core/error.hpp"
+
+namespace cdtgpu {
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+
+// Opens a text input; the checks come first so that a directory or a missing file gets a plain message.
+std::ifstream open_text(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path, 0, "no such file");
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, 0, "is a directory, not a file");
+  // Binary mode: the readers treat '\r' as white space, so CRLF files read the same everywhere.
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw InputError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  return file;
+}
+
+template <typename Reader>
+void read_text_file(const std::string& path, Reader reader, InputSet& in) {
+  std::ifstream file = open_text(path);
+  reader(file, path, in);
+  if (file.bad()) throw InputError(path, 0, "read error");
+}
+
+}  // namespace
+
+void read_input(const std::string& path, const ReadOptions& options, InputSet& in) {
+  if (path == "-") {
+    read_wkt(std::cin, "<stdin>", in);
+    return;
+  }
+  const std::string ext = lower(std::filesystem::path(path).extension().string());
+  if (ext == ".shp")
+    read_shapefile(path, options, in);
+  else if (ext == ".wkt")
+    read_text_file(path, read_wkt, in);
+  else if (ext == ".xyz" || ext == ".csv" || ext == ".txt")
+    read_text_file(path, read_xyz, in);
+  else if (ext == ".asc")
+    read_text_file(path, read_ascii_grid, in);
+  else
+    throw InputError(path, 0,
+                     "unknown input format '" + (ext.empty() ? std::string("(no extension)") : ext) +
+                         "' (expected .shp, .wkt, .xyz, .csv, .txt or .asc, or - for WKT on stdin)");
+}
+
+}  // namespace cdtgpu

@@ -1,0 +1,252 @@
+// Point readers for plain text: XYZ/CSV ("x y z" per line) and ESRI ASCII grids (.asc, one vertex per cell).
+// Numbers go through std::from_chars: locale-free, exact (round-trips what a %.17g writer printed) and fast.
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "core/error.hpp"
+#include "core/repair.hpp"
+#include "io/readers.hpp"
+
+namespace cdtgpu {
+
+namespace {
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+bool is_separator(char c) { return c == ',' || c == ';'; }
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
+  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+// Drops a UTF-8 byte order mark (spreadsheet exports start with one).
+void strip_bom(std::string& line) {
+  if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
+}
+
+enum class Parse { ok, not_a_number, out_of_range };
+
+// Parses a number that must end at `end` or at a character for which `stop` holds.
+template <typename Stop>
+Parse parse_number(const char*& p, const char* end, double& v, Stop stop) {
+  const char* s = p;
+  if (s < end && *s == '+' && s + 1 < end && s[1] != '-') ++s;  // from_chars rejects a leading '+'
+  auto [q, ec] = std::from_chars(s, end, v);
+  if (ec == std::errc::result_out_of_range) return Parse::out_of_range;
+  if (ec != std::errc() || (q < end && !stop(*q))) return Parse::not_a_number;
+  p = q;
+  return Parse::ok;
+}
+
+std::string token_at(const char* p, const char* end) {
+  const char* q = p;
+  while (q < end && !is_space(*q) && !is_separator(*q)) ++q;
+  return std::string(p, q);
+}
+
+// An input that gave nothing to triangulate is a mistake (wrong file, wrong format), not an empty TIN.
+void require_geometry(const InputSet& in, size_t before, const std::string& name) {
+  if (in.points.size() + in.lines.size() == before) throw InputError(name, 0, "no geometry");
+}
+
+uint32_t add_source(InputSet& in, const std::string& name) {
+  in.sources.push_back(name);
+  return uint32_t(in.sources.size() - 1);
+}
+
+}  // namespace
+
+void read_xyz(std::istream& text, const std::string& name, InputSet& in) {
+  const uint32_t source = add_source(in, name);
+  const size_t before = in.points.size() + in.lines.size();
+  auto field_end = [](char c) { return is_space(c) || is_separator(c); };
+  std::string line;
+  uint64_t line_no = 0;
+  bool seen_first = false;  // the first non-blank, non-comment line may be a header
+  while (std::getline(text, line)) {
+    ++line_no;
+    if (line_no == 1) strip_bom(line);
+    const char* p = line.data();
+    const char* end = p + line.size();
+    while (p < end && is_space(*p)) ++p;
+    if (p == end || *p == '#') continue;
+    double v[3];
+    int n = 0;
+    for (; n < 3; ++n) {
+      while (p < end && is_space(*p)) ++p;
+      if (n > 0 && p < end && is_separator(*p)) {
+        ++p;
+        while (p < end && is_space(*p)) ++p;
+      }
+      if (p == end) break;
+      const char* start = p;
+      const Parse r = parse_number(p, end, v[n], field_end);
+      if (r == Parse::ok) continue;
+      if (n == 0 && !seen_first && r == Parse::not_a_number) break;  // header line
+      if (r == Parse::out_of_range)
+        throw InputError(name, line_no, "number out of range in column " + std::to_string(n + 1));
+      const std::string tok = token_at(start, end);
+      throw InputError(name, line_no,
+                       "column " + std::to_string(n + 1) +
+                           (tok.empty() ? std::string(" is empty") : " is not a number: '" + tok + "'"));
+    }
+    const bool header = n == 0 && !seen_first;
+    seen_first = true;
+    if (header) continue;
+    if (n < 3)
+      throw InputError(name, line_no,
+                       "expected x y z, found " + std::to_string(n) + " number" + (n == 1 ? "" : "s"));
+    add_point(in, source, line_no, Point3{v[0], v[1], v[2]});
+  }
+  require_geometry(in, before, name);
+}
+
+namespace {
+
+struct GridHeader {
+  int64_t ncols = -1, nrows = -1;
+  double xll = NAN, yll = NAN, cellsize = NAN, dx = NAN, dy = NAN, nodata = NAN;
+  bool x_center = false, y_center = false, has_nodata = false;
+};
+
+bool starts_number(char c) { return (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.'; }
+
+// Reads "key value" header lines; returns false on the first line that starts with a number (the data).
+bool read_header_line(std::string_view line, uint64_t line_no, const std::string& name, GridHeader& h) {
+  size_t k = 0;
+  while (k < line.size() && !is_space(line[k])) ++k;
+  std::string key(line.substr(0, k));
+  if (starts_number(key[0])) return false;
+  for (char& c : key) c = char(std::tolower(static_cast<unsigned char>(c)));
+  const std::string_view value = trim(line.substr(k));
+  if (value.empty()) throw InputError(name, line_no, "header '" + key + "' has no value");
+  const char* p = value.data();
+  const char* end = p + value.size();
+  if (key == "ncols" || key == "nrows") {
+    int64_t n = 0;
+    auto [q, ec] = std::from_chars(p, end, n);
+    if (ec != std::errc() || q != end || n <= 0)
+      throw InputError(name, line_no, key + " must be a positive integer, not '" + std::string(value) + "'");
+    (key == "ncols" ? h.ncols : h.nrows) = n;
+    return true;
+  }
+  double v = 0;
+  // NODATA_value may be nan (some writers use it); every other value must be finite.
+  if (parse_number(p, end, v, [](char) { return false; }) != Parse::ok ||
+      (!std::isfinite(v) && key != "nodata_value"))
+    throw InputError(name, line_no, key + " must be a finite number, not '" + std::string(value) + "'");
+  if (key == "xllcorner" || key == "xllcenter") {
+    h.xll = v;
+    h.x_center = key == "xllcenter";
+  } else if (key == "yllcorner" || key == "yllcenter") {
+    h.yll = v;
+    h.y_center = key == "yllcenter";
+  } else if (key == "cellsize" || key == "dx" || key == "dy") {
+    if (v <= 0) throw InputError(name, line_no, key + " must be positive");
+    (key == "cellsize" ? h.cellsize : key == "dx" ? h.dx : h.dy) = v;
+  } else if (key == "nodata_value") {
+    h.nodata = v;
+    h.has_nodata = true;
+  } else {
+    throw InputError(name, line_no, "unknown header key '" + key + "'");
+  }
+  return true;
+}
+
+void check_header(GridHeader& h, uint64_t line_no, const std::string& name) {
+  std::string missing;
+  if (h.ncols < 0) missing += " ncols";
+  if (h.nrows < 0) missing += " nrows";
+  if (std::isnan(h.xll)) missing += " xllcorner|xllcenter";
+  if (std::isnan(h.yll)) missing += " yllcorner|yllcenter";
+  if (!std::isnan(h.cellsize)) {
+    if (std::isnan(h.dx)) h.dx = h.cellsize;
+    if (std::isnan(h.dy)) h.dy = h.cellsize;
+  }
+  if (std::isnan(h.dx) || std::isnan(h.dy)) missing += " cellsize|dx+dy";
+  if (!missing.empty()) throw InputError(name, line_no, "grid header lacks" + missing);
+}
+
+}  // namespace
+
+void read_ascii_grid(std::istream& text, const std::string& name, InputSet& in) {
+  const uint32_t source = add_source(in, name);
+  const size_t before = in.points.size() + in.lines.size();
+  GridHeader h;
+  std::string line;
+  uint64_t line_no = 0;
+  bool in_data = false, any_text = false;
+  while (!in_data && std::getline(text, line)) {
+    ++line_no;
+    if (line_no == 1) strip_bom(line);
+    const std::string_view s = trim(line);
+    if (s.empty()) continue;
+    any_text = true;
+    in_data = !read_header_line(s, line_no, name, h);
+  }
+  if (!any_text) throw InputError(name, 0, "no geometry");
+  if (!in_data) {
+    check_header(h, line_no, name);
+    throw InputError(name, line_no, "grid has no data rows");
+  }
+  check_header(h, line_no, name);
+
+  // Cell centres: a corner origin is half a cell off the first centre. Row 0 is the top (northmost) row.
+  const double x0 = h.x_center ? 0.0 : 0.5, y0 = h.y_center ? 0.0 : 0.5;
+  const uint64_t ncols = uint64_t(h.ncols), nrows = uint64_t(h.nrows), total = ncols * nrows;
+  auto value_end = [](char c) { return is_space(c); };
+  uint64_t k = 0;  // cells read so far
+  // Rows are one per line in conforming files; some writers wrap long rows. If the first data line holds
+  // exactly one row, every line must, so a short or long row is reported on its own line.
+  int row_per_line = -1;  // -1: not known yet
+  for (bool more = true; more; more = bool(std::getline(text, line)), line_no += more) {
+    const char* p = line.data();
+    const char* end = p + line.size();
+    uint64_t on_line = 0;
+    const uint64_t k_line = k;
+    for (;;) {
+      while (p < end && is_space(*p)) ++p;
+      if (p == end) break;
+      if (k == total)
+        throw InputError(name, line_no, "more values than ncols x nrows = " + std::to_string(total));
+      const char* start = p;
+      double v = 0;
+      const Parse r = parse_number(p, end, v, value_end);
+      if (r != Parse::ok) {
+        std::string tok(start, size_t(std::find_if(start, end, is_space) - start));
+        throw InputError(
+            name, line_no,
+            r == Parse::out_of_range ? "number out of range: '" + tok + "'" : "not a number: '" + tok + "'");
+      }
+      const uint64_t row = k / ncols, col = k % ncols;
+      ++k;
+      ++on_line;
+      if (h.has_nodata && (v == h.nodata || (std::isnan(h.nodata) && std::isnan(v)))) {
+        ++in.repairs.nodata_cells;
+        continue;
+      }
+      const double x = h.xll + (double(col) + x0) * h.dx;
+      const double y = h.yll + (double(nrows - 1 - row) + y0) * h.dy;
+      add_point(in, source, line_no, Point3{x, y, v});
+    }
+    if (on_line == 0) continue;
+    if (row_per_line < 0) row_per_line = on_line == ncols ? 1 : 0;
+    if (row_per_line == 1 && on_line != ncols)
+      throw InputError(name, line_no,
+                       "row " + std::to_string(k_line / ncols + 1) + " has " + std::to_string(on_line) +
+                           " values, ncols is " + std::to_string(ncols));
+  }
+  if (k < total)
+    throw InputError(
+        name, line_no,
+        "expected ncols x nrows = " + std::to_string(total) + " values, found " + std::to_string(k));
+  require_geometry(in, before, name);
+}
+
+}  // namespace cdtgpu
