@@ -6,19 +6,23 @@ namespace cdtgpu {
 
 struct PreparedInput {
   // Unique by (x, y), sorted lexicographically by (x, y). z of a merged vertex: the z of its first
-  // occurrence in read order (points of a file before its lines, files in command-line order).
+  // occurrence in the order InputSet holds them: every loose point (in.points, in order) before every
+  // polyline vertex (in.lines in order, each line's points in order). With several files this is not read
+  // order: a later file's loose points come before an earlier file's lines.
   std::vector<Point3> vertices;
   // Constraint segments (a < b), unique, no zero-length ones, sorted. Crossings are not resolved here.
   std::vector<Edge> constraints;
   // For each constraint, the index of the input polyline it came from (first one if shared).
   std::vector<uint32_t> constraint_line;
 
-  uint64_t input_points = 0;         // every vertex read (loose points and polyline vertices)
-  uint64_t merged_duplicates = 0;    // input_points - vertices.size()
-  uint64_t z_conflicts = 0;          // merged vertices whose z values differed
-  double max_z_conflict = 0;         // largest |dz| among them
-  uint64_t input_segments = 0;       // segments of all polylines and rings
-  uint64_t duplicate_segments = 0;   // segments equal to an earlier one (shared ring edges, repeated lines)
+  uint64_t input_points = 0;        // every vertex read (loose points and polyline vertices)
+  uint64_t merged_duplicates = 0;   // input_points - vertices.size()
+  uint64_t z_conflicts = 0;         // merged vertices whose z values differed
+  double max_z_conflict = 0;        // largest |dz| among them
+  uint64_t input_segments = 0;      // segments of all polylines and rings
+  uint64_t duplicate_segments = 0;  // segments equal to an earlier one (shared ring edges, repeated lines)
+  // Segments whose two ends are one vertex; add_polyline removes them, so only hand-built lines have any.
+  uint64_t zero_length_segments = 0;
 };
 
 PreparedInput prepare(const InputSet& in);

@@ -1,0 +1,111 @@
+// prepare: merges exact duplicate (x, y) vertices and turns polylines into unique index segments.
+// Cost: two sorts (all occurrences by (x, y), all segments by index pair), O(n log n), no hashing, so the
+// result is the same on every run.
+#include "core/prepare.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace cdtgpu {
+
+namespace {
+
+struct Occurrence {
+  double x, y, z;
+  uint32_t occ;  // position in reading order: in.points first, then the vertices of in.lines
+};
+
+bool xy_less(const Occurrence& a, const Occurrence& b) {
+  if (a.x != b.x) return a.x < b.x;
+  if (a.y != b.y) return a.y < b.y;
+  return a.occ < b.occ;  // the first occurrence leads its group: its z wins
+}
+
+struct SegmentKey {
+  uint64_t ab;    // a << 32 | b with a < b: sorting the key sorts by (a, b)
+  uint32_t line;  // polyline index, so that a shared segment keeps its first line
+};
+
+}  // namespace
+
+PreparedInput prepare(const InputSet& in) {
+  PreparedInput out;
+  uint64_t total = in.points.size();
+  for (const Polyline& l : in.lines) total += l.points.size();
+  if (total >= std::numeric_limits<uint32_t>::max())
+    throw std::length_error("prepare: " + std::to_string(total) +
+                            " input vertices exceed the 32-bit index range");
+  out.input_points = total;
+
+  std::vector<Occurrence> occ;
+  occ.reserve(total);
+  auto push = [&](const Point3& p) {
+    // NaN would break the sort's strict weak order; readers reject it, this guards direct callers.
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      throw std::invalid_argument("prepare: vertex " + std::to_string(occ.size()) + " is not finite");
+    occ.push_back({p.x, p.y, p.z, uint32_t(occ.size())});
+  };
+  for (const Point3& p : in.points) push(p);
+  for (const Polyline& l : in.lines)
+    for (const Point3& p : l.points) push(p);
+
+  std::sort(occ.begin(), occ.end(), xy_less);
+
+  // Vertex of each occurrence, and the merged vertices.
+  std::vector<uint32_t> vertex_of(total);
+  for (size_t i = 0; i < occ.size();) {
+    const Occurrence& first = occ[i];
+    const uint32_t v = uint32_t(out.vertices.size());
+    out.vertices.push_back({first.x, first.y, first.z});
+    bool conflict = false;
+    size_t j = i;
+    for (; j < occ.size() && occ[j].x == first.x && occ[j].y == first.y; ++j) {
+      vertex_of[occ[j].occ] = v;
+      if (occ[j].z != first.z) {
+        conflict = true;
+        out.max_z_conflict = std::max(out.max_z_conflict, std::abs(occ[j].z - first.z));
+      }
+    }
+    if (conflict) ++out.z_conflicts;
+    i = j;
+  }
+  out.merged_duplicates = total - out.vertices.size();
+  occ = {};
+
+  // Segments of every polyline, the closing edge of every ring included.
+  std::vector<SegmentKey> segs;
+  uint32_t base = uint32_t(in.points.size());
+  for (size_t li = 0; li < in.lines.size(); ++li) {
+    const Polyline& l = in.lines[li];
+    const uint32_t n = uint32_t(l.points.size());
+    const uint32_t count = n < 2 ? 0 : (l.closed && n >= 3 ? n : n - 1);
+    for (uint32_t k = 0; k < count; ++k) {
+      ++out.input_segments;
+      uint32_t a = vertex_of[base + k], b = vertex_of[base + (k + 1) % n];
+      if (a == b) {
+        ++out.zero_length_segments;
+        continue;
+      }
+      if (a > b) std::swap(a, b);
+      segs.push_back({uint64_t(a) << 32 | b, uint32_t(li)});
+    }
+    base += n;
+  }
+  std::sort(segs.begin(), segs.end(), [](const SegmentKey& s, const SegmentKey& t) {
+    return s.ab != t.ab ? s.ab < t.ab : s.line < t.line;
+  });
+  for (size_t i = 0; i < segs.size(); ++i) {
+    if (i > 0 && segs[i].ab == segs[i - 1].ab) {
+      ++out.duplicate_segments;
+      continue;
+    }
+    out.constraints.push_back({uint32_t(segs[i].ab >> 32), uint32_t(segs[i].ab & 0xffffffffu)});
+    out.constraint_line.push_back(segs[i].line);
+  }
+  return out;
+}
+
+}  // namespace cdtgpu
