@@ -1,0 +1,268 @@
+// Map projection: parses the CRS options, decides whether input is lon/lat, and projects it with
+// GeographicLib's Transverse Mercator (Krüger series, about 5 nm accurate) to WGS 84 UTM or GDA94 /
+// GDA2020 MGA, which is UTM on the GRS80 ellipsoid. Also writes the ESRI .prj WKT1 for the result.
+#include "core/projection.hpp"
+
+#include <GeographicLib/Constants.hpp>
+#include <GeographicLib/TransverseMercator.hpp>
+#include <GeographicLib/UTMUPS.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <limits>
+
+#include "core/error.hpp"
+
+namespace cdtgpu {
+
+namespace {
+
+enum class Datum { Wgs84, Gda94, Gda2020 };
+
+constexpr double kGrs80InverseFlattening = 298.257222101;
+constexpr double kWgs84InverseFlattening = 298.257223563;
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// A whole string as a non-negative int, or -1.
+int parse_int(const std::string& s) {
+  if (s.empty() || s.size() > 9) return -1;
+  int v = 0;
+  auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || ptr != s.data() + s.size() || v < 0) return -1;
+  return v;
+}
+
+struct EpsgInfo {
+  Datum datum;
+  int zone;
+  bool north;
+};
+
+// The supported EPSG codes: WGS 84 / UTM (326zz north, 327zz south), GDA94 / MGA zones 48-58 (283zz),
+// GDA2020 / MGA zones 46-59 (78zz). MGA is always south.
+bool epsg_info(int code, EpsgInfo& info) {
+  if (code >= 32601 && code <= 32660) info = {Datum::Wgs84, code - 32600, true};
+  else if (code >= 32701 && code <= 32760) info = {Datum::Wgs84, code - 32700, false};
+  else if (code >= 28348 && code <= 28358) info = {Datum::Gda94, code - 28300, false};
+  else if (code >= 7846 && code <= 7859) info = {Datum::Gda2020, code - 7800, false};
+  else return false;
+  return true;
+}
+
+std::string fmt_number(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  std::string s(buf, r.ptr);
+  // ESRI writes decimals with a point ("500000.0"); keep that look for integral values.
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return s;
+}
+
+int central_meridian(int zone) { return 6 * zone - 183; }
+
+std::string crs_name(Datum datum, int zone, bool north) {
+  const std::string z = std::to_string(zone);
+  switch (datum) {
+    case Datum::Gda94: return "GDA94 / MGA zone " + z;
+    case Datum::Gda2020: return "GDA2020 / MGA zone " + z;
+    case Datum::Wgs84: break;
+  }
+  return "WGS 84 / UTM zone " + z + (north ? "N" : "S");
+}
+
+// ESRI-style WKT1 as ArcGIS writes it in .prj files.
+std::string crs_wkt(Datum datum, int zone, bool north) {
+  std::string projcs, geogcs, datum_name, spheroid;
+  const std::string z = std::to_string(zone);
+  switch (datum) {
+    case Datum::Wgs84:
+      projcs = "WGS_1984_UTM_Zone_" + z + (north ? "N" : "S");
+      geogcs = "GCS_WGS_1984";
+      datum_name = "D_WGS_1984";
+      spheroid = "SPHEROID[\"WGS_1984\",6378137.0," + fmt_number(kWgs84InverseFlattening) + "]";
+      break;
+    case Datum::Gda94:
+      projcs = "GDA_1994_MGA_Zone_" + z;
+      geogcs = "GCS_GDA_1994";
+      datum_name = "D_GDA_1994";
+      spheroid = "SPHEROID[\"GRS_1980\",6378137.0," + fmt_number(kGrs80InverseFlattening) + "]";
+      break;
+    case Datum::Gda2020:
+      projcs = "GDA2020_MGA_Zone_" + z;
+      geogcs = "GCS_GDA2020";
+      datum_name = "D_GDA2020";
+      spheroid = "SPHEROID[\"GRS_1980\",6378137.0," + fmt_number(kGrs80InverseFlattening) + "]";
+      break;
+  }
+  std::string w = "PROJCS[\"" + projcs + "\",GEOGCS[\"" + geogcs + "\",DATUM[\"" + datum_name + "\"," + spheroid +
+                  "],PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]],"
+                  "PROJECTION[\"Transverse_Mercator\"],"
+                  "PARAMETER[\"False_Easting\",500000.0],"
+                  "PARAMETER[\"False_Northing\"," +
+                  std::string(north ? "0.0" : "10000000.0") +
+                  "],"
+                  "PARAMETER[\"Central_Meridian\"," +
+                  fmt_number(central_meridian(zone)) +
+                  "],"
+                  "PARAMETER[\"Scale_Factor\",0.9996],"
+                  "PARAMETER[\"Latitude_Of_Origin\",0.0],"
+                  "UNIT[\"Meter\",1.0]]";
+  return w;
+}
+
+Crs make_crs(Datum datum, int zone, bool north) {
+  Crs c;
+  c.projected = true;
+  c.from_geographic = true;
+  c.zone = zone;
+  c.north = north;
+  switch (datum) {
+    case Datum::Wgs84: c.epsg = (north ? 32600 : 32700) + zone; break;
+    case Datum::Gda94: c.epsg = 28300 + zone; break;
+    case Datum::Gda2020: c.epsg = 7800 + zone; break;
+  }
+  c.name = crs_name(datum, zone, north);
+  c.wkt = crs_wkt(datum, zone, north);
+  return c;
+}
+
+// The datum of a Crs we made, from its EPSG code.
+Datum datum_of(const Crs& crs) {
+  EpsgInfo info{};
+  if (epsg_info(crs.epsg, info)) return info.datum;
+  return Datum::Wgs84;
+}
+
+struct Bounds {
+  double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
+  double max_x = -min_x, max_y = -min_x;
+  bool empty() const { return !(min_x <= max_x); }
+  void add(const Point3& p) {
+    min_x = std::min(min_x, p.x);
+    max_x = std::max(max_x, p.x);
+    min_y = std::min(min_y, p.y);
+    max_y = std::max(max_y, p.y);
+  }
+};
+
+Bounds bounds_of(const InputSet& in) {
+  Bounds b;
+  for (const Point3& p : in.points) b.add(p);
+  for (const Polyline& l : in.lines)
+    for (const Point3& p : l.points) b.add(p);
+  return b;
+}
+
+bool is_lon_lat(const Bounds& b) {
+  return !b.empty() && b.min_x >= -180 && b.max_x <= 180 && b.min_y >= -90 && b.max_y <= 90;
+}
+
+// Coordinates kept as read (projected stays false: we did not project). The name comes from the .prj's
+// PROJCS/GEOGCS name when there is one.
+Crs kept_crs(const InputSet& in, const std::string& fallback_name) {
+  Crs c;
+  c.wkt = in.source_crs_wkt;
+  c.name = fallback_name;
+  for (const char* key : {"PROJCS[\"", "GEOGCS[\""}) {
+    const size_t at = c.wkt.find(key);
+    if (at == std::string::npos) continue;
+    const size_t start = at + std::char_traits<char>::length(key);
+    const size_t end = c.wkt.find('"', start);
+    if (end != std::string::npos && end > start) c.name = c.wkt.substr(start, end - start);
+    break;
+  }
+  return c;
+}
+
+}  // namespace
+
+CrsRequest parse_crs(const std::string& text) {
+  CrsRequest r;
+  const std::string t = lower(text);
+  if (t == "auto") return r;
+  if (t == "none") {
+    r.mode = CrsRequest::Mode::None;
+    return r;
+  }
+  // A UTM zone: digits then N or S.
+  if (t.size() >= 2 && (t.back() == 'n' || t.back() == 's') && std::isdigit(static_cast<unsigned char>(t[0]))) {
+    const int zone = parse_int(t.substr(0, t.size() - 1));
+    if (zone < 1 || zone > 60)
+      throw UsageError("UTM zone '" + text + "' out of range: the zone number must be 1 to 60, e.g. 55S");
+    r.mode = CrsRequest::Mode::Utm;
+    r.zone = zone;
+    r.north = t.back() == 'n';
+    return r;
+  }
+  std::string digits = t;
+  if (digits.rfind("epsg:", 0) == 0) digits = digits.substr(5);
+  const int code = parse_int(digits);
+  if (code >= 0) {
+    EpsgInfo info{};
+    if (!epsg_info(code, info))
+      throw UsageError("unsupported EPSG code " + std::to_string(code) +
+                       " (supported: 32601-32660 and 32701-32760 WGS 84 / UTM, 28348-28358 GDA94 / MGA, "
+                       "7846-7859 GDA2020 / MGA)");
+    r.mode = CrsRequest::Mode::Epsg;
+    r.epsg = code;
+    r.zone = info.zone;
+    r.north = info.north;
+    return r;
+  }
+  throw UsageError("unknown CRS '" + text + "' (use auto, none, a UTM zone such as 55S, or EPSG:7855)");
+}
+
+Crs choose_crs(const InputSet& in, const CrsRequest& request) {
+  using Mode = CrsRequest::Mode;
+  if (request.mode == Mode::None) {
+    Crs c = kept_crs(in, "none");
+    c.name = "none";
+    return c;
+  }
+  const Bounds b = bounds_of(in);
+  const bool lon_lat = is_lon_lat(b);
+  if (request.mode == Mode::Auto) {
+    if (!lon_lat) return kept_crs(in, b.empty() ? "none" : "as input (projected)");
+    const double lon = (b.min_x + b.max_x) / 2, lat = (b.min_y + b.max_y) / 2;
+    // Force a UTM zone even near the poles (the standard rule would choose UPS there).
+    const int zone = GeographicLib::UTMUPS::StandardZone(lat, lon, GeographicLib::UTMUPS::UTM);
+    return make_crs(Datum::Wgs84, zone, lat >= 0);
+  }
+  if (!b.empty() && !lon_lat)
+    throw UsageError("a projection was requested but the input is not lon/lat (x from " + fmt_number(b.min_x) +
+                     " to " + fmt_number(b.max_x) + ", y from " + fmt_number(b.min_y) + " to " +
+                     fmt_number(b.max_y) + "); use --crs auto or none for projected input");
+  if (request.mode == Mode::Utm) {
+    if (request.zone < 1 || request.zone > 60) throw UsageError("UTM zone must be 1 to 60");
+    return make_crs(Datum::Wgs84, request.zone, request.north);
+  }
+  EpsgInfo info{};
+  if (!epsg_info(request.epsg, info)) throw UsageError("unsupported EPSG code " + std::to_string(request.epsg));
+  return make_crs(info.datum, info.zone, info.north);
+}
+
+void project(InputSet& in, const Crs& crs) {
+  if (!crs.from_geographic) return;
+  const double a = GeographicLib::Constants::WGS84_a();  // GRS80 has the same equatorial radius
+  const double f = datum_of(crs) == Datum::Wgs84 ? 1 / kWgs84InverseFlattening : 1 / kGrs80InverseFlattening;
+  const GeographicLib::TransverseMercator tm(a, f, GeographicLib::Constants::UTM_k0());
+  const double lon0 = central_meridian(crs.zone);
+  const double false_northing = crs.north ? 0 : 10000000;
+  auto forward = [&](Point3& p) {
+    double x, y;
+    tm.Forward(lon0, p.y, p.x, x, y);
+    p.x = x + 500000;
+    p.y = y + false_northing;
+  };
+  for (Point3& p : in.points) forward(p);
+  for (Polyline& l : in.lines)
+    for (Point3& p : l.points) forward(p);
+}
+
+}  // namespace cdtgpu

@@ -1,0 +1,236 @@
+// TIN writers for OBJ, PLY (binary little-endian or ascii) and WKT (TIN Z or MULTIPOLYGON Z). Text is built in a
+// large buffer with std::to_chars (shortest text that reads back to the same double), never with iostream
+// formatting, so millions of triangles are written at buffer speed. Triangle indices are checked as they are
+// written: a bad mesh throws part way, and write_mesh_file then leaves no file behind.
+#include "io/writers.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cctype>
+#include <charconv>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+#include <vector>
+
+#include "core/error.hpp"
+#include "io/atomic_file.hpp"
+
+namespace cdtgpu {
+
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "the binary PLY writer assumes a little-endian host");
+
+// An output buffer flushed to the stream in large blocks.
+class Sink {
+ public:
+  explicit Sink(std::ostream& out) : out_(out), buf_(1 << 20) {}
+  ~Sink() = default;
+
+  void flush() {
+    out_.write(buf_.data(), std::streamsize(n_));
+    n_ = 0;
+    if (!out_) throw std::runtime_error("write failed");
+  }
+  void reserve(size_t k) {
+    if (n_ + k > buf_.size()) flush();
+  }
+  void text(const char* s, size_t len) {
+    if (len > buf_.size()) {
+      flush();
+      out_.write(s, std::streamsize(len));
+      if (!out_) throw std::runtime_error("write failed");
+      return;
+    }
+    reserve(len);
+    std::memcpy(buf_.data() + n_, s, len);
+    n_ += len;
+  }
+  void text(const std::string& s) { text(s.data(), s.size()); }
+  void ch(char c) {
+    reserve(1);
+    buf_[n_++] = c;
+  }
+  // The shortest decimal text that round-trips (at most 24 characters for a double).
+  void number(double v) {
+    reserve(32);
+    n_ = size_t(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v).ptr - buf_.data());
+  }
+  void number(uint64_t v) {
+    reserve(24);
+    n_ = size_t(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v).ptr - buf_.data());
+  }
+  template <class T>
+  void raw(const T& v) {
+    reserve(sizeof v);
+    std::memcpy(buf_.data() + n_, &v, sizeof v);
+    n_ += sizeof v;
+  }
+
+ private:
+  std::ostream& out_;
+  std::vector<char> buf_;
+  size_t n_ = 0;
+};
+
+const Triangle& checked(const Mesh& mesh, size_t t) {
+  const Triangle& tri = mesh.triangles[t];
+  for (uint32_t v : tri)
+    if (v >= mesh.vertices.size())
+      throw std::runtime_error("triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
+                               " but the mesh has " + std::to_string(mesh.vertices.size()) + " vertices");
+  return tri;
+}
+
+// One line: a name with a line break inside would break the header or comment.
+std::string one_line(const std::string& s) {
+  std::string r = s;
+  std::replace_if(r.begin(), r.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+  return r;
+}
+
+void write_obj(const Mesh& mesh, const Crs& crs, Sink& out) {
+  if (!crs.name.empty()) out.text("# crs: " + one_line(crs.name) + "\n");
+  for (const Point3& p : mesh.vertices) {
+    out.text("v ", 2);
+    out.number(p.x);
+    out.ch(' ');
+    out.number(p.y);
+    out.ch(' ');
+    out.number(p.z);
+    out.ch('\n');
+  }
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = checked(mesh, t);
+    out.ch('f');
+    for (uint32_t v : tri) {
+      out.ch(' ');
+      out.number(uint64_t(v) + 1);
+    }
+    out.ch('\n');
+  }
+}
+
+void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out) {
+  std::string h = "ply\nformat ";
+  h += ascii ? "ascii" : "binary_little_endian";
+  h += " 1.0\n";
+  if (!crs.name.empty()) h += "comment crs " + one_line(crs.name) + "\n";
+  h += "element vertex " + std::to_string(mesh.vertices.size()) +
+       "\nproperty double x\nproperty double y\nproperty double z\n"
+       "element face " +
+       std::to_string(mesh.triangles.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+  out.text(h);
+  if (ascii) {
+    for (const Point3& p : mesh.vertices) {
+      out.number(p.x);
+      out.ch(' ');
+      out.number(p.y);
+      out.ch(' ');
+      out.number(p.z);
+      out.ch('\n');
+    }
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+      const Triangle& tri = checked(mesh, t);
+      out.ch('3');
+      for (uint32_t v : tri) {
+        out.ch(' ');
+        out.number(uint64_t(v));
+      }
+      out.ch('\n');
+    }
+    return;
+  }
+  for (const Point3& p : mesh.vertices) {
+    out.raw(p.x);
+    out.raw(p.y);
+    out.raw(p.z);
+  }
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = checked(mesh, t);
+    out.raw(uint8_t(3));
+    for (uint32_t v : tri) out.raw(v);
+  }
+}
+
+void write_wkt(const Mesh& mesh, bool multipolygon, Sink& out) {
+  out.text(multipolygon ? "MULTIPOLYGON Z " : "TIN Z ");
+  if (mesh.triangles.empty()) {
+    out.text("EMPTY\n", 6);
+    return;
+  }
+  // Each vertex appears in about six triangles, four times in each ring list: format it once.
+  std::vector<char> pool;
+  std::vector<size_t> start(mesh.vertices.size() + 1, 0);
+  pool.reserve(mesh.vertices.size() * 40);
+  char buf[80];
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Point3& p = mesh.vertices[v];
+    char* e = std::to_chars(buf, buf + sizeof buf, p.x).ptr;
+    *e++ = ' ';
+    e = std::to_chars(e, buf + sizeof buf, p.y).ptr;
+    *e++ = ' ';
+    e = std::to_chars(e, buf + sizeof buf, p.z).ptr;
+    pool.insert(pool.end(), buf, e);
+    start[v + 1] = pool.size();
+  }
+  auto point = [&](uint32_t v) { out.text(pool.data() + start[v], start[v + 1] - start[v]); };
+  out.ch('(');
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const Triangle& tri = checked(mesh, t);
+    out.text(t ? ", ((" : "((", t ? 4 : 2);
+    point(tri[0]);
+    out.text(", ", 2);
+    point(tri[1]);
+    out.text(", ", 2);
+    point(tri[2]);
+    out.text(", ", 2);
+    point(tri[0]);  // rings repeat their first point
+    out.text("))", 2);
+  }
+  out.text(")\n", 2);
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
+MeshFormat format_from_extension(const std::string& path) {
+  const std::string ext = lower(std::filesystem::path(path).extension().string());
+  if (ext == ".obj") return MeshFormat::Obj;
+  if (ext == ".ply") return MeshFormat::Ply;
+  if (ext == ".wkt") return MeshFormat::Wkt;
+  throw UsageError("cannot tell the output format of '" + path + "' from its extension '" + ext +
+                   "' (use .obj, .ply or .wkt, or --format)");
+}
+
+MeshFormat parse_format(const std::string& name) {
+  const std::string n = lower(name);
+  if (n == "obj") return MeshFormat::Obj;
+  if (n == "ply") return MeshFormat::Ply;
+  if (n == "wkt") return MeshFormat::Wkt;
+  throw UsageError("unknown output format '" + name + "' (use obj, ply or wkt)");
+}
+
+void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, std::ostream& out) {
+  Sink sink(out);
+  switch (options.format) {
+    case MeshFormat::Obj: write_obj(mesh, crs, sink); break;
+    case MeshFormat::Ply: write_ply(mesh, crs, options.ascii, sink); break;
+    case MeshFormat::Wkt: write_wkt(mesh, options.wkt_multipolygon, sink); break;
+  }
+  sink.flush();
+}
+
+void write_mesh_file(const Mesh& mesh, const Crs& crs, const WriteOptions& options, const std::string& path) {
+  write_file_atomically(path, [&](std::ostream& out) { write_mesh(mesh, crs, options, out); });
+  if (path == "-" || crs.wkt.empty()) return;
+  const std::string prj = std::filesystem::path(path).replace_extension(".prj").string();
+  write_file_atomically(prj, [&](std::ostream& out) { out << crs.wkt; });
+}
+
+}  // namespace cdtgpu
