@@ -1,0 +1,169 @@
+// Device-local buffers and synchronous staging copies; see buffers.hpp.
+#include "gpu/buffers.hpp"
+
+#include <cstring>
+#include <functional>
+#include <utility>
+
+#include "gpu/check.hpp"
+
+namespace cdtgpu::gpu {
+namespace {
+
+uint32_t memory_type(const Context& ctx, uint32_t type_bits, VkMemoryPropertyFlags want, VkMemoryPropertyFlags need) {
+  for (int pass = 0; pass < 2; ++pass) {
+    VkMemoryPropertyFlags flags = pass == 0 ? (want | need) : need;
+    for (uint32_t i = 0; i < ctx.memory.memoryTypeCount; ++i)
+      if ((type_bits & (1u << i)) && (ctx.memory.memoryTypes[i].propertyFlags & flags) == flags) return i;
+  }
+  throw DeviceError("no suitable Vulkan memory type on " + ctx.info.name);
+}
+
+// Raw buffer + memory; `host` makes it host-visible and coherent (staging).
+Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, bool host) {
+  Buffer b;
+  b.device = ctx.device;
+  b.size = bytes;
+  b.name = name;
+  VkBufferCreateInfo bi{};
+  bi.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
+  bi.size = bytes ? bytes : 4;
+  bi.usage = host ? (VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT)
+                  : (VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                     VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
+  bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VK_CHECK(vkCreateBuffer(ctx.device, &bi, nullptr, &b.buffer));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(ctx.device, b.buffer, &req);
+  VkMemoryAllocateInfo ai{};
+  ai.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+  ai.allocationSize = req.size;
+  ai.memoryTypeIndex =
+      host ? memory_type(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_CACHED_BIT,
+                         VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
+           : memory_type(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  VkResult r = vkAllocateMemory(ctx.device, &ai, nullptr, &b.memory);
+  if (r != VK_SUCCESS)
+    vk_fail(r, ("vkAllocateMemory for buffer '" + name + "' of " + std::to_string(bytes) + " bytes").c_str(),
+            __FILE__, __LINE__);
+  VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, b.memory, 0));
+  return b;
+}
+
+void full_barrier(VkCommandBuffer cmd) {
+  VkMemoryBarrier mb{};
+  mb.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+  mb.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT | VK_ACCESS_HOST_READ_BIT;
+  vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, VK_PIPELINE_STAGE_ALL_COMMANDS_BIT | VK_PIPELINE_STAGE_HOST_BIT,
+                       0, 1, &mb, 0, nullptr, 0, nullptr);
+}
+
+// Records `record` into a fresh command buffer, submits it and waits.
+void run_once(const Context& ctx, const std::function<void(VkCommandBuffer)>& record) {
+  VkCommandBufferAllocateInfo ai{};
+  ai.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
+  ai.commandPool = ctx.pool;
+  ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  ai.commandBufferCount = 1;
+  VkCommandBuffer cmd;
+  VK_CHECK(vkAllocateCommandBuffers(ctx.device, &ai, &cmd));
+  VkFence fence = VK_NULL_HANDLE;
+  try {
+    VkCommandBufferBeginInfo bi{};
+    bi.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    VK_CHECK(vkBeginCommandBuffer(cmd, &bi));
+    full_barrier(cmd);  // orders against earlier submissions on this queue
+    record(cmd);
+    full_barrier(cmd);  // and makes the result visible to the host and to later submissions
+    VK_CHECK(vkEndCommandBuffer(cmd));
+    VkFenceCreateInfo fi{};
+    fi.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
+    VK_CHECK(vkCreateFence(ctx.device, &fi, nullptr, &fence));
+    VkSubmitInfo si{};
+    si.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+    si.commandBufferCount = 1;
+    si.pCommandBuffers = &cmd;
+    VK_CHECK(vkQueueSubmit(ctx.queue, 1, &si, fence));
+    VK_CHECK(vkWaitForFences(ctx.device, 1, &fence, VK_TRUE, UINT64_MAX));
+  } catch (...) {
+    if (fence) vkDestroyFence(ctx.device, fence, nullptr);
+    vkFreeCommandBuffers(ctx.device, ctx.pool, 1, &cmd);
+    throw;
+  }
+  vkDestroyFence(ctx.device, fence, nullptr);
+  vkFreeCommandBuffers(ctx.device, ctx.pool, 1, &cmd);
+}
+
+void check_range(const Buffer& b, VkDeviceSize bytes, VkDeviceSize offset, const char* what) {
+  if (offset + bytes > b.size)
+    throw DeviceError(std::string(what) + " of " + std::to_string(bytes) + " bytes at offset " +
+                      std::to_string(offset) + " past the end of buffer '" + b.name + "' (" + std::to_string(b.size) +
+                      " bytes)");
+}
+
+}  // namespace
+
+Buffer::Buffer(Buffer&& o) noexcept { *this = std::move(o); }
+
+Buffer& Buffer::operator=(Buffer&& o) noexcept {
+  if (this == &o) return *this;
+  if (buffer) vkDestroyBuffer(device, buffer, nullptr);
+  if (memory) vkFreeMemory(device, memory, nullptr);
+  device = o.device;
+  buffer = std::exchange(o.buffer, VK_NULL_HANDLE);
+  memory = std::exchange(o.memory, VK_NULL_HANDLE);
+  size = std::exchange(o.size, 0);
+  name = std::move(o.name);
+  return *this;
+}
+
+Buffer::~Buffer() {
+  if (buffer) vkDestroyBuffer(device, buffer, nullptr);
+  if (memory) vkFreeMemory(device, memory, nullptr);
+}
+
+Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
+  // Every buffer is bound whole as one storage-buffer descriptor, so it must fit the device's range.
+  if (bytes > ctx.info.max_storage_buffer_range)
+    throw DeviceError("buffer '" + name + "' needs " + std::to_string(bytes) + " bytes, more than the device limit maxStorageBufferRange = " +
+                      std::to_string(ctx.info.max_storage_buffer_range) + " bytes (" +
+                      std::to_string(ctx.info.max_storage_buffer_range >> 20) + " MiB) of " + ctx.info.name +
+                      "; use a smaller input or a device with a larger limit");
+  return make(ctx, bytes, name, false);
+}
+
+void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+  check_range(dst, bytes, offset, "upload");
+  if (!bytes) return;
+  Buffer staging = make(ctx, bytes, dst.name + " (staging)", true);
+  void* p = nullptr;
+  VK_CHECK(vkMapMemory(ctx.device, staging.memory, 0, bytes, 0, &p));
+  std::memcpy(p, data, bytes);
+  vkUnmapMemory(ctx.device, staging.memory);
+  run_once(ctx, [&](VkCommandBuffer cmd) {
+    VkBufferCopy region{0, offset, bytes};
+    vkCmdCopyBuffer(cmd, staging.buffer, dst.buffer, 1, &region);
+  });
+}
+
+void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+  check_range(src, bytes, offset, "download");
+  if (!bytes) return;
+  Buffer staging = make(ctx, bytes, src.name + " (staging)", true);
+  run_once(ctx, [&](VkCommandBuffer cmd) {
+    VkBufferCopy region{offset, 0, bytes};
+    vkCmdCopyBuffer(cmd, src.buffer, staging.buffer, 1, &region);
+  });
+  void* p = nullptr;
+  VK_CHECK(vkMapMemory(ctx.device, staging.memory, 0, bytes, 0, &p));
+  std::memcpy(data, p, bytes);
+  vkUnmapMemory(ctx.device, staging.memory);
+}
+
+void fill(const Context& ctx, const Buffer& dst, uint32_t value) {
+  run_once(ctx, [&](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, dst.buffer, 0, VK_WHOLE_SIZE, value); });
+}
+
+}  // namespace cdtgpu::gpu

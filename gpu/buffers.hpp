@@ -1,0 +1,63 @@
+// Device-local storage buffers, staging upload/download and fill.
+//
+// Size policy: a buffer is bound whole as one storage-buffer descriptor, so a buffer larger than the device's
+// maxStorageBufferRange (128 MiB on lavapipe, 4 GiB on NVIDIA) is refused by create_buffer with a DeviceError
+// naming the limit. Callers split their data or run on a device with a larger range.
+#pragma once
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "gpu/context.hpp"
+
+namespace cdtgpu::gpu {
+
+// A device-local buffer usable as storage buffer, transfer source/destination and indirect-dispatch argument.
+// Move-only; `size` is what was asked for (0 allowed: a 4-byte buffer is made, since Vulkan forbids empty ones).
+struct Buffer {
+  VkDevice device = VK_NULL_HANDLE;
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  VkDeviceSize size = 0;
+  std::string name;
+
+  Buffer() = default;
+  Buffer(Buffer&& o) noexcept;
+  Buffer& operator=(Buffer&& o) noexcept;
+  Buffer(const Buffer&) = delete;
+  Buffer& operator=(const Buffer&) = delete;
+  ~Buffer();
+};
+
+// Throws DeviceError when bytes > maxStorageBufferRange (message names the buffer, its size and the limit).
+Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name = "buffer");
+
+// Synchronous copies through a host-visible staging buffer (each waits for the queue to finish).
+void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
+void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
+// Fills the whole buffer with a 32-bit pattern, synchronously.
+void fill(const Context& ctx, const Buffer& dst, uint32_t value);
+
+// Creates a buffer holding `data`.
+template <class T>
+Buffer upload_new(const Context& ctx, std::span<const T> data, const std::string& name = "buffer") {
+  Buffer b = create_buffer(ctx, data.size_bytes(), name);
+  if (!data.empty()) upload(ctx, b, data.data(), data.size_bytes());
+  return b;
+}
+template <class T>
+Buffer upload_new(const Context& ctx, const std::vector<T>& data, const std::string& name = "buffer") {
+  return upload_new(ctx, std::span<const T>(data), name);
+}
+// Reads the first `count` elements of `src`.
+template <class T>
+std::vector<T> download_vector(const Context& ctx, const Buffer& src, size_t count) {
+  std::vector<T> out(count);
+  if (count) download(ctx, src, out.data(), count * sizeof(T));
+  return out;
+}
+
+}  // namespace cdtgpu::gpu

@@ -1,0 +1,392 @@
+// Instance, device choice and logical device; see context.hpp.
+#include "gpu/context.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+#include <utility>
+
+#include "gpu/check.hpp"
+
+namespace cdtgpu::gpu {
+namespace {
+
+const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+
+bool env_validation() {
+  const char* v = std::getenv("CDTGPU_VALIDATION");
+  return v && std::strcmp(v, "1") == 0;
+}
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+const char* type_name(VkPhysicalDeviceType t) {
+  switch (t) {
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "cpu";
+    default: return "other";
+  }
+}
+
+int type_rank(const std::string& type) {
+  if (type == "discrete") return 0;
+  if (type == "integrated") return 1;
+  if (type == "virtual") return 2;
+  if (type == "cpu") return 3;
+  return 4;
+}
+
+// First queue family with compute; prefers one without graphics (a dedicated compute queue).
+int compute_family(VkPhysicalDevice pd, uint32_t* timestamp_bits) {
+  uint32_t n = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+  std::vector<VkQueueFamilyProperties> fams(n);
+  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
+  int best = -1;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (!(fams[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) continue;
+    if (best < 0 || (!(fams[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) && (fams[best].queueFlags & VK_QUEUE_GRAPHICS_BIT)))
+      best = static_cast<int>(i);
+  }
+  if (best >= 0 && timestamp_bits) *timestamp_bits = fams[best].timestampValidBits;
+  return best;
+}
+
+bool has_extension(VkPhysicalDevice pd, const char* name) {
+  uint32_t n = 0;
+  vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr);
+  std::vector<VkExtensionProperties> exts(n);
+  vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, exts.data());
+  for (auto& e : exts)
+    if (std::strcmp(e.extensionName, name) == 0) return true;
+  return false;
+}
+
+DeviceInfo query(VkPhysicalDevice pd, uint32_t index) {
+  DeviceInfo d;
+  d.index = index;
+  VkPhysicalDeviceDriverProperties driver{};
+  driver.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES;
+  VkPhysicalDeviceSubgroupProperties subgroup{};
+  subgroup.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES;
+  subgroup.pNext = &driver;
+  VkPhysicalDeviceProperties2 props{};
+  props.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2;
+  props.pNext = &subgroup;
+  vkGetPhysicalDeviceProperties2(pd, &props);
+  const VkPhysicalDeviceProperties& p = props.properties;
+  d.name = p.deviceName;
+  d.type = type_name(p.deviceType);
+  d.api_version = p.apiVersion;
+  d.driver_name = driver.driverName;
+  d.driver_info = driver.driverInfo;
+  d.max_storage_buffer_range = p.limits.maxStorageBufferRange;
+  d.max_shared_memory = p.limits.maxComputeSharedMemorySize;
+  d.timestamp_period = p.limits.timestampPeriod;
+  d.subgroup_size = subgroup.subgroupSize;
+  const VkSubgroupFeatureFlags need_ops =
+      VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT | VK_SUBGROUP_FEATURE_BALLOT_BIT;
+  d.subgroup_ops = (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+                   (subgroup.supportedOperations & need_ops) == need_ops;
+
+  VkPhysicalDeviceMemoryProperties mem;
+  vkGetPhysicalDeviceMemoryProperties(pd, &mem);
+  for (uint32_t i = 0; i < mem.memoryHeapCount; ++i) {
+    d.heap_sizes.push_back(mem.memoryHeaps[i].size);
+    d.heap_device_local.push_back(mem.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT);
+  }
+
+  VkPhysicalDeviceVulkan12Features f12{};
+  f12.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES;
+  VkPhysicalDeviceFeatures2 f{};
+  f.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
+  f.pNext = &f12;
+  vkGetPhysicalDeviceFeatures2(pd, &f);
+  d.float64 = f.features.shaderFloat64;
+  d.int64 = f.features.shaderInt64;
+  d.int64_atomics = f12.shaderBufferInt64Atomics;
+  uint32_t ts_bits = 0;
+  int family = compute_family(pd, &ts_bits);
+  d.timestamps = family >= 0 && ts_bits > 0 && p.limits.timestampPeriod > 0;
+  d.push_descriptors = has_extension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);
+
+  std::vector<std::string> missing;
+  if (VK_API_VERSION_MINOR(p.apiVersion) < 2 && VK_API_VERSION_MAJOR(p.apiVersion) == 1) missing.push_back("Vulkan 1.2");
+  if (family < 0) missing.push_back("a compute queue");
+  if (!d.float64) missing.push_back("shaderFloat64");
+  if (!d.int64) missing.push_back("shaderInt64");
+  if (!d.int64_atomics) missing.push_back("shaderBufferInt64Atomics");
+  if (!d.timestamps) missing.push_back("timestamps on the compute queue");
+  if (!d.subgroup_ops) missing.push_back("subgroup basic/arithmetic/ballot in compute");
+  if (d.subgroup_size < 8 || d.subgroup_size > 64) missing.push_back("subgroup size 8..64");
+  if (!d.push_descriptors) missing.push_back(VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);
+  for (size_t i = 0; i < missing.size(); ++i) d.missing += (i ? ", " : "") + missing[i];
+  return d;
+}
+
+VkInstance make_instance(bool validation, VkDebugUtilsMessengerCreateInfoEXT* messenger_info) {
+  VkApplicationInfo app{};
+  app.sType = VK_STRUCTURE_TYPE_APPLICATION_INFO;
+  app.pApplicationName = "cdtgpu";
+  app.apiVersion = VK_API_VERSION_1_2;
+  VkInstanceCreateInfo ci{};
+  ci.sType = VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO;
+  ci.pApplicationInfo = &app;
+  const char* layers[] = {kValidationLayer};
+  const char* exts[] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME};
+  // Synchronization validation catches a missing barrier between dispatches, the commonest compute bug.
+  VkValidationFeatureEnableEXT enables[] = {VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT};
+  VkValidationFeaturesEXT features{};
+  features.sType = VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT;
+  features.enabledValidationFeatureCount = 1;
+  features.pEnabledValidationFeatures = enables;
+  if (validation) {
+    ci.enabledLayerCount = 1;
+    ci.ppEnabledLayerNames = layers;
+    ci.enabledExtensionCount = 1;
+    ci.ppEnabledExtensionNames = exts;
+    features.pNext = messenger_info;  // also reports messages from vkCreateInstance itself
+    ci.pNext = &features;
+  }
+  VkInstance instance = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateInstance(&ci, nullptr, &instance));
+  return instance;
+}
+
+std::vector<VkPhysicalDevice> physical_devices(VkInstance instance) {
+  uint32_t n = 0;
+  VK_CHECK(vkEnumeratePhysicalDevices(instance, &n, nullptr));
+  std::vector<VkPhysicalDevice> pds(n);
+  VK_CHECK(vkEnumeratePhysicalDevices(instance, &n, pds.data()));
+  pds.resize(n);
+  return pds;
+}
+
+VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                          VkDebugUtilsMessageTypeFlagsEXT, const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                          void* user) {
+  auto* messages = static_cast<std::vector<std::string>*>(user);
+  std::string m = severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT ? "error: " : "warning: ";
+  m += data->pMessage ? data->pMessage : "";
+  messages->push_back(m);
+  return VK_FALSE;
+}
+
+std::string mib(uint64_t bytes) { return std::to_string(bytes >> 20) + " MiB"; }
+
+}  // namespace
+
+bool validation_layer_available() {
+  uint32_t n = 0;
+  if (vkEnumerateInstanceLayerProperties(&n, nullptr) != VK_SUCCESS) return false;
+  std::vector<VkLayerProperties> layers(n);
+  vkEnumerateInstanceLayerProperties(&n, layers.data());
+  for (auto& l : layers)
+    if (std::strcmp(l.layerName, kValidationLayer) == 0) return true;
+  return false;
+}
+
+std::vector<DeviceInfo> list_devices() {
+  VkInstance instance = make_instance(false, nullptr);
+  std::vector<DeviceInfo> out;
+  try {
+    auto pds = physical_devices(instance);
+    for (uint32_t i = 0; i < pds.size(); ++i) out.push_back(query(pds[i], i));
+  } catch (...) {
+    vkDestroyInstance(instance, nullptr);
+    throw;
+  }
+  vkDestroyInstance(instance, nullptr);
+  return out;
+}
+
+size_t pick_device(const std::vector<DeviceInfo>& devices, const std::string& override_name) {
+  if (devices.empty()) throw DeviceError("no Vulkan device found (is a Vulkan driver installed?)");
+  if (!override_name.empty()) {
+    bool numeric = std::all_of(override_name.begin(), override_name.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+    size_t pick = devices.size();
+    if (numeric) {
+      size_t i = std::stoul(override_name);
+      if (i >= devices.size())
+        throw DeviceError("device index " + override_name + " out of range: " + std::to_string(devices.size()) +
+                          " device(s) found");
+      pick = i;
+    } else {
+      for (size_t i = 0; i < devices.size() && pick == devices.size(); ++i)
+        if (lower(devices[i].name).find(lower(override_name)) != std::string::npos) pick = i;
+      if (pick == devices.size()) throw DeviceError("no Vulkan device name contains '" + override_name + "'");
+    }
+    if (!devices[pick].missing.empty())
+      throw DeviceError("device '" + devices[pick].name + "' cannot run cdtgpu: it lacks " + devices[pick].missing);
+    return pick;
+  }
+  size_t best = devices.size();
+  for (size_t i = 0; i < devices.size(); ++i) {
+    if (!devices[i].missing.empty()) continue;
+    if (best == devices.size() || type_rank(devices[i].type) < type_rank(devices[best].type)) best = i;
+  }
+  if (best == devices.size()) {
+    std::string m = "no Vulkan device can run cdtgpu:";
+    for (auto& d : devices) m += " '" + d.name + "' lacks " + d.missing + ";";
+    throw DeviceError(m);
+  }
+  return best;
+}
+
+std::string describe_devices(const std::string& override_name) {
+  auto devices = list_devices();
+  std::ostringstream os;
+  size_t picked = devices.size();
+  std::string pick_error;
+  try {
+    picked = pick_device(devices, override_name);
+  } catch (const DeviceError& e) {
+    pick_error = e.what();
+  }
+  for (auto& d : devices) {
+    os << (d.index == picked ? "* " : "  ") << d.index << ": " << d.name << " (" << d.type << ")\n";
+    os << "    driver: " << d.driver_name << " " << d.driver_info << ", Vulkan " << VK_API_VERSION_MAJOR(d.api_version)
+       << "." << VK_API_VERSION_MINOR(d.api_version) << "." << VK_API_VERSION_PATCH(d.api_version) << "\n";
+    os << "    memory heaps:";
+    for (size_t h = 0; h < d.heap_sizes.size(); ++h)
+      os << " " << mib(d.heap_sizes[h]) << (d.heap_device_local[h] ? " (device-local)" : "");
+    os << "\n";
+    os << "    float64: " << (d.float64 ? "yes" : "no") << ", int64: " << (d.int64 ? "yes" : "no")
+       << ", int64 buffer atomics: " << (d.int64_atomics ? "yes" : "no")
+       << ", timestamps: " << (d.timestamps ? "yes" : "no") << "\n";
+    os << "    maxStorageBufferRange: " << d.max_storage_buffer_range << " bytes (" << mib(d.max_storage_buffer_range)
+       << "), subgroup size: " << d.subgroup_size << ", shared memory: " << d.max_shared_memory << " bytes\n";
+    os << "    usable: " << (d.missing.empty() ? "yes" : "no, lacks " + d.missing) << "\n";
+  }
+  if (picked < devices.size())
+    os << "picked: " << picked << " (" << devices[picked].name << ")\n";
+  else
+    os << "picked: none: " << pick_error << "\n";
+  return os.str();
+}
+
+namespace {
+void release(Context& c) {
+  if (c.device) {
+    vkDeviceWaitIdle(c.device);
+    if (c.pool) vkDestroyCommandPool(c.device, c.pool, nullptr);
+    vkDestroyDevice(c.device, nullptr);
+  }
+  if (c.messenger) {
+    auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(c.instance, "vkDestroyDebugUtilsMessengerEXT"));
+    if (destroy) destroy(c.instance, c.messenger, nullptr);
+  }
+  if (c.instance) vkDestroyInstance(c.instance, nullptr);
+  c.instance = VK_NULL_HANDLE;
+  c.messenger = VK_NULL_HANDLE;
+  c.device = VK_NULL_HANDLE;
+  c.pool = VK_NULL_HANDLE;
+}
+}  // namespace
+
+Context::Context(Context&& o) noexcept { *this = std::move(o); }
+
+Context& Context::operator=(Context&& o) noexcept {
+  if (this == &o) return *this;
+  release(*this);
+  instance = std::exchange(o.instance, VK_NULL_HANDLE);
+  messenger = std::exchange(o.messenger, VK_NULL_HANDLE);
+  physical = std::exchange(o.physical, VK_NULL_HANDLE);
+  device = std::exchange(o.device, VK_NULL_HANDLE);
+  queue = std::exchange(o.queue, VK_NULL_HANDLE);
+  pool = std::exchange(o.pool, VK_NULL_HANDLE);
+  queue_family = o.queue_family;
+  props = o.props;
+  memory = o.memory;
+  info = o.info;
+  validation = o.validation;
+  cmd_push_descriptor_set = o.cmd_push_descriptor_set;
+  messages_ = std::move(o.messages_);
+  o.messages_ = std::make_unique<std::vector<std::string>>();
+  return *this;
+}
+
+Context::~Context() { release(*this); }
+
+Context create_context(const ContextOptions& options) {
+  Context ctx;
+  bool want = options.validation || env_validation();
+  bool have = validation_layer_available();
+  if (env_validation() && !have)
+    throw DeviceError("CDTGPU_VALIDATION=1 but the layer VK_LAYER_KHRONOS_validation is not installed");
+  ctx.validation = want && have;
+
+  VkDebugUtilsMessengerCreateInfoEXT mi{};
+  mi.sType = VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT;
+  mi.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+  mi.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                   VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+  mi.pfnUserCallback = on_message;
+  mi.pUserData = ctx.messages_.get();
+
+  ctx.instance = make_instance(ctx.validation, &mi);
+  if (ctx.validation) {
+    auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+        vkGetInstanceProcAddr(ctx.instance, "vkCreateDebugUtilsMessengerEXT"));
+    if (!create) throw DeviceError("validation layer loaded but vkCreateDebugUtilsMessengerEXT is missing");
+    VK_CHECK(create(ctx.instance, &mi, nullptr, &ctx.messenger));
+  }
+
+  auto pds = physical_devices(ctx.instance);
+  std::vector<DeviceInfo> infos;
+  for (uint32_t i = 0; i < pds.size(); ++i) infos.push_back(query(pds[i], i));
+  size_t pick = pick_device(infos, options.device);
+  ctx.physical = pds[pick];
+  ctx.info = infos[pick];
+  vkGetPhysicalDeviceProperties(ctx.physical, &ctx.props);
+  vkGetPhysicalDeviceMemoryProperties(ctx.physical, &ctx.memory);
+  ctx.queue_family = static_cast<uint32_t>(compute_family(ctx.physical, nullptr));
+
+  float priority = 1.0f;
+  VkDeviceQueueCreateInfo qi{};
+  qi.sType = VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO;
+  qi.queueFamilyIndex = ctx.queue_family;
+  qi.queueCount = 1;
+  qi.pQueuePriorities = &priority;
+
+  VkPhysicalDeviceVulkan12Features f12{};
+  f12.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES;
+  f12.shaderBufferInt64Atomics = VK_TRUE;
+  f12.shaderSharedInt64Atomics = VK_FALSE;
+  VkPhysicalDeviceFeatures2 f{};
+  f.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
+  f.pNext = &f12;
+  f.features.shaderFloat64 = VK_TRUE;
+  f.features.shaderInt64 = VK_TRUE;
+
+  const char* exts[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+  VkDeviceCreateInfo di{};
+  di.sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO;
+  di.pNext = &f;
+  di.queueCreateInfoCount = 1;
+  di.pQueueCreateInfos = &qi;
+  di.enabledExtensionCount = 1;
+  di.ppEnabledExtensionNames = exts;
+  VK_CHECK(vkCreateDevice(ctx.physical, &di, nullptr, &ctx.device));
+  vkGetDeviceQueue(ctx.device, ctx.queue_family, 0, &ctx.queue);
+  ctx.cmd_push_descriptor_set =
+      reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(ctx.device, "vkCmdPushDescriptorSetKHR"));
+  if (!ctx.cmd_push_descriptor_set) throw DeviceError("vkCmdPushDescriptorSetKHR not found on " + ctx.info.name);
+
+  VkCommandPoolCreateInfo pi{};
+  pi.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO;
+  pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pi.queueFamilyIndex = ctx.queue_family;
+  VK_CHECK(vkCreateCommandPool(ctx.device, &pi, nullptr, &ctx.pool));
+  return ctx;
+}
+
+}  // namespace cdtgpu::gpu

@@ -1,0 +1,95 @@
+// The Vulkan context: instance (optionally with the Khronos validation layer), the chosen physical device, a
+// logical device with one compute queue and a command pool. Also lists what the loader sees, for
+// `cdtgpu devices`.
+//
+//   gpu::ContextOptions options;  options.validation = true;
+//   gpu::Context ctx = gpu::create_context(options);
+//   ... record and submit work (see passes.hpp) ...
+//   EXPECT_TRUE(ctx.messages().empty());   // validation messages, when validation is on
+#pragma once
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace cdtgpu::gpu {
+
+// One physical device as the loader reports it.
+struct DeviceInfo {
+  uint32_t index = 0;                 // position in vkEnumeratePhysicalDevices
+  std::string name;
+  std::string type;                   // "discrete", "integrated", "virtual", "cpu", "other"
+  std::string driver_name;            // VkPhysicalDeviceDriverProperties
+  std::string driver_info;
+  uint32_t api_version = 0;
+  std::vector<uint64_t> heap_sizes;   // bytes, one per memory heap
+  std::vector<bool> heap_device_local;
+  bool float64 = false;               // shaderFloat64
+  bool int64 = false;                 // shaderInt64
+  bool int64_atomics = false;         // shaderBufferInt64Atomics
+  bool timestamps = false;            // compute queue has timestampValidBits > 0
+  bool subgroup_ops = false;          // basic + arithmetic + ballot subgroup ops in compute shaders
+  bool push_descriptors = false;      // VK_KHR_push_descriptor
+  uint64_t max_storage_buffer_range = 0;
+  uint32_t subgroup_size = 0;
+  uint32_t max_shared_memory = 0;     // maxComputeSharedMemorySize
+  float timestamp_period = 0;         // ns per timestamp tick
+  std::string missing;                // what the pipeline needs and this device lacks; empty = usable
+};
+
+struct ContextOptions {
+  // Device override: a decimal index into the list, or a case-insensitive substring of the name.
+  // Empty: the first usable discrete GPU, then integrated, then virtual, then CPU (lavapipe).
+  std::string device;
+  // Enable VK_LAYER_KHRONOS_validation when it is installed. The env var CDTGPU_VALIDATION=1 turns it on as
+  // well (and then a missing layer is an error).
+  bool validation = false;
+};
+
+// Lists every physical device the loader sees (creates and destroys its own instance).
+std::vector<DeviceInfo> list_devices();
+// Index into `devices` of the device the options would pick; throws DeviceError when none fits.
+size_t pick_device(const std::vector<DeviceInfo>& devices, const std::string& override_name);
+// Human-readable listing for `cdtgpu devices`: one block per device, the picked one marked.
+std::string describe_devices(const std::string& override_name = "");
+// True when VK_LAYER_KHRONOS_validation is installed.
+bool validation_layer_available();
+
+// Owns the Vulkan objects; move-only, destroyed in reverse order. Fields are plain so passes and buffers can
+// use them directly.
+struct Context {
+  VkInstance instance = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+  VkQueue queue = VK_NULL_HANDLE;
+  uint32_t queue_family = 0;
+  VkCommandPool pool = VK_NULL_HANDLE;  // RESET_COMMAND_BUFFER: recorders reset and reuse their buffers
+  VkPhysicalDeviceProperties props{};
+  VkPhysicalDeviceMemoryProperties memory{};
+  DeviceInfo info;
+  bool validation = false;              // the validation layer is active
+  PFN_vkCmdPushDescriptorSetKHR cmd_push_descriptor_set = nullptr;
+
+  // Every validation warning or error recorded since creation (or the last clear_messages()).
+  const std::vector<std::string>& messages() const { return *messages_; }
+  void clear_messages() { messages_->clear(); }
+
+  Context() = default;
+  Context(Context&& o) noexcept;
+  Context& operator=(Context&& o) noexcept;
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+  ~Context();
+
+  std::unique_ptr<std::vector<std::string>> messages_ = std::make_unique<std::vector<std::string>>();
+};
+
+// Creates the context; throws DeviceError (naming the device and the missing features) when the chosen device
+// cannot run the pipeline: it needs shaderFloat64, shaderInt64, shaderBufferInt64Atomics, timestamps, subgroup
+// arithmetic/ballot and VK_KHR_push_descriptor.
+Context create_context(const ContextOptions& options = {});
+
+}  // namespace cdtgpu::gpu

@@ -1,0 +1,158 @@
+// One command buffer of dispatches with barriers between them; see recorder.hpp.
+#include "gpu/recorder.hpp"
+
+#include <algorithm>
+#include <vector>
+
+#include "gpu/check.hpp"
+
+namespace cdtgpu::gpu {
+
+Recorder::Recorder(const Context& ctx) : ctx_(ctx) {
+  VkCommandBufferAllocateInfo ai{};
+  ai.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
+  ai.commandPool = ctx.pool;
+  ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  ai.commandBufferCount = 1;
+  VK_CHECK(vkAllocateCommandBuffers(ctx.device, &ai, &cmd_));
+  VkFenceCreateInfo fi{};
+  fi.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
+  VkResult r = vkCreateFence(ctx.device, &fi, nullptr, &fence_);
+  if (r != VK_SUCCESS) {
+    vkFreeCommandBuffers(ctx.device, ctx.pool, 1, &cmd_);
+    vk_fail(r, "vkCreateFence", __FILE__, __LINE__);
+  }
+}
+
+Recorder::~Recorder() {
+  // A recording that was never submitted is simply dropped; a submitted one has been waited for.
+  if (recording_) vkEndCommandBuffer(cmd_);
+  vkDestroyFence(ctx_.device, fence_, nullptr);
+  vkFreeCommandBuffers(ctx_.device, ctx_.pool, 1, &cmd_);
+}
+
+void Recorder::begin() {
+  if (recording_) return;
+  VK_CHECK(vkResetCommandBuffer(cmd_, 0));
+  VkCommandBufferBeginInfo bi{};
+  bi.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO;
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  VK_CHECK(vkBeginCommandBuffer(cmd_, &bi));
+  recording_ = true;
+  any_ = false;
+}
+
+void Recorder::barrier() {
+  begin();
+  // Also before the first command: orders against earlier submissions on the queue (uploads, other recorders).
+  VkMemoryBarrier mb{};
+  mb.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+  mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_READ_BIT |
+                     VK_ACCESS_TRANSFER_WRITE_BIT | VK_ACCESS_INDIRECT_COMMAND_READ_BIT;
+  const VkPipelineStageFlags stages = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+  vkCmdPipelineBarrier(cmd_, stages, stages | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT, 0, 1, &mb, 0, nullptr, 0, nullptr);
+  any_ = true;
+}
+
+void Recorder::check_push(const Pass& pass, size_t bytes) const {
+  if (bytes != pass.push_size)
+    throw DeviceError("pass '" + pass.name + "' declares " + std::to_string(pass.push_size) +
+                      " push-constant bytes, given " + std::to_string(bytes));
+}
+
+void Recorder::bind(const Pass& pass, std::initializer_list<Binding> bindings, const void* push) {
+  if (bindings.size() != pass.buffers)
+    throw DeviceError("pass '" + pass.name + "' declares " + std::to_string(pass.buffers) + " buffers, given " +
+                      std::to_string(bindings.size()));
+  if (pass.push_size && !push) throw DeviceError("pass '" + pass.name + "' needs push constants");
+  barrier();
+  vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pass.pipeline);
+  std::vector<VkDescriptorBufferInfo> infos;
+  std::vector<VkWriteDescriptorSet> writes;
+  infos.reserve(bindings.size());
+  for (const Binding& b : bindings) infos.push_back({b.buffer, b.offset, b.range});
+  for (uint32_t i = 0; i < infos.size(); ++i) {
+    VkWriteDescriptorSet w{};
+    w.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
+    w.dstBinding = i;
+    w.descriptorCount = 1;
+    w.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    w.pBufferInfo = &infos[i];
+    writes.push_back(w);
+  }
+  if (!writes.empty())
+    ctx_.cmd_push_descriptor_set(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pass.layout, 0,
+                                 static_cast<uint32_t>(writes.size()), writes.data());
+  if (pass.push_size) vkCmdPushConstants(cmd_, pass.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, pass.push_size, push);
+}
+
+void Recorder::dispatch(const Pass& pass, std::initializer_list<Binding> bindings, const void* push, uint32_t gx,
+                        uint32_t gy, uint32_t gz) {
+  if (!gx || !gy || !gz) return;
+  bind(pass, bindings, push);
+  vkCmdDispatch(cmd_, gx, gy, gz);
+}
+
+void Recorder::dispatch_groups_raw(const Pass& pass, std::initializer_list<Binding> bindings, const void* push,
+                                   uint64_t groups) {
+  if (!groups) return;
+  uint64_t max_x = ctx_.props.limits.maxComputeWorkGroupCount[0];
+  uint64_t x = std::min(groups, max_x);
+  uint64_t y = (groups + x - 1) / x;
+  if (y > ctx_.props.limits.maxComputeWorkGroupCount[1])
+    throw DeviceError("pass '" + pass.name + "': " + std::to_string(groups) + " workgroups exceed the device limits");
+  bind(pass, bindings, push);
+  vkCmdDispatch(cmd_, static_cast<uint32_t>(x), static_cast<uint32_t>(y), 1);
+}
+
+void Recorder::dispatch_indirect(const Pass& pass, std::initializer_list<Binding> bindings, const void* push,
+                                 const Buffer& args, VkDeviceSize offset) {
+  bind(pass, bindings, push);
+  vkCmdDispatchIndirect(cmd_, args.buffer, offset);
+}
+
+void Recorder::fill(const Buffer& dst, uint32_t value) {
+  barrier();
+  vkCmdFillBuffer(cmd_, dst.buffer, 0, VK_WHOLE_SIZE, value);
+}
+
+void Recorder::copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, VkDeviceSize src_offset,
+                    VkDeviceSize dst_offset) {
+  if (!bytes) return;
+  if (src_offset + bytes > src.size || dst_offset + bytes > dst.size)
+    throw DeviceError("copy of " + std::to_string(bytes) + " bytes from '" + src.name + "' to '" + dst.name +
+                      "' out of range");
+  barrier();
+  VkBufferCopy region{src_offset, dst_offset, bytes};
+  vkCmdCopyBuffer(cmd_, src.buffer, dst.buffer, 1, &region);
+}
+
+const Buffer& Recorder::temp(VkDeviceSize bytes, const std::string& name) {
+  temps_.push_back(create_buffer(ctx_, bytes, name));
+  return temps_.back();
+}
+
+void Recorder::submit() {
+  begin();
+  // Results visible to the host (downloads map staging memory) and to later submissions.
+  VkMemoryBarrier mb{};
+  mb.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER;
+  mb.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT;
+  mb.dstAccessMask = VK_ACCESS_HOST_READ_BIT | VK_ACCESS_MEMORY_READ_BIT | VK_ACCESS_MEMORY_WRITE_BIT;
+  vkCmdPipelineBarrier(cmd_, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                       VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_ALL_COMMANDS_BIT, 0, 1, &mb, 0, nullptr, 0,
+                       nullptr);
+  recording_ = false;
+  VK_CHECK(vkEndCommandBuffer(cmd_));
+  VK_CHECK(vkResetFences(ctx_.device, 1, &fence_));
+  VkSubmitInfo si{};
+  si.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cmd_;
+  VK_CHECK(vkQueueSubmit(ctx_.queue, 1, &si, fence_));
+  VK_CHECK(vkWaitForFences(ctx_.device, 1, &fence_, VK_TRUE, UINT64_MAX));
+  temps_.clear();
+}
+
+}  // namespace cdtgpu::gpu

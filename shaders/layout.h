@@ -1,0 +1,53 @@
+// Shared between C++ (gpu/*.cpp) and GLSL (shaders/*.comp): workgroup sizes, element structs and push-constant
+// blocks. One source of truth, so host and shader layouts cannot drift. Only 32-bit scalar members, so std430
+// (buffers) and the push-constant layout equal the C++ layout.
+#ifndef CDTGPU_SHADERS_LAYOUT_H
+#define CDTGPU_SHADERS_LAYOUT_H
+
+#ifdef __cplusplus
+#include <cstdint>
+namespace cdtgpu::gpu::layout {
+using uint = uint32_t;
+#endif
+
+// Exclusive scan: a workgroup scans SCAN_BLOCK consecutive elements (SCAN_ITEMS per invocation).
+#define SCAN_WG 256
+#define SCAN_ITEMS 8
+#define SCAN_BLOCK (SCAN_WG * SCAN_ITEMS)
+
+struct ScanPush {
+  uint n;           // elements to scan
+  uint write_sums;  // 1: write each block's total to block_sums[block]
+  uint binarize;    // 1: scan (in[i] != 0) instead of in[i] (compaction flags)
+};
+
+struct ScanAddPush {
+  uint n;  // elements; block b gets offsets[b] added
+};
+
+#define COMPACT_WG 256
+struct CompactPush {
+  uint n;
+};
+
+// Radix sort: 8 bits per pass. Each subgroup owns a tile of (subgroup size * RADIX_ITEMS) consecutive keys, so
+// the histogram has RADIX_BINS counts per tile, stored digit-major: hist[digit * num_tiles + tile].
+#define RADIX_WG 64
+#define RADIX_ITEMS 16
+#define RADIX_BINS 256
+#define RADIX_MIN_SUBGROUP 8
+#define RADIX_MAX_SUBGROUPS (RADIX_WG / RADIX_MIN_SUBGROUP)
+
+struct RadixPush {
+  uint n;          // keys
+  uint shift;      // bit position of this pass's digit (0, 8, ..., 56)
+  uint wide;       // 1: keys are 64-bit (two uint words each)
+  uint num_tiles;  // ceil(n / tile size)
+  uint tile_size;  // subgroup size * RADIX_ITEMS
+};
+
+#ifdef __cplusplus
+}  // namespace cdtgpu::gpu::layout
+#endif
+
+#endif

@@ -1,0 +1,213 @@
+// The Vulkan context: device listing and choice, validation that really records misuse and stays silent on a
+// clean run, buffer limits, VK_CHECK messages, pass/recorder argument checks and the profiler.
+#include <gtest/gtest.h>
+
+#include <numeric>
+#include <vector>
+
+#include "gpu/buffers.hpp"
+#include "gpu/check.hpp"
+#include "gpu/context.hpp"
+#include "gpu/passes.hpp"
+#include "gpu/primitives.hpp"
+#include "gpu/profiler.hpp"
+#include "gpu/recorder.hpp"
+#include "shaders/layout.h"
+
+using namespace cdtgpu::gpu;
+
+namespace {
+
+Context& shared_context() {
+  static Context ctx = [] {
+    ContextOptions options;
+    options.validation = true;
+    return create_context(options);
+  }();
+  return ctx;
+}
+
+DeviceInfo fake(const std::string& name, const std::string& type, const std::string& missing) {
+  DeviceInfo d;
+  d.name = name;
+  d.type = type;
+  d.missing = missing;
+  return d;
+}
+
+}  // namespace
+
+TEST(GpuContext, ListsDevicesWithTheirProperties) {
+  auto devices = list_devices();
+  ASSERT_FALSE(devices.empty());
+  for (size_t i = 0; i < devices.size(); ++i) {
+    EXPECT_EQ(devices[i].index, i);
+    EXPECT_FALSE(devices[i].name.empty());
+    EXPECT_FALSE(devices[i].heap_sizes.empty());
+    EXPECT_GT(devices[i].max_storage_buffer_range, 0u);
+    EXPECT_GT(devices[i].subgroup_size, 0u);
+  }
+  std::string text = describe_devices();
+  size_t picked = pick_device(devices, "");
+  EXPECT_NE(text.find(devices[picked].name), std::string::npos);
+  EXPECT_NE(text.find("picked: " + std::to_string(picked)), std::string::npos) << text;
+  EXPECT_NE(text.find("maxStorageBufferRange"), std::string::npos);
+}
+
+TEST(GpuContext, PicksDiscreteThenIntegratedThenCpu) {
+  std::vector<DeviceInfo> d = {fake("llvmpipe", "cpu", ""), fake("Some iGPU", "integrated", ""),
+                               fake("Big GPU", "discrete", "")};
+  EXPECT_EQ(pick_device(d, ""), 2u);
+  d[2].missing = "shaderFloat64";  // a discrete GPU without float64 is passed over
+  EXPECT_EQ(pick_device(d, ""), 1u);
+  d[1].missing = "shaderBufferInt64Atomics";
+  EXPECT_EQ(pick_device(d, ""), 0u);
+  d[0].missing = "timestamps on the compute queue";
+  try {
+    pick_device(d, "");
+    FAIL() << "no usable device must throw";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("Big GPU' lacks shaderFloat64"), std::string::npos) << e.what();
+  }
+}
+
+TEST(GpuContext, OverrideByIndexOrNameAndRefusal) {
+  std::vector<DeviceInfo> d = {fake("llvmpipe (LLVM 15)", "cpu", ""), fake("NVIDIA H100", "discrete", "")};
+  EXPECT_EQ(pick_device(d, "0"), 0u);
+  EXPECT_EQ(pick_device(d, "LLVMpipe"), 0u);
+  EXPECT_EQ(pick_device(d, "h100"), 1u);
+  EXPECT_THROW(pick_device(d, "7"), DeviceError);
+  EXPECT_THROW(pick_device(d, "radeon"), DeviceError);
+  d[1].missing = "shaderFloat64";
+  try {
+    pick_device(d, "h100");
+    FAIL() << "a device without shaderFloat64 must be refused";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("lacks shaderFloat64"), std::string::npos) << e.what();
+  }
+  // The real devices: overriding by the picked device's own name gives that device.
+  auto real = list_devices();
+  size_t p = pick_device(real, "");
+  EXPECT_EQ(pick_device(real, real[p].name), p);
+  EXPECT_EQ(pick_device(real, std::to_string(p)), p);
+}
+
+TEST(GpuContext, ValidationRecordsMisuse) {
+  if (!validation_layer_available()) GTEST_SKIP() << "VK_LAYER_KHRONOS_validation not installed";
+  Context& ctx = shared_context();
+  ASSERT_TRUE(ctx.validation);
+  ctx.clear_messages();
+  // usage = 0 is invalid (VUID-VkBufferCreateInfo-usage-requiredbitmask) and harmless to the driver.
+  VkBufferCreateInfo bi{};
+  bi.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
+  bi.size = 64;
+  bi.usage = 0;
+  VkBuffer b = VK_NULL_HANDLE;
+  if (vkCreateBuffer(ctx.device, &bi, nullptr, &b) == VK_SUCCESS) vkDestroyBuffer(ctx.device, b, nullptr);
+  EXPECT_FALSE(ctx.messages().empty());
+  ctx.clear_messages();
+}
+
+TEST(GpuContext, ValidationCleanRun) {
+  Context& ctx = shared_context();
+  ctx.clear_messages();
+  {
+    Primitives prims(ctx);
+    std::vector<uint32_t> v(5000);
+    std::iota(v.begin(), v.end(), 1u);
+    Buffer in = upload_new(ctx, v, "in");
+    Buffer out = create_buffer(ctx, v.size() * 4, "out");
+    Buffer payload = upload_new(ctx, v, "payload");
+    Recorder rec(ctx);
+    Profiler prof(ctx);
+    prof.begin(rec, "scan");
+    prims.exclusive_scan(rec, in, out, uint32_t(v.size()));
+    prof.end(rec);
+    prof.begin(rec, "sort");
+    prims.radix_sort(rec, in, payload, uint32_t(v.size()), 32);
+    prof.end(rec);
+    rec.submit();
+    auto times = prof.results();
+    ASSERT_EQ(times.size(), 2u);
+    EXPECT_EQ(times[0].name, "scan");
+    EXPECT_GE(times[0].ms, 0.0);
+    EXPECT_GE(times[1].ms, 0.0);
+    auto r = download_vector<uint32_t>(ctx, out, v.size());
+    EXPECT_EQ(r[4999], 4999u * 5000u / 2u);
+    // The recorder can be reused after submit.
+    rec.fill(out, 7);
+    rec.submit();
+    EXPECT_EQ(download_vector<uint32_t>(ctx, out, 3), (std::vector<uint32_t>{7, 7, 7}));
+  }
+  for (auto& m : ctx.messages()) ADD_FAILURE() << m;
+}
+
+TEST(GpuContext, OversizedBufferIsRefusedNamingTheLimit) {
+  Context& ctx = shared_context();
+  uint64_t limit = ctx.info.max_storage_buffer_range;
+  try {
+    create_buffer(ctx, limit + 4, "points");
+    FAIL() << "a buffer over maxStorageBufferRange must be refused";
+  } catch (const DeviceError& e) {
+    std::string m = e.what();
+    EXPECT_NE(m.find("maxStorageBufferRange"), std::string::npos) << m;
+    EXPECT_NE(m.find(std::to_string(limit)), std::string::npos) << m;
+    EXPECT_NE(m.find("points"), std::string::npos) << m;
+  }
+}
+
+TEST(GpuContext, BuffersRoundTripFillAndZeroSize) {
+  Context& ctx = shared_context();
+  ctx.clear_messages();
+  std::vector<uint32_t> v = {1, 2, 3, 0xdeadbeef, 5};
+  Buffer b = upload_new(ctx, v, "b");
+  EXPECT_EQ(download_vector<uint32_t>(ctx, b, v.size()), v);
+  uint32_t x = 42;
+  upload(ctx, b, &x, 4, 8);
+  EXPECT_EQ(download_vector<uint32_t>(ctx, b, 5), (std::vector<uint32_t>{1, 2, 42, 0xdeadbeef, 5}));
+  fill(ctx, b, 9);
+  EXPECT_EQ(download_vector<uint32_t>(ctx, b, 5), std::vector<uint32_t>(5, 9));
+  EXPECT_THROW(upload(ctx, b, v.data(), 8, 16), DeviceError);  // past the end
+  Buffer empty = create_buffer(ctx, 0, "empty");
+  EXPECT_EQ(empty.size, 0u);
+  EXPECT_TRUE(download_vector<uint32_t>(ctx, empty, 0).empty());
+  for (auto& m : ctx.messages()) ADD_FAILURE() << m;
+}
+
+TEST(GpuContext, VkCheckNamesCallFileAndSpecialErrors) {
+  auto fails = [](VkResult r) { VK_CHECK(r); };
+  try {
+    fails(VK_ERROR_DEVICE_LOST);
+    FAIL();
+  } catch (const VulkanError& e) {
+    std::string m = e.what();
+    EXPECT_EQ(e.result, VK_ERROR_DEVICE_LOST);
+    EXPECT_NE(m.find("device lost"), std::string::npos) << m;
+    EXPECT_NE(m.find("Vulkan call r failed"), std::string::npos) << m;
+    EXPECT_NE(m.find("gpu_context_test.cpp:"), std::string::npos) << m;
+  }
+  try {
+    fails(VK_ERROR_OUT_OF_DEVICE_MEMORY);
+    FAIL();
+  } catch (const VulkanError& e) {
+    EXPECT_NE(std::string(e.what()).find("out of GPU memory"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(fails(VK_SUCCESS));
+}
+
+TEST(GpuContext, PassesAreEmbeddedAndArgumentsChecked) {
+  Context& ctx = shared_context();
+  ctx.clear_messages();
+  auto names = shader_names();
+  EXPECT_NE(std::find(names.begin(), names.end(), "scan_block"), names.end());
+  EXPECT_GT(shader_spirv("scan_block").size(), 5u);
+  EXPECT_EQ(shader_spirv("scan_block")[0], 0x07230203u);  // SPIR-V magic
+  EXPECT_THROW(shader_spirv("no_such_shader"), DeviceError);
+  Pass add = create_pass(ctx, {"scan_add", 2, sizeof(cdtgpu::gpu::layout::ScanAddPush)});
+  Buffer a = create_buffer(ctx, 16, "a");
+  Recorder rec(ctx);
+  EXPECT_THROW(rec.dispatch_groups(add, {a}, cdtgpu::gpu::layout::ScanAddPush{4}, 1), DeviceError);  // 1 buffer of 2
+  EXPECT_THROW(rec.dispatch_groups(add, {a, a}, uint64_t{4}, 1), DeviceError);  // wrong push size
+  rec.submit();
+  for (auto& m : ctx.messages()) ADD_FAILURE() << m;
+}
