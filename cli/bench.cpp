@@ -1,0 +1,369 @@
+// cdtgpu bench: generate each workload, prepare it, time the fast CGAL CDT (and the GPU backend when given),
+// check the triangles against the reference backend, print the table and optionally write every figure as JSON.
+#include "cli/bench.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <numeric>
+#include <thread>
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Spatial_sort_traits_adapter_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <CGAL/property_map.h>
+#include <CGAL/spatial_sort.h>
+#include <CGAL/version.h>
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include "core/canonical.hpp"
+#include "core/cdt_cgal.hpp"
+#include "core/error.hpp"
+#include "core/workloads.hpp"
+#include "io/atomic_file.hpp"
+
+namespace cdtgpu {
+
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Vb = CGAL::Triangulation_vertex_base_with_info_2<uint32_t, K>;
+using Fb = CGAL::Constrained_triangulation_face_base_2<K>;
+using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+using FastCdt = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predicates_tag>;
+using SortTraits = CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<K::Point_2>::type>;
+using Clock = std::chrono::steady_clock;
+using json = nlohmann::ordered_json;
+
+constexpr uint64_t kCheckLimit = 200000;  // points; the quick sizes are all below
+constexpr double kFraction = 0.5;          // subset fraction of tables 1 and 2
+constexpr double kLongFraction = 0.02;     // subset fraction of the long-constraint table
+
+const char* kCgalConfig =
+    "CGAL " CGAL_VERSION_STR " Constrained_Delaunay_triangulation_2<Epick, TDS with vertex index, "
+    "Exact_predicates_tag>; points spatially sorted (CGAL::spatial_sort) and inserted with a hint, constraints "
+    "inserted by vertex handle; time = point insertion + constraint insertion, one thread";
+
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  size_t n = v.size();
+  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
+}
+
+struct Workload {
+  std::string table, name;
+  uint64_t points = 0, constraints = 0;  // requested: constraints only for the uniform tables
+  double fraction = 0;
+  uint32_t grid = 0;  // terrain only
+};
+
+uint64_t parse_size(const std::string& s) {
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(s, &used);
+  } catch (const std::exception&) {
+    throw UsageError("--sizes: not a number: '" + s + "'");
+  }
+  std::string suffix = s.substr(used);
+  if (suffix == "K" || suffix == "k") v *= 1e3;
+  else if (suffix == "M" || suffix == "m") v *= 1e6;
+  else if (!suffix.empty()) throw UsageError("--sizes: unknown suffix in '" + s + "' (use K or M)");
+  if (!(v >= 3 && v <= 1e9)) throw UsageError("--sizes: '" + s + "' must be between 3 and 1e9 points");
+  return static_cast<uint64_t>(std::llround(v));
+}
+
+// The tables of the paper, scaled: table 1 keeps the constraint count at half the smallest size (1M..4M points,
+// 500K constraints), table 2 uses twice the smallest size with 10%..50% as many constraints (2M points, 200K..1M).
+std::vector<Workload> plan(const BenchOptions& o) {
+  std::vector<uint64_t> sizes;
+  for (const auto& s : o.sizes) sizes.push_back(parse_size(s));
+  if (sizes.empty()) sizes = o.quick ? std::vector<uint64_t>{20000, 40000, 60000, 80000}
+                                     : std::vector<uint64_t>{1000000, 2000000, 3000000, 4000000};
+  const uint64_t smallest = *std::min_element(sizes.begin(), sizes.end());
+  const bool all = o.table == "all";
+  std::vector<Workload> w;
+  if (all || o.table == "1")
+    for (uint64_t n : sizes) w.push_back({"1", "uniform+dt-edges", n, smallest / 2, kFraction, 0});
+  if (all || o.table == "2")
+    for (int k = 1; k <= 5; ++k) w.push_back({"2", "uniform+dt-edges", 2 * smallest, 2 * smallest * k / 10, kFraction, 0});
+  if (all || o.table == "long")
+    for (uint64_t n : sizes) w.push_back({"long", "uniform+long-dt-edges", n, n / 50, kLongFraction, 0});
+  if (all || o.table == "terrain")
+    for (uint64_t n : sizes)
+      w.push_back({"terrain", "dem+contours", n, 0, 0, static_cast<uint32_t>(std::llround(std::sqrt(double(n))))});
+  if (w.empty()) throw UsageError("--table must be 1, 2, long, terrain or all, got '" + o.table + "'");
+  return w;
+}
+
+InputSet generate(const Workload& w, uint64_t seed) {
+  if (w.grid) {
+    TerrainOptions t;
+    t.grid = w.grid;
+    t.seed = seed;
+    return terrain_workload(t);
+  }
+  InputSet in = uniform_points(w.points, seed);
+  add_dt_edge_constraints(in, w.constraints, w.fraction, seed);
+  return in;
+}
+
+// Mean constraint length in units of the mean point spacing sqrt(bounding-box area / vertices).
+double mean_length_in_spacings(const PreparedInput& p) {
+  if (p.constraints.empty() || p.vertices.empty()) return 0;
+  double x0 = p.vertices.front().x, x1 = p.vertices.back().x, y0 = p.vertices[0].y, y1 = y0;
+  for (const Point3& v : p.vertices) y0 = std::min(y0, v.y), y1 = std::max(y1, v.y);
+  double spacing = std::sqrt((x1 - x0) * (y1 - y0) / double(p.vertices.size()));
+  double sum = 0;
+  for (const Edge& e : p.constraints) {
+    const Point3 &a = p.vertices[e[0]], &b = p.vertices[e[1]];
+    sum += std::hypot(b.x - a.x, b.y - a.y);
+  }
+  return spacing > 0 ? sum / double(p.constraints.size()) / spacing : 0;
+}
+
+struct Timings {
+  std::vector<double> total;
+  std::vector<std::pair<std::string, std::vector<double>>> stages;  // in run order
+  Mesh mesh;                                                        // of the last run, canonical
+
+  json to_json() const {
+    json j;
+    j["median_ms"] = median(total);
+    j["runs_ms"] = total;
+    json sm = json::object(), sr = json::object();
+    for (const auto& [name, v] : stages) {
+      sm[name] = median(v);
+      sr[name] = v;
+    }
+    j["stage_median_ms"] = sm;
+    j["stage_runs_ms"] = sr;
+    return j;
+  }
+};
+
+Timings time_backend(const BenchBackend& backend, const PreparedInput& p, int runs) {
+  Timings t;
+  backend(p);  // warm-up: page faults, allocator, caches
+  for (int r = 0; r < runs; ++r) {
+    BackendRun run = backend(p);
+    t.total.push_back(run.total_ms);
+    for (const auto& [name, ms] : run.stage_ms) {
+      auto it = std::find_if(t.stages.begin(), t.stages.end(), [&](const auto& s) { return s.first == name; });
+      if (it == t.stages.end()) it = t.stages.insert(t.stages.end(), {name, {}});
+      it->second.push_back(ms);
+    }
+    if (r + 1 == runs) t.mesh = std::move(run.mesh);
+  }
+  canonicalize(t.mesh);
+  return t;
+}
+
+std::string cpu_model() {
+  std::ifstream f("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("model name", 0) == 0) {
+      auto c = line.find(':');
+      if (c != std::string::npos) return line.substr(line.find_first_not_of(" \t", c + 1));
+    }
+  return "unknown";
+}
+
+std::string utc_now() {
+  std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+std::string fmt_ms(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, v < 100 ? "%.2f" : "%.0f", v);
+  return buf;
+}
+
+// First differing triangle, or empty when the meshes are equal.
+std::string mesh_difference(const Mesh& a, const Mesh& b) {
+  if (a.vertices.size() != b.vertices.size())
+    return std::to_string(a.vertices.size()) + " vs " + std::to_string(b.vertices.size()) + " vertices";
+  if (a.vertices != b.vertices) return "vertex coordinates differ";
+  if (a.triangles.size() != b.triangles.size())
+    return std::to_string(a.triangles.size()) + " vs " + std::to_string(b.triangles.size()) + " triangles";
+  for (size_t i = 0; i < a.triangles.size(); ++i)
+    if (a.triangles[i] != b.triangles[i]) {
+      const auto &s = a.triangles[i], &t = b.triangles[i];
+      return "triangle " + std::to_string(i) + ": (" + std::to_string(s[0]) + "," + std::to_string(s[1]) + "," +
+             std::to_string(s[2]) + ") vs (" + std::to_string(t[0]) + "," + std::to_string(t[1]) + "," +
+             std::to_string(t[2]) + ")";
+    }
+  return {};
+}
+
+}  // namespace
+
+BackendRun run_cgal_fast(const PreparedInput& p) {
+  BackendRun r;
+  const size_t n = p.vertices.size();
+  auto t0 = Clock::now();
+  std::vector<K::Point_2> pts;
+  pts.reserve(n);
+  for (const Point3& v : p.vertices) pts.emplace_back(v.x, v.y);
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  CGAL::spatial_sort(order.begin(), order.end(), SortTraits(CGAL::make_property_map(pts)));
+  FastCdt cdt;
+  std::vector<FastCdt::Vertex_handle> vh(n);
+  FastCdt::Face_handle hint;
+  for (std::size_t i : order) {
+    FastCdt::Vertex_handle v = cdt.insert(pts[i], hint);
+    v->info() = static_cast<uint32_t>(i);
+    vh[i] = v;
+    hint = v->face();
+  }
+  double points_ms = ms_since(t0);
+  auto t1 = Clock::now();
+  for (const Edge& e : p.constraints) cdt.insert_constraint(vh[e[0]], vh[e[1]]);
+  double constraints_ms = ms_since(t1);
+
+  auto t2 = Clock::now();
+  r.mesh.vertices = p.vertices;
+  r.mesh.triangles.reserve(cdt.number_of_faces());
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+    r.mesh.triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+  double extract_ms = ms_since(t2);
+  r.stage_ms = {{"points", points_ms}, {"constraints", constraints_ms}, {"extract", extract_ms}};
+  r.total_ms = points_ms + constraints_ms;
+  return r;
+}
+
+void add_bench_options(CLI::App* cmd, BenchOptions& o) {
+  cmd->add_option("--table", o.table,
+                  "1 (1M..4M points, 500K constraints), 2 (2M points, 200K..1M constraints), long (long "
+                  "constraints), terrain (DEM grid + contours) or all")
+      ->default_val("all")
+      ->check(CLI::IsMember({"1", "2", "long", "terrain", "all"}));
+  cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points) that finish in about a minute on 2 cores");
+  cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
+  cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
+      ->default_val(5)
+      ->check(CLI::Range(1, 1000));
+  cmd->add_option("--json", o.json_path, "write every figure (each run's times too) and machine info here");
+  cmd->add_option("--seed", o.seed, "seed of the workload generators")->default_val(1);
+  cmd->add_flag("--check", o.check, "compare with the reference CGAL backend at every size (default: up to 200K)");
+}
+
+int run_bench(const BenchOptions& o) {
+  const std::vector<Workload> work = plan(o);
+  const std::string cpu = cpu_model(), date = utc_now();
+  const unsigned threads = std::thread::hardware_concurrency();
+  std::printf("cdtgpu bench, %s\n", date.c_str());
+  std::printf("CPU: %s, %u hardware threads\n", cpu.c_str(), threads);
+  std::printf("CGAL column: %s\n", kCgalConfig);
+  std::printf("%s column: %s\n", o.gpu_name.c_str(), o.gpu ? "total of its stages" : "no GPU backend yet ('-')");
+  std::printf("median of %d runs after 1 warm-up, seed %llu\n\n", o.runs, static_cast<unsigned long long>(o.seed));
+  std::printf("%-8s %-22s %10s %10s %11s %10s %10s %8s %10s %6s %s\n", "table", "workload", "points", "vertices",
+              "constraints", "CGAL ms", (o.gpu_name + " ms").c_str(), "speedup", "triangles", "len", "check");
+  std::fflush(stdout);
+
+  json rows = json::array();
+  int failures = 0;
+  for (const Workload& w : work) {
+    auto tg = Clock::now();
+    InputSet in = generate(w, o.seed);
+    double generate_ms = ms_since(tg);
+    auto tp = Clock::now();
+    PreparedInput p = prepare(in);
+    double prepare_ms = ms_since(tp);
+
+    Timings cgal = time_backend(run_cgal_fast, p, o.runs);
+    Timings gpu;
+    if (o.gpu) gpu = time_backend(o.gpu, p, o.runs);
+
+    json check = json::object();
+    std::string status = "-";
+    if (o.check || in.points.size() <= kCheckLimit) {
+      auto tr = Clock::now();
+      CdtResult ref = triangulate_cgal(p);
+      check["reference_ms"] = ms_since(tr);
+      check["steiner_points"] = ref.steiner_points;
+      std::string diff = mesh_difference(cgal.mesh, ref.mesh);
+      if (ref.steiner_points) diff = std::to_string(ref.steiner_points) + " Steiner points: constraints cross";
+      check["cgal_equal"] = diff.empty();
+      if (!diff.empty()) {
+        spdlog::error("{} {} points: fast CGAL differs from the reference: {}", w.table, w.points, diff);
+        check["cgal_difference"] = diff;
+      }
+      status = diff.empty() ? "ok" : "FAIL";
+      failures += !diff.empty();
+    }
+    if (o.gpu) {
+      // The GPU result must equal CGAL's at every size, checked or not.
+      std::string diff = mesh_difference(gpu.mesh, cgal.mesh);
+      check["gpu_equal"] = diff.empty();
+      if (!diff.empty()) {
+        spdlog::error("{} {} points: {} differs from CGAL: {}", w.table, w.points, o.gpu_name, diff);
+        check["gpu_difference"] = diff;
+        status = "FAIL";
+        ++failures;
+      }
+    }
+
+    const double cgal_ms = median(cgal.total);
+    const double gpu_ms = o.gpu ? median(gpu.total) : 0;
+    const double len = mean_length_in_spacings(p);
+    std::printf("%-8s %-22s %10zu %10zu %11zu %10s %10s %8s %10zu %6.2f %s\n", w.table.c_str(), w.name.c_str(),
+                in.points.size(), p.vertices.size(), p.constraints.size(), fmt_ms(cgal_ms).c_str(),
+                o.gpu ? fmt_ms(gpu_ms).c_str() : "-", o.gpu ? fmt_ms(cgal_ms / gpu_ms).c_str() : "-",
+                cgal.mesh.triangles.size(), len, status.c_str());
+    std::fflush(stdout);
+
+    json row;
+    row["table"] = w.table;
+    row["workload"] = w.name;
+    row["sources"] = in.sources;
+    row["points"] = in.points.size();
+    row["input_points"] = p.input_points;
+    row["vertices"] = p.vertices.size();
+    row["constraints"] = p.constraints.size();
+    if (w.fraction > 0) row["subset_fraction"] = w.fraction;
+    if (w.grid) row["grid"] = w.grid;
+    row["mean_constraint_length_spacings"] = len;
+    row["triangles"] = cgal.mesh.triangles.size();
+    row["generate_ms"] = generate_ms;
+    row["prepare_ms"] = prepare_ms;
+    row["cgal"] = cgal.to_json();
+    row["gpu"] = o.gpu ? gpu.to_json() : json();
+    row["speedup"] = o.gpu ? json(cgal_ms / gpu_ms) : json();
+    row["check"] = check;
+    rows.push_back(row);
+  }
+
+  if (!o.json_path.empty()) {
+    json j;
+    j["tool"] = "cdtgpu bench";
+    j["date"] = date;
+    j["machine"] = {{"cpu", cpu}, {"hardware_threads", threads}};
+    j["cgal_config"] = kCgalConfig;
+    j["gpu_backend"] = o.gpu ? json(o.gpu_name) : json();
+    j["runs"] = o.runs;
+    j["warmup_runs"] = 1;
+    j["seed"] = o.seed;
+    j["quick"] = o.quick;
+    j["rows"] = rows;
+    write_file_atomically(o.json_path, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+  }
+  if (failures) spdlog::error("{} workload(s) failed the check", failures);
+  return failures ? 1 : 0;
+}
+
+}  // namespace cdtgpu

@@ -1,0 +1,49 @@
+// cdtgpu bench: times the CDT of the deterministic workloads (core/workloads.hpp) with a CGAL configured for
+// speed and, once one exists, a GPU backend, and prints a table like the paper's (Chen et al. 2026).
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "core/model.hpp"
+#include "core/prepare.hpp"
+
+namespace cdtgpu {
+
+// One run of a backend on a prepared input. The mesh may be in any order (the bench canonicalizes it to
+// compare backends); total_ms is the figure the table compares, stage_ms its parts (and any extras) in order.
+struct BackendRun {
+  Mesh mesh;
+  std::vector<std::pair<std::string, double>> stage_ms;
+  double total_ms = 0;
+};
+using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
+
+struct BenchOptions {
+  std::string table = "all";        // 1, 2, long, terrain or all
+  bool quick = false;               // 20K..80K points instead of 1M..4M
+  std::vector<std::string> sizes;   // point counts overriding the table's, e.g. 50000 or 1.5M
+  int runs = 5;                     // timed runs per backend and workload (median), after one warm-up
+  std::string json_path;            // empty: no JSON
+  uint64_t seed = 1;
+  bool check = false;               // compare with triangulate_cgal at every size, not only up to 200K points
+  BenchBackend gpu;                 // empty until a GPU backend exists: its column prints "-"
+  std::string gpu_name = "GPU";
+};
+
+// Adds the options above to a `bench` subcommand.
+void add_bench_options(CLI::App* cmd, BenchOptions& options);
+
+// Returns the exit code: 0, or 1 when a backend's triangles differ from the reference CGAL backend's.
+int run_bench(const BenchOptions& options);
+
+// The CGAL configuration the bench times: Constrained_Delaunay_triangulation_2<Epick, TDS, Exact_predicates_tag>
+// (the TDS's vertices carry their index), points spatially sorted then inserted with a hint, constraints
+// inserted by vertex handle. total_ms = point insertion (sort included) + constraint insertion.
+BackendRun run_cgal_fast(const PreparedInput& prepared);
+
+}  // namespace cdtgpu
