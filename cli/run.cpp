@@ -1,0 +1,133 @@
+#include "cli/run.hpp"
+
+#include <chrono>
+#include <fstream>
+#include <functional>
+
+#include <spdlog/spdlog.h>
+
+#include "core/cdt_cgal.hpp"
+#include "core/error.hpp"
+#include "core/prepare.hpp"
+#include "core/stats.hpp"
+#include "core/verify.hpp"
+#include "io/atomic_file.hpp"
+
+namespace cdtgpu {
+namespace {
+
+// Times a stage; a stage over a second gets a progress line even without -v.
+template <class F>
+auto timed(RunStats& stats, const std::string& name, F&& f) {
+  auto t0 = std::chrono::steady_clock::now();
+  auto finish = [&] {
+    double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    stats.stage_ms.emplace_back(name, ms);
+    spdlog::log(ms > 1000 ? spdlog::level::info : spdlog::level::debug, "{}: {:.1f} ms", name, ms);
+  };
+  if constexpr (std::is_void_v<decltype(f())>) {
+    f();
+    finish();
+  } else {
+    auto r = f();
+    finish();
+    return r;
+  }
+}
+
+struct Loaded {
+  InputSet in;
+  Crs crs;
+  PreparedInput prepared;
+};
+
+Loaded load(const InputOptions& options, RunStats& stats) {
+  Loaded l;
+  timed(stats, "read", [&] {
+    for (const std::string& path : options.inputs) read_input(path, options.read, l.in);
+  });
+  l.crs = choose_crs(l.in, options.crs);
+  timed(stats, "project", [&] { project(l.in, l.crs); });
+  l.prepared = timed(stats, "prepare", [&] { return prepare(l.in); });
+  spdlog::info("CRS: {}", l.crs.name);
+
+  const Repairs& r = l.in.repairs;
+  const PreparedInput& p = l.prepared;
+  if (p.merged_duplicates)
+    spdlog::info("merged {} duplicate points into existing vertices", p.merged_duplicates);
+  if (p.z_conflicts)
+    spdlog::warn("{} merged points had different z (largest difference {}): the first one read was kept",
+                 p.z_conflicts, p.max_z_conflict);
+  if (p.duplicate_segments) spdlog::info("{} repeated constraint segments counted once", p.duplicate_segments);
+  if (r.repeated_vertices) spdlog::info("repaired {} repeated vertices (zero-length segments)", r.repeated_vertices);
+  if (r.rings_closed) spdlog::info("closed {} rings that did not end at their first vertex", r.rings_closed);
+  if (r.degenerate_lines) spdlog::info("{} lines with a single distinct vertex kept as points", r.degenerate_lines);
+  if (r.null_shapes) spdlog::info("skipped {} NULL shapes (no geometry)", r.null_shapes);
+  if (r.nodata_cells) spdlog::info("skipped {} NODATA grid cells", r.nodata_cells);
+
+  auto& c = stats.counts;
+  c["input_points"] = p.input_points;
+  c["merged_duplicates"] = p.merged_duplicates;
+  c["z_conflicts"] = p.z_conflicts;
+  c["input_segments"] = p.input_segments;
+  c["duplicate_segments"] = p.duplicate_segments;
+  c["constraints"] = p.constraints.size();
+  c["repeated_vertices_removed"] = r.repeated_vertices;
+  c["rings_closed"] = r.rings_closed;
+  c["degenerate_lines"] = r.degenerate_lines;
+  c["null_shapes"] = r.null_shapes;
+  c["nodata_cells"] = r.nodata_cells;
+  stats.crs = l.crs.name;
+  return l;
+}
+
+void write_stats(const RunStats& stats, const std::string& path) {
+  if (path.empty()) return;
+  write_file_atomically(path, [&](std::ostream& out) { out << stats.to_json().dump(2) << '\n'; });
+}
+
+}  // namespace
+
+int run_triangulate(const TriangulateOptions& options) {
+  RunStats stats;
+  stats.backend = options.backend;
+  WriteOptions write = options.write;
+  if (!options.format.empty())
+    write.format = parse_format(options.format);
+  else if (options.output == "-")
+    throw UsageError("writing to stdout needs --format (obj, ply or wkt)");
+  else
+    write.format = format_from_extension(options.output);
+  if (options.backend != "cgal") throw UsageError("unknown backend '" + options.backend + "' (use cgal)");
+
+  Loaded l = load(options.input, stats);
+  CdtResult result = timed(stats, "triangulate", [&] { return triangulate_cgal(l.prepared); });
+  if (result.mesh.triangles.empty())
+    spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
+  timed(stats, "write", [&] { write_mesh_file(result.mesh, l.crs, write, options.output); });
+
+  stats.counts["steiner_points"] = result.steiner_points;
+  stats.counts["vertices"] = result.mesh.vertices.size();
+  stats.counts["triangles"] = result.mesh.triangles.size();
+  write_stats(stats, options.stats_path);
+  spdlog::info("{} vertices, {} triangles ({} constraints, {} Steiner points)", result.mesh.vertices.size(),
+               result.mesh.triangles.size(), l.prepared.constraints.size(), result.steiner_points);
+  return 0;
+}
+
+int run_verify(const std::string& mesh_path, const InputOptions& options) {
+  RunStats stats;
+  Mesh mesh = read_mesh_file(mesh_path);
+  Loaded l = load(options, stats);
+  VerifyReport report = verify_mesh(mesh, l.prepared);
+  for (const std::string& f : report.failures) spdlog::error("{}: {}", mesh_path, f);
+  if (!report.ok()) {
+    spdlog::error("{}: NOT the constrained Delaunay triangulation of the inputs", mesh_path);
+    return 1;
+  }
+  spdlog::info("{}: ok ({} vertices, {} triangles, {} constrained edges, {} Steiner vertices)", mesh_path,
+               mesh.vertices.size(), mesh.triangles.size(), report.constrained_edges, report.steiner_vertices);
+  return 0;
+}
+
+}  // namespace cdtgpu

@@ -1,0 +1,31 @@
+// The commands behind the CLI: read -> project -> prepare -> triangulate -> write, and verify.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/projection.hpp"
+#include "io/readers.hpp"
+#include "io/writers.hpp"
+
+namespace cdtgpu {
+
+struct InputOptions {
+  std::vector<std::string> inputs;
+  ReadOptions read;
+  CrsRequest crs;
+};
+
+struct TriangulateOptions {
+  InputOptions input;
+  std::string output;        // "-" for stdout
+  std::string format;        // empty: from the output's extension
+  WriteOptions write;
+  std::string backend = "cgal";
+  std::string stats_path;    // empty: none
+};
+
+// Returns the process exit code; throws InputError / UsageError for bad input.
+int run_triangulate(const TriangulateOptions& options);
+int run_verify(const std::string& mesh_path, const InputOptions& options);
+
+}  // namespace cdtgpu

@@ -1,0 +1,191 @@
+// End to end: the cdtgpu binary on real files, one test per output format and per bad-input case.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string err;
+};
+
+class Cli : public ::testing::Test {
+ public:
+  fs::path dir;
+
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("cdtgpu_cli_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+
+  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
+
+  static std::string slurp(const std::string& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+  }
+
+  Result run(const std::string& args, const std::string& stdout_to = "/dev/null") const {
+    std::string err = path("stderr.txt");
+    std::string cmd = std::string(CDTGPU_BINARY) + " " + args + " >" + stdout_to + " 2>" + err;
+    int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err)};
+  }
+
+  // Files in dir other than the inputs we wrote: a failed run must leave none (no half file, no tmp file).
+  size_t files_matching(const std::string& stem) const {
+    size_t n = 0;
+    for (auto& e : fs::directory_iterator(dir))
+      if (e.path().filename().string().rfind(stem, 0) == 0) ++n;
+    return n;
+  }
+
+  // A small terrain: 400 jittered DEM points, two contour lines, one building ring, in projected metres.
+  void write_terrain() const {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::ostringstream xyz;
+    xyz << "x,y,z\n";
+    for (int i = 0; i < 20; ++i)
+      for (int j = 0; j < 20; ++j)
+        xyz << 500000 + i * 10 + u(rng) << ',' << 6000000 + j * 10 + u(rng) << ',' << 100 + i + j * 0.5 << '\n';
+    write("dem.csv", xyz.str());
+    write("lines.wkt",
+          "LINESTRING Z (500005 6000005 110, 500100 6000050 111, 500185 6000180 112)\n"
+          "LINESTRING (500020 6000150, 500060 6000120)\n"
+          "POLYGON Z ((500120 6000020 130, 500140 6000020 130, 500140 6000040 130, 500120 6000040 130, "
+          "500120 6000020 130))\n");
+  }
+};
+
+TEST_F(Cli, EachFormatIsWrittenAndPassesVerify) {
+  write_terrain();
+  for (std::string ext : {"obj", "ply", "wkt"}) {
+    std::string out = path("tin." + ext);
+    Result r = run("triangulate " + path("dem.csv") + " " + path("lines.wkt") + " -o " + out + " -q");
+    ASSERT_EQ(r.code, 0) << r.err;
+    ASSERT_TRUE(fs::exists(out));
+    Result v = run("verify " + out + " " + path("dem.csv") + " " + path("lines.wkt"));
+    EXPECT_EQ(v.code, 0) << ext << ": " << v.err;
+  }
+  Result r = run("triangulate " + path("dem.csv") + " -o " + path("ascii.ply") + " --ascii -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(path("ascii.ply")).rfind("ply\nformat ascii 1.0\n", 0), 0u);
+  r = run("triangulate " + path("dem.csv") + " -o " + path("mp.wkt") + " --wkt-multipolygon -q");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(path("mp.wkt")).rfind("MULTIPOLYGON Z", 0), 0u);
+}
+
+TEST_F(Cli, SameInputGivesSameBytes) {
+  write_terrain();
+  std::string args = "triangulate " + path("dem.csv") + " " + path("lines.wkt") + " -q -o ";
+  ASSERT_EQ(run(args + path("a.ply")).code, 0);
+  ASSERT_EQ(run(args + path("b.ply")).code, 0);
+  EXPECT_EQ(slurp(path("a.ply")), slurp(path("b.ply")));
+  // Input order of the files does not matter for the vertex and triangle order.
+  ASSERT_EQ(run("triangulate " + path("lines.wkt") + " " + path("dem.csv") + " -q -o " + path("c.obj")).code, 0);
+  ASSERT_EQ(run(args + path("d.obj")).code, 0);
+  EXPECT_EQ(slurp(path("c.obj")), slurp(path("d.obj")));
+}
+
+TEST_F(Cli, StdinToStdoutAndStats) {
+  write("pts.wkt", "MULTIPOINT ((0 0), (1 0), (0 1), (1 1), (0.5 0.5))\nPOINT (1 1)\n");
+  Result r = run("triangulate - --crs none --format wkt -o - --stats " + path("s.json") + " < " + path("pts.wkt"),
+                 path("out.wkt"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string wkt = slurp(path("out.wkt"));
+  EXPECT_EQ(wkt.rfind("TIN Z (((", 0), 0u) << wkt;
+  auto stats = nlohmann::json::parse(slurp(path("s.json")));
+  EXPECT_EQ(stats["counts"]["input_points"], 6);
+  EXPECT_EQ(stats["counts"]["merged_duplicates"], 1);
+  EXPECT_EQ(stats["counts"]["vertices"], 5);
+  EXPECT_EQ(stats["counts"]["triangles"], 4);
+  EXPECT_EQ(stats["crs"], "none");
+  for (const char* stage : {"read", "project", "prepare", "triangulate", "write"})
+    EXPECT_TRUE(stats["stage_ms"].contains(stage)) << stage;
+}
+
+TEST_F(Cli, LonLatIsProjectedToTheUtmZoneOfItsCentre) {
+  // Around Katoomba NSW: 150.31E 33.71S lies in UTM zone 56S.
+  write("ll.xyz", "150.30 -33.70 1000\n150.32 -33.70 1010\n150.31 -33.72 1005\n150.31 -33.69 990\n");
+  Result r = run("triangulate " + path("ll.xyz") + " -o " + path("t.obj") + " --stats " + path("s.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  auto stats = nlohmann::json::parse(slurp(path("s.json")));
+  EXPECT_NE(stats["crs"].get<std::string>().find("56S"), std::string::npos) << stats["crs"];
+  EXPECT_NE(slurp(path("t.obj")).find("56S"), std::string::npos);
+}
+
+TEST_F(Cli, VerifyRejectsAMeshOfOtherInputs) {
+  write_terrain();
+  ASSERT_EQ(run("triangulate " + path("dem.csv") + " -q -o " + path("dem.obj")).code, 0);
+  // The DEM-only mesh does not honour the contour and building constraints.
+  Result v = run("verify " + path("dem.obj") + " " + path("dem.csv") + " " + path("lines.wkt"));
+  EXPECT_EQ(v.code, 1) << v.err;
+  EXPECT_NE(v.err.find("NOT"), std::string::npos) << v.err;
+}
+
+// Bad input: exit code 2, a message naming the file (and line where there is one), no output written.
+void expect_bad(const Cli& t, const Result& r, const std::string& file, const std::string& detail) {
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find(file), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(detail), std::string::npos) << r.err;
+  EXPECT_EQ(t.files_matching("out"), 0u) << "a failed run left an output file";
+}
+
+TEST_F(Cli, MalformedWktNamesTheLine) {
+  write("bad.wkt", "POINT (0 0)\nPOINT (1 0)\nLINESTRING (0 0, 1\nPOINT (0 1)\n");
+  expect_bad(*this, run("triangulate " + path("bad.wkt") + " -o " + path("out.ply")), "bad.wkt", "line 3");
+}
+
+TEST_F(Cli, NonFiniteCoordinateIsRejected) {
+  write("nan.xyz", "0 0 1\n1 0 nan\n0 1 2\n");
+  expect_bad(*this, run("triangulate " + path("nan.xyz") + " -o " + path("out.ply")), "nan.xyz", ":2");
+  write("inf.wkt", "POINT (0 0)\nPOINT (inf 0)\n");
+  expect_bad(*this, run("triangulate " + path("inf.wkt") + " -o " + path("out.ply")), "inf.wkt", ":2");
+}
+
+TEST_F(Cli, UnknownExtensionEmptyAndMissingInputs) {
+  write("x.dxf", "0\nSECTION\n");
+  expect_bad(*this, run("triangulate " + path("x.dxf") + " -o " + path("out.ply")), "x.dxf", "");
+  write("empty.xyz", "");
+  expect_bad(*this, run("triangulate " + path("empty.xyz") + " -o " + path("out.ply")), "empty.xyz", "");
+  expect_bad(*this, run("triangulate " + path("nope.shp") + " -o " + path("out.ply")), "nope.shp", "");
+}
+
+TEST_F(Cli, UnknownOutputFormatIsAUsageError) {
+  write_terrain();
+  Result r = run("triangulate " + path("dem.csv") + " -o " + path("out.stl"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(files_matching("out"), 0u);
+}
+
+TEST_F(Cli, FailedRunKeepsTheOldOutput) {
+  write_terrain();
+  ASSERT_EQ(run("triangulate " + path("dem.csv") + " -q -o " + path("keep.ply")).code, 0);
+  std::string before = slurp(path("keep.ply"));
+  write("bad.wkt", "POLYGON ((0 0, 1 0, 1 1\n");
+  Result r = run("triangulate " + path("bad.wkt") + " -o " + path("keep.ply"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(slurp(path("keep.ply")), before);
+  EXPECT_EQ(files_matching("keep"), 1u) << "temporary file left behind";
+}
+
+}  // namespace
