@@ -46,6 +46,17 @@ struct RadixPush {
   uint tile_size;  // subgroup size * RADIX_ITEMS
 };
 
+
+// The triangulation on the GPU (gpu/triangulation.hpp): a closed triangulation of the sphere, finite triangles
+// plus one infinite triangle per convex-hull edge whose third vertex is the symbolic INF_VERTEX.
+// verts[3t+k]: vertex k of slot t, counter-clockwise. nbrs[3t+k]: the triangle across the edge opposite
+// vertex k, as NBR(tri, k') with k' the index of the same edge in that triangle.
+#define INF_VERTEX 0xFFFFFFFFu
+#define NO_TRI 0xFFFFFFFFu
+#define NBR(tri, k) (((tri) << 2) | (k))
+#define NBR_TRI(code) ((code) >> 2)
+#define NBR_EDGE(code) ((code) & 3u)
+
 #ifdef __cplusplus
 }  // namespace cdtgpu::gpu::layout
 #endif
