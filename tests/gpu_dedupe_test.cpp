@@ -1,0 +1,124 @@
+// Duplicate merging on the GPU against the CPU: same vertices in the same (canonical) order, same map from input
+// points to vertices, same first occurrences; and the same vertices as core/prepare.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "core/prepare.hpp"
+#include "gpu/context.hpp"
+#include "gpu/dedupe.hpp"
+
+using namespace cdtgpu;
+using namespace cdtgpu::gpu;
+
+namespace {
+
+Context& ctx() {
+  static Context c = [] {
+    ContextOptions options;
+    options.validation = true;
+    return create_context(options);
+  }();
+  return c;
+}
+
+bool large() {
+  const char* v = std::getenv("CDTGPU_LARGE");
+  return v && std::strcmp(v, "1") == 0;
+}
+
+// The CPU answer: a stable sort of the input indices by (x, y) with == as equality (so -0.0 == 0.0).
+DedupedHost cpu_dedupe(const std::vector<double>& xy) {
+  const size_t n = xy.size() / 2;
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  auto less = [&](uint32_t a, uint32_t b) {
+    return xy[2 * a] < xy[2 * b] || (xy[2 * a] == xy[2 * b] && xy[2 * a + 1] < xy[2 * b + 1]);
+  };
+  std::stable_sort(order.begin(), order.end(), less);
+  DedupedHost h;
+  h.map.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    uint32_t j = order[i];
+    if (i == 0 || less(order[i - 1], j)) {
+      h.xy.push_back(xy[2 * j]);
+      h.xy.push_back(xy[2 * j + 1]);
+      h.first.push_back(j);
+    }
+    h.map[j] = uint32_t(h.first.size() - 1);
+  }
+  return h;
+}
+
+void expect_same(const std::vector<double>& xy) {
+  DedupedHost gpu = dedupe_points(ctx(), xy);
+  DedupedHost cpu = cpu_dedupe(xy);
+  ASSERT_EQ(gpu.first.size(), cpu.first.size());
+  EXPECT_EQ(gpu.first, cpu.first);
+  EXPECT_EQ(gpu.map, cpu.map);
+  // Bit-exact: a vertex keeps its first occurrence's bits (-0.0 stays -0.0 if it came first).
+  ASSERT_EQ(gpu.xy.size(), cpu.xy.size());
+  EXPECT_EQ(0, std::memcmp(gpu.xy.data(), cpu.xy.data(), gpu.xy.size() * sizeof(double)));
+  EXPECT_TRUE(ctx().messages().empty()) << ctx().messages().front();
+}
+
+std::vector<double> integer_points(size_t n, int range, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> d(-range, range);
+  std::vector<double> xy(2 * n);
+  for (auto& v : xy) v = d(rng);
+  return xy;
+}
+
+}  // namespace
+
+TEST(GpuDedupe, EmptyAndSinglePoint) {
+  expect_same({});
+  expect_same({3.5, -2});
+}
+
+TEST(GpuDedupe, ManyDuplicatesOnAnIntegerGrid) {
+  for (size_t n : {2u, 17u, 1000u, 5000u}) expect_same(integer_points(n, 20, uint32_t(n)));
+  expect_same(integer_points(100000, 200, 3));  // every point about 2.5 times
+}
+
+TEST(GpuDedupe, NegativeZeroEqualsZeroAndKeepsTheFirstBits) {
+  expect_same({-0.0, 1, 0.0, 1, 0.0, -0.0, -0.0, 0.0, -1, -0.0, -1, 0.0, -2.5, 3});
+}
+
+TEST(GpuDedupe, UtmScaleWithMillimetreDetail) {
+  std::mt19937_64 rng(5);
+  std::vector<double> xy;
+  for (int i = 0; i < 50000; ++i) {
+    double x = 500000 + double(rng() % 10000000) / 1000, y = 6000000 + double(rng() % 1000) / 1000;
+    xy.insert(xy.end(), {x, y});
+    if (i % 7 == 0) xy.insert(xy.end(), {x, y});  // exact duplicates
+    if (i % 11 == 0) xy.insert(xy.end(), {std::nextafter(x, 1e9), y});  // one ulp apart: not a duplicate
+  }
+  expect_same(xy);
+}
+
+TEST(GpuDedupe, SameVerticesAsPrepare) {
+  InputSet in;
+  auto xy = integer_points(20000, 60, 9);
+  for (size_t i = 0; i < xy.size(); i += 2) in.points.push_back({xy[i] * 0.25, xy[i + 1] * 0.5, double(i)});
+  for (size_t i = 0; i < xy.size(); i += 2) xy[i] *= 0.25, xy[i + 1] *= 0.5;
+  PreparedInput prepared = prepare(in);
+  DedupedHost gpu = dedupe_points(ctx(), xy);
+  ASSERT_EQ(gpu.first.size(), prepared.vertices.size());
+  for (size_t v = 0; v < prepared.vertices.size(); ++v) {
+    ASSERT_EQ(gpu.xy[2 * v], prepared.vertices[v].x) << v;
+    ASSERT_EQ(gpu.xy[2 * v + 1], prepared.vertices[v].y) << v;
+    ASSERT_EQ(in.points[gpu.first[v]].z, prepared.vertices[v].z) << v;  // first occurrence's z, as prepare keeps
+  }
+}
+
+TEST(GpuDedupe, LargeInputs) {
+  if (!large()) GTEST_SKIP() << "set CDTGPU_LARGE=1 (GPU machine)";
+  expect_same(integer_points(8u << 20, 3000, 11));
+}
