@@ -1,0 +1,484 @@
+// The GPU Delaunay driver: build() reads as the algorithm (first triangle, then rounds of insert + flip until
+// every point is a vertex); each step records its passes (shaders/dt_*.comp) into the build's one command
+// buffer, submitted once per round (plus once per extra batch of flip passes). The method, its invariants and
+// why the result equals CGAL's: docs/gpu-delaunay.md.
+#include "gpu/delaunay.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstring>
+#include <map>
+#include <optional>
+
+#include "core/predicates.hpp"
+#include "gpu/check.hpp"
+#include "gpu/profiler.hpp"
+#include "shaders/layout_dt.h"
+
+namespace cdtgpu::gpu {
+
+using namespace layout;
+
+namespace {
+
+uint64_t groups(uint64_t n) { return (n + DT_WG - 1) / DT_WG; }
+
+uint32_t slot_capacity(uint32_t n) { return 2 * n - 2; }  // 2(n + 1) - 4: a sphere with n + 1 vertices
+
+// ExactChecks::adaptive inlines the exact stage in a round's flip checks when the last round needed it for
+// fewer slots than this: uniform data never does; a grid DEM needs it for ~20% of its checks, where the
+// separate pass was faster (H100, 2M grid points: flips 23 ms separate, 34 ms inlined; 2M uniform: 10.6
+// vs 9.3).
+constexpr uint32_t kInlineExactBelow = 1024;
+
+// Block sums of each level of an exclusive scan of up to n elements (the primitives' scan allocates them per
+// call; a build runs two scans a round). Each level starts on a 256-byte boundary, the largest storage-buffer
+// offset alignment Vulkan allows.
+constexpr uint64_t kLevelAlign = 256;
+uint64_t align_up(uint64_t v) { return (v + kLevelAlign - 1) / kLevelAlign * kLevelAlign; }
+uint64_t scan_scratch_bytes(uint64_t n) {
+  uint64_t bytes = kLevelAlign;
+  for (uint64_t m = n; m > 1; m = (m + SCAN_BLOCK - 1) / SCAN_BLOCK)
+    bytes += align_up((m + SCAN_BLOCK - 1) / SCAN_BLOCK * 4);
+  return bytes;
+}
+
+// A host-visible, coherent, persistently mapped buffer: the counters are copied into it at the end of every
+// submit, so reading them costs no submit of its own.
+Buffer create_readback(const Context& ctx, VkDeviceSize bytes, void** mapped) {
+  Buffer b;
+  b.device = ctx.device;
+  b.size = bytes;
+  b.name = "dt readback";
+  VkBufferCreateInfo bi{};
+  bi.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
+  bi.size = bytes;
+  bi.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VK_CHECK(vkCreateBuffer(ctx.device, &bi, nullptr, &b.buffer));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(ctx.device, b.buffer, &req);
+  const VkMemoryPropertyFlags need =
+      VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  VkMemoryAllocateInfo ai{};
+  ai.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+  ai.allocationSize = req.size;
+  ai.memoryTypeIndex = UINT32_MAX;
+  for (uint32_t i = 0; i < ctx.memory.memoryTypeCount && ai.memoryTypeIndex == UINT32_MAX; ++i)
+    if ((req.memoryTypeBits & (1u << i)) && (ctx.memory.memoryTypes[i].propertyFlags & need) == need)
+      ai.memoryTypeIndex = i;
+  if (ai.memoryTypeIndex == UINT32_MAX)
+    throw DeviceError("no host-visible coherent memory on " + ctx.info.name);
+  VK_CHECK(vkAllocateMemory(ctx.device, &ai, nullptr, &b.memory));
+  VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, b.memory, 0));
+  VK_CHECK(vkMapMemory(ctx.device, b.memory, 0, VK_WHOLE_SIZE, 0, mapped));
+  return b;
+}
+
+}  // namespace
+
+// Everything one build holds on the device, and the host's view of the counters.
+struct DelaunayBuilder::State {
+  explicit State(const Context& ctx) : rec(ctx) {}
+
+  GpuTriangulation tri;
+  uint32_t n = 0;
+  uint32_t first[3] = {0, 0, 0};  // the first triangle, counter-clockwise
+  Buffer reduce;                  // dt_points results
+  Buffer loc, list, list2;
+  Buffer pick, claim, partner, flip[2];
+  Buffer counters, args, scan_sums;
+  Buffer readback;
+  void* host = nullptr;   // readback, mapped
+  uint32_t list_len = 0;  // entries in `list` (some may have become vertices in the last round)
+  uint32_t left = 0;      // points not yet vertices
+  uint32_t used = 0;      // slots in use
+  uint32_t round = 0;
+  uint32_t epoch = 0;              // of the last claim step (a round's splits, a flip pass); 0 is never used
+  uint32_t cur = 0;                // the flip list the next pass reads
+  uint32_t passes_last_round = 0;  // non-empty flip passes the last round needed: the next first batch
+  uint32_t exact_last_round = 0;   // flip checks the last round decided exactly (ExactChecks::adaptive)
+  uint32_t exact_before = 0;
+  std::array<uint32_t, DT_COUNTERS> c{};
+  std::optional<Profiler> prof;
+  DelaunayStats* stats = nullptr;
+  // One command buffer, submitted once per round and per extra flip batch. Last, so that it goes first: an
+  // unsubmitted recording ends before the buffers it names are destroyed.
+  Recorder rec;
+
+  bool detail = false;  // a stage per kernel as well (DelaunayBuilder::profile_kernels)
+
+  void begin(const char* stage) {
+    if (prof) prof->begin(rec, stage);
+  }
+  void end() {
+    if (prof) prof->end(rec);
+  }
+  // Records one kernel (or scan) through `record`, timed on its own in detail mode.
+  template <class F>
+  void kernel(const char* name, F&& record) {
+    if (detail) begin(name);
+    record();
+    if (detail) end();
+  }
+};
+
+DelaunayBuilder::DelaunayBuilder(const Context& ctx)
+    : exact_checks(ctx.info.type == "cpu" ? ExactChecks::separate : ExactChecks::adaptive),
+      ctx_(ctx),
+      prims_(ctx),
+      points_(create_pass(ctx, {"dt_points", 2, sizeof(DtPointsPush)})),
+      init_(create_pass(ctx, {"dt_init", 7, sizeof(DtInitPush)})),
+      relocate_(create_pass(ctx, {"dt_relocate", 10, sizeof(DtRoundPush)})),
+      relocate_exact_(create_pass(ctx, {"dt_relocate_exact", 7, sizeof(DtRoundPush)})),
+      compact_(create_pass(ctx, {"dt_compact", 4, sizeof(DtRoundPush)})),
+      claim_(create_pass(ctx, {"dt_claim", 4, sizeof(DtRoundPush)})),
+      grant_(create_pass(ctx, {"dt_grant", 3, sizeof(DtRoundPush)})),
+      split_(create_pass(ctx, {"dt_split", 8, sizeof(DtRoundPush)})),
+      split_fix_(create_pass(ctx, {"dt_split_fix", 9, sizeof(DtRoundPush)})),
+      flip_check_(create_pass(ctx, {"dt_flip_check", 9, sizeof(DtFlipPush)})),
+      flip_check_exact_(create_pass(ctx, {"dt_flip_check_exact", 8, sizeof(DtFlipPush)})),
+      flip_(create_pass(ctx, {"dt_flip", 8, sizeof(DtFlipPush)})) {}
+
+GpuTriangulation DelaunayBuilder::build(std::span<const double> xy, DelaunayStats* stats) const {
+  const uint32_t n = uint32_t(xy.size() / 2);
+  return build(upload_new(ctx_, xy.subspan(0, size_t(n) * 2), "points"), n, stats);
+}
+
+GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats* stats) const {
+  if (n > DT_MAX_SLOTS / 2)
+    throw DeviceError("delaunay: " + std::to_string(n) + " points; at most " +
+                      std::to_string(DT_MAX_SLOTS / 2));
+  State st(ctx_);
+  st.n = n;
+  st.stats = stats;
+  st.tri.points = std::move(points);
+  st.tri.num_points = n;
+  if (stats) {
+    *stats = DelaunayStats{};
+    st.detail = profile_kernels;
+    st.prof.emplace(ctx_, profile_kernels ? 512 : 16);
+  }
+  if (n < 3 || !first_triangle(st)) {  // nothing to triangulate: no slots
+    st.tri.verts = create_buffer(ctx_, 0, "tri_verts");
+    st.tri.nbrs = create_buffer(ctx_, 0, "tri_nbrs");
+    return std::move(st.tri);
+  }
+  start(st);
+  while (st.left > 0) {
+    insert_round(st);
+    flip_passes(st);
+  }
+  if (st.used != slot_capacity(n))
+    throw DeviceError("delaunay: " + std::to_string(st.used) + " slots in use at the end, expected " +
+                      std::to_string(slot_capacity(n)));
+  st.tri.num_slots = st.used;
+  if (stats) {
+    stats->rounds = st.round;
+    stats->flips = st.c[DT_FLIPS];
+    stats->exact_walks = st.c[DT_EXACT_WALKS];
+    stats->exact_checks = st.c[DT_EXACT_CHECKS];
+    stats->flip_passes = st.c[DT_FLIP_PASSES];
+    stats->peak_device_bytes = peak_bytes(n);
+  }
+  return std::move(st.tri);
+}
+
+// v0 = point 0 (lexicographic minimum), v1 = point n-1 (maximum), v2 = the point farthest from the line v0-v1
+// by a double estimate, checked exactly here; should the estimate pick a collinear point (all points on a
+// line up to rounding), an exact scan on the host looks for any point off the line. None: all collinear, no
+// triangles.
+bool DelaunayBuilder::first_triangle(State& st) const {
+  const uint32_t n = st.n;
+  st.reduce = create_buffer(ctx_, 4 * sizeof(uint64_t), "dt reduce");
+  st.readback = create_readback(ctx_, std::max<size_t>(DT_COUNTERS * 4, 64), &st.host);
+  st.begin("start");
+  st.rec.fill(st.reduce, 0xFFFFFFFFu);
+  st.rec.dispatch_groups(points_, {st.tri.points, st.reduce}, DtPointsPush{n, 0, n - 1}, groups(n));
+  st.rec.copy(st.reduce, st.readback, 3 * sizeof(uint64_t));
+  st.end();
+  submit(st, false);
+  uint32_t c = uint32_t(static_cast<const uint64_t*>(st.host)[2]);
+  for (uint32_t k = 0; k < 3; ++k)
+    st.rec.copy(st.tri.points, st.readback, 16, uint64_t(k == 0 ? 0 : k == 1 ? n - 1 : c) * 16, k * 16);
+  submit(st, false);
+  pred::XY p[3];
+  std::memcpy(p, st.host, sizeof(p));
+  int o = pred::orient2d(p[0], p[1], p[2]);
+  if (o == 0) {
+    std::vector<double> xy = download_vector<double>(ctx_, st.tri.points, size_t(n) * 2);
+    for (c = 1; c + 1 < n; ++c) {
+      o = pred::orient2d(p[0], p[1], {xy[2 * c], xy[2 * c + 1]});
+      if (o != 0) break;
+    }
+    if (o == 0) return false;
+  }
+  st.first[0] = 0;
+  st.first[1] = o > 0 ? n - 1 : c;
+  st.first[2] = o > 0 ? c : n - 1;
+  return true;
+}
+
+uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
+  if (n < 3) return uint64_t(n) * 16 + 64;
+  const uint64_t slots = slot_capacity(n);
+  const uint64_t result = uint64_t(n) * 16 + slots * 24;  // points, verts, nbrs
+  const uint64_t per_point = uint64_t(n) * 4 * 3;         // loc, list, list2
+  const uint64_t per_slot = slots * (8 + 8 + 4 + 4 + 4);  // pick, claim, partner, 2 flip lists
+  const uint64_t small = 32 + (DT_COUNTERS + DT_ARGS_WORDS) * 4 + std::max(DT_COUNTERS * 4, 64);
+  return result + per_point + per_slot + scan_scratch_bytes(slots) + small;
+}
+
+// Slots 0..3 (the first triangle and its three infinite neighbours); every other point is located in slot 0
+// and listed in Morton order (a 32-bit key, 16 bits per axis over the bounding box), so that points listed
+// together lie together. The keys sit in flip list 0 (idle until the first round). The other per-slot arrays
+// are allocated after the sort has released its scratch: a lower peak.
+void DelaunayBuilder::start(State& st) const {
+  const uint32_t n = st.n, slots = slot_capacity(n);
+  st.tri.capacity = slots;
+  st.tri.verts = create_buffer(ctx_, uint64_t(slots) * 12, "tri_verts");
+  st.tri.nbrs = create_buffer(ctx_, uint64_t(slots) * 12, "tri_nbrs");
+  st.loc = create_buffer(ctx_, uint64_t(n) * 4, "dt loc");
+  st.list = create_buffer(ctx_, uint64_t(n) * 4, "dt list");
+  st.flip[0] = create_buffer(ctx_, uint64_t(slots) * 4, "dt flip list 0");
+  st.begin("start");
+  st.rec.dispatch_groups(init_,
+                         {st.tri.points, st.reduce, st.tri.verts, st.tri.nbrs, st.loc, st.flip[0], st.list},
+                         DtInitPush{n, st.first[0], st.first[1], st.first[2]}, groups(n));
+  prims_.radix_sort(st.rec, st.flip[0], st.list, n, 32);
+  st.end();
+  submit(st, false);
+  st.list2 = create_buffer(ctx_, uint64_t(n) * 4, "dt list2");
+  st.pick = create_buffer(ctx_, uint64_t(slots) * 8, "dt pick");
+  st.claim = create_buffer(ctx_, uint64_t(slots) * 8, "dt claim");
+  st.partner = create_buffer(ctx_, uint64_t(slots) * 4, "dt partner");
+  st.flip[1] = create_buffer(ctx_, uint64_t(slots) * 4, "dt flip list 1");
+  st.counters = create_buffer(ctx_, DT_COUNTERS * 4, "dt counters");
+  st.args = create_buffer(ctx_, DT_ARGS_WORDS * 4, "dt args");
+  st.scan_sums = create_buffer(ctx_, scan_scratch_bytes(slots), "dt scan sums");
+  st.rec.fill(st.pick, DT_NONE);
+  st.rec.fill(st.claim, DT_NONE);
+  st.rec.fill(st.counters, 0);
+  st.list_len = n;
+  st.left = n - 3;
+  st.used = 4;
+}
+
+// One round, one submit: every point left walks to its slot and bids for it (relocate; walks the filters
+// cannot finish go to the exact pass); the list is compacted once a quarter of it are vertices; every slot
+// with a bid inserts its winner where the claims allow (claim, grant, scan, split, fix); then the first batch
+// of flip passes, as many as the last round needed and one more. Flip list 0 holds the walk flags and flip
+// list 1 the scans: both lists are idle between rounds.
+void DelaunayBuilder::insert_round(State& st) const {
+  const uint32_t cap = slot_capacity(st.n);
+  const Buffer &flags = st.flip[0], &offsets = st.flip[1];
+
+  st.begin("relocate");
+  const DtRoundPush points{st.list_len, st.used, st.used + 16, cap, st.round, 0};
+  st.kernel("k:relocate", [&] {
+    st.rec.dispatch_groups(relocate_,
+                           {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.list, flags, st.pick,
+                            st.list2, st.counters, st.args},
+                           points, groups(points.n));
+  });
+  st.kernel("k:relocate_exact", [&] {
+    st.rec.dispatch_indirect(
+        relocate_exact_, {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.list2, st.counters},
+        &points, st.args, DT_ARGS_RELOC * sizeof(uint32_t));
+  });
+  if (uint64_t(st.list_len - st.left) * 4 >= st.list_len) {  // a quarter of the list are vertices: compact
+    st.kernel("k:compact", [&] {
+      scan(st, flags, offsets, points.n);
+      st.rec.dispatch_groups(compact_, {st.list, flags, offsets, st.list2}, points, groups(points.n));
+    });
+    std::swap(st.list, st.list2);
+    st.list_len = st.left;
+  }
+  st.end();
+
+  st.begin("insert");
+  const DtRoundPush slots{st.used, st.used, 0, cap, st.round, ++st.epoch};
+  const uint64_t g = groups(slots.n);
+  st.kernel("k:claim", [&] {
+    st.rec.dispatch_groups(claim_, {st.tri.nbrs, st.loc, st.pick, st.claim}, slots, g);
+  });
+  st.kernel("k:grant+scan", [&] {
+    st.rec.dispatch_groups(grant_, {st.pick, st.claim, offsets}, slots, groups(uint64_t(slots.n) + 1));
+    scan(st, offsets, offsets, slots.n + 1);
+  });
+  st.kernel("k:split", [&] {
+    st.rec.dispatch_groups(
+        split_, {st.tri.verts, st.tri.nbrs, st.loc, st.pick, offsets, st.partner, st.flip[0], st.counters},
+        slots, g);
+  });
+  st.kernel("k:split_fix", [&] {
+    st.rec.dispatch_groups(
+        split_fix_,
+        {st.tri.verts, st.tri.nbrs, st.loc, st.pick, offsets, st.partner, st.claim, st.counters, st.args},
+        slots, g);
+  });
+  st.end();
+  st.cur = 0;
+
+  const uint32_t passes_before = st.c[DT_FLIP_PASSES];
+  st.exact_before = st.c[DT_EXACT_CHECKS];
+  record_flip_batch(st, std::max(flip_passes_per_submit, st.passes_last_round + 1));
+  submit(st, true);
+  ++st.round;
+  const uint32_t winners = st.c[DT_WINNERS];
+  if (winners == 0) throw DeviceError("delaunay: an insertion round inserted nothing");
+  st.left -= winners;
+  st.used += 2 * winners;
+  st.passes_last_round = st.c[DT_FLIP_PASSES] - passes_before;
+}
+
+// Further batches of flip passes until the list is empty: the triangulation is then Delaunay again.
+void DelaunayBuilder::flip_passes(State& st) const {
+  while (st.c[DT_COUNT_LIST0 + st.cur] != 0) {
+    const uint32_t passes_before = st.c[DT_FLIP_PASSES];
+    record_flip_batch(st, flip_passes_per_submit);
+    submit(st, true);
+    st.passes_last_round += st.c[DT_FLIP_PASSES] - passes_before;
+  }
+  st.exact_last_round = st.c[DT_EXACT_CHECKS] - st.exact_before;
+  if (st.stats) st.stats->round_flip_passes.push_back(st.passes_last_round);
+}
+
+// `passes` flip passes, each: check (filters: requests and claims; the last workgroup sizes the exact pass),
+// check the undecided slots exactly (or both in one kernel: ExactChecks), flip (winners flip and repair their
+// neighbours; the next list; the last workgroup sizes the next pass). Indirect dispatches over the current
+// list: no host round trip between passes.
+void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
+  const uint32_t cap = slot_capacity(st.n);
+  const bool inlined = exact_checks == ExactChecks::inlined ||
+                       (exact_checks == ExactChecks::adaptive && st.exact_last_round < kInlineExactBelow);
+  if (inlined && !flip_check_inline_)
+    flip_check_inline_.emplace(create_pass(ctx_, {"dt_flip_check_inline", 9, sizeof(DtFlipPush)}));
+  const Pass& check = inlined ? *flip_check_inline_ : flip_check_;
+  st.begin("flip");
+  for (uint32_t k = 0; k < passes; ++k) {
+    const uint32_t src = st.cur;
+    const DtFlipPush fp{src, cap, ++st.epoch};
+    const VkDeviceSize at = (src == 0 ? DT_ARGS_LIST0 : DT_ARGS_LIST1) * sizeof(uint32_t);
+    const Buffer &list = st.flip[src], &next = st.flip[1 - src];
+    st.kernel("k:flip_check", [&] {
+      st.rec.dispatch_indirect(check,
+                               {st.tri.points, st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, st.pick,
+                                st.counters, st.args},
+                               &fp, st.args, at);
+    });
+    if (!inlined)
+      st.kernel("k:flip_check_exact", [&] {
+        st.rec.dispatch_indirect(
+            flip_check_exact_,
+            {st.tri.points, st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, st.pick, st.counters}, &fp,
+            st.args, DT_ARGS_FLIP * sizeof(uint32_t));
+      });
+    st.kernel("k:flip", [&] {
+      st.rec.dispatch_indirect(
+          flip_, {st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, next, st.counters, st.args}, &fp,
+          st.args, at);
+    });
+    st.cur = 1 - src;
+  }
+  st.end();
+}
+
+// Exclusive scan with the build's own block sums (the primitives' passes, levels as in Primitives).
+void DelaunayBuilder::scan(State& st, const Buffer& in, const Buffer& out, uint32_t n) const {
+  struct Level {
+    uint32_t n, blocks;
+    VkDeviceSize at;
+  };
+  std::vector<Level> levels;
+  VkDeviceSize at = 0;
+  for (uint32_t m = n; m > 1;) {
+    const uint32_t blocks = (m + SCAN_BLOCK - 1) / SCAN_BLOCK;
+    levels.push_back({m, blocks, at});
+    at += align_up(uint64_t(blocks) * 4);
+    m = blocks;
+  }
+  if (n == 1) levels.push_back({1, 1, 0});
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const Level& v = levels[l];
+    const Binding src = l == 0 ? Binding(in) : Binding(st.scan_sums, levels[l - 1].at, uint64_t(v.n) * 4);
+    const Binding dst = l == 0 ? Binding(out) : src;
+    const Binding sums(st.scan_sums, v.at, uint64_t(v.blocks) * 4);
+    st.rec.dispatch_groups(prims_.scan_block, {src, dst, sums}, ScanPush{v.n, v.blocks > 1 ? 1u : 0u, 0u},
+                           v.blocks);
+    if (v.blocks == 1) break;
+  }
+  for (size_t l = levels.size(); l-- > 0;) {
+    const Level& v = levels[l];
+    if (v.blocks == 1) continue;
+    const Binding dst = l == 0 ? Binding(out) : Binding(st.scan_sums, levels[l - 1].at, uint64_t(v.n) * 4);
+    st.rec.dispatch_groups(prims_.scan_add, {dst, Binding(st.scan_sums, v.at, uint64_t(v.blocks) * 4)},
+                           ScanAddPush{v.n}, v.blocks);
+  }
+}
+
+// Submits the recording and waits; `counters`: copy the counters into the readback buffer first, then check
+// them. The stage times go to the stats.
+void DelaunayBuilder::submit(State& st, bool counters) const {
+  if (counters) st.rec.copy(st.counters, st.readback, DT_COUNTERS * sizeof(uint32_t));
+  st.rec.submit();
+  if (st.prof) {
+    for (const StageTime& s : st.prof->results()) {
+      auto& stages = st.stats->stage_ms;
+      auto it = std::find_if(stages.begin(), stages.end(), [&](const auto& e) { return e.first == s.name; });
+      if (it == stages.end())
+        stages.push_back({s.name, s.ms});
+      else
+        it->second += s.ms;
+    }
+    st.prof->reset();
+  }
+  if (!counters) return;
+  std::memcpy(st.c.data(), st.host, DT_COUNTERS * sizeof(uint32_t));
+  const std::pair<int, const char*> errors[] = {{DT_NONCONVEX, "illegal edges with a non-convex quad"},
+                                                {DT_WALK_FAIL, "relocation walks past the step cap"},
+                                                {DT_OVERFLOW, "list overflows"},
+                                                {DT_BEYOND, "hull apexes between the ends of a hull edge"}};
+  for (auto [at, what] : errors)
+    if (st.c[at]) throw DeviceError("delaunay: " + std::to_string(st.c[at]) + " " + what + " (a bug)");
+}
+
+GpuTriangulation build_delaunay(const Context& ctx, std::span<const double> xy, DelaunayStats* stats) {
+  return DelaunayBuilder(ctx).build(xy, stats);
+}
+
+std::vector<std::pair<std::string, double>> bench_delaunay(const DelaunayBuilder& dt,
+                                                           std::span<const double> xy, int runs) {
+  const Context& ctx = dt.context();
+  const uint32_t n = uint32_t(xy.size() / 2);
+  std::map<std::string, std::vector<double>> samples;
+  std::vector<std::string> order;
+  auto add = [&](const std::string& name, double ms) {
+    if (!samples.count(name)) order.push_back(name);
+    samples[name].push_back(ms);
+  };
+  for (int r = 0; r < std::max(runs, 1); ++r) {
+    Buffer points = upload_new(ctx, xy.subspan(0, size_t(n) * 2), "points");
+    DelaunayStats stats;
+    auto t0 = std::chrono::steady_clock::now();
+    GpuTriangulation tri = dt.build(std::move(points), n, &stats);
+    auto t1 = std::chrono::steady_clock::now();
+    double total = 0;
+    for (auto& [name, ms] : stats.stage_ms) {
+      add(name, ms);
+      total += ms;
+    }
+    add("gpu_total", total);
+    add("wall", std::chrono::duration<double, std::milli>(t1 - t0).count());
+  }
+  std::vector<std::pair<std::string, double>> out;
+  for (const std::string& name : order) {
+    std::vector<double>& v = samples[name];
+    std::sort(v.begin(), v.end());
+    out.push_back({name, v[v.size() / 2]});
+  }
+  return out;
+}
+
+}  // namespace cdtgpu::gpu

@@ -1,0 +1,96 @@
+// The Delaunay triangulation of a canonical point set on the GPU, equal to CGAL's Delaunay_triangulation_2
+// triangle for triangle: parallel insertion rounds (gDel2D-like) with exact flipping and CGAL's symbolic
+// perturbation for co-circular points, a symbolic infinite vertex instead of a bounding triangle. The method
+// and why it is exact: docs/gpu-delaunay.md.
+//
+//   gpu::DelaunayBuilder dt(ctx);                 // builds the passes once
+//   gpu::GpuTriangulation tri = dt.build(xy);      // xy: canonical (sorted by x, then y, unique) pairs
+//   std::vector<Triangle> tris = gpu::download_triangles(ctx, tri);
+//
+// Fewer than 3 points, or all points collinear: num_slots = 0 (no triangles), as CGAL has no finite faces
+// then. Cost: about 25-30 rounds for 2M uniform points, each one submit with a host read of a few counters,
+// plus a submit per further batch of flip passes. Device memory at the peak: 132 bytes per point (see
+// peak_bytes()).
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "gpu/buffers.hpp"
+#include "gpu/context.hpp"
+#include "gpu/passes.hpp"
+#include "gpu/primitives.hpp"
+#include "gpu/recorder.hpp"
+#include "gpu/triangulation.hpp"
+
+namespace cdtgpu::gpu {
+
+struct DelaunayStats {
+  uint32_t rounds = 0;       // insertion rounds
+  uint32_t flip_passes = 0;  // flip passes over a non-empty list
+  uint64_t flips = 0;
+  uint64_t exact_walks = 0;                 // relocation walks the filters could not finish (exact pass)
+  uint64_t exact_checks = 0;                // slot flip checks the filters could not decide (exact pass)
+  std::vector<uint32_t> round_flip_passes;  // non-empty flip passes after each round's insertions
+  // GPU time per stage (timestamps), summed over rounds, in order of first appearance: "start" (first
+  // triangle, Morton order), "relocate" (walks + compaction), "insert" (pick, claim, split, fix), "flip".
+  std::vector<std::pair<std::string, double>> stage_ms;
+  uint64_t peak_device_bytes = 0;  // every buffer of the build alive at the peak, the result's included
+};
+
+class DelaunayBuilder {
+ public:
+  explicit DelaunayBuilder(const Context& ctx);
+
+  // Uploads the points and builds; the result owns them.
+  GpuTriangulation build(std::span<const double> xy, DelaunayStats* stats = nullptr) const;
+  // Builds on points already on the GPU (n canonical dvec2); takes the buffer over as the result's points.
+  GpuTriangulation build(Buffer points, uint32_t n, DelaunayStats* stats = nullptr) const;
+
+  // Device bytes a build of n points holds at its peak (the same count as DelaunayStats::peak_device_bytes).
+  static uint64_t peak_bytes(uint32_t n);
+
+  const Context& context() const { return ctx_; }
+
+  // Flip passes recorded blind (indirect dispatch over the current list): a round's first batch is as long as
+  // the last round needed plus one, at least this; each further batch (one submit each) is this long.
+  uint32_t flip_passes_per_submit = 4;
+  // With stats: time every kernel too (stages named "k:..."; the extra timestamps and barriers cost time).
+  bool profile_kernels = false;
+  // How flip checks reach the exact stage: `separate`, filters in one kernel and the undecided slots in a
+  // second (an extra launch per flip pass); `inlined`, one kernel with the exact stage inline (fast while few
+  // checks need it, slow when many do: grids); `adaptive`, inlined for a round when the last round needed the
+  // exact stage for few slots. Default: adaptive on GPUs, separate on CPU devices (lavapipe runs the inlined
+  // kernel several times slower). See docs/gpu-delaunay.md.
+  enum class ExactChecks { separate, inlined, adaptive };
+  ExactChecks exact_checks;
+
+ private:
+  struct State;
+  bool first_triangle(State& st) const;
+  void start(State& st) const;
+  void insert_round(State& st) const;
+  void flip_passes(State& st) const;
+  void record_flip_batch(State& st, uint32_t passes) const;
+  void scan(State& st, const Buffer& in, const Buffer& out, uint32_t n) const;
+  void submit(State& st, bool counters) const;
+
+  const Context& ctx_;
+  Primitives prims_;
+  Pass points_, init_, relocate_, relocate_exact_, compact_, claim_, grant_, split_, split_fix_, flip_check_,
+      flip_check_exact_, flip_;
+  mutable std::optional<Pass> flip_check_inline_;  // built on first use
+};
+
+GpuTriangulation build_delaunay(const Context& ctx, std::span<const double> xy,
+                                DelaunayStats* stats = nullptr);
+
+// Timing for the lead: `runs` builds of the same points; the median GPU milliseconds of every stage, then
+// "gpu_total" (sum of the stages) and "wall" (host clock around build, upload excluded), each a median.
+std::vector<std::pair<std::string, double>> bench_delaunay(const DelaunayBuilder& dt,
+                                                           std::span<const double> xy, int runs);
+
+}  // namespace cdtgpu::gpu

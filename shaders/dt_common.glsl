@@ -1,0 +1,307 @@
+// Helpers of the Delaunay passes (shaders/dt_*.comp). Slots follow gpu/triangulation.hpp: edge k of a slot is
+// opposite vertex k and runs from vertex k+1 to vertex k+2; INF_VERTEX is symbolic and never has coordinates.
+//
+// Always: corner arithmetic and order-preserving float keys. The rest is switched on by the including shader,
+// after it has declared the buffers the code names:
+//   DT_CLAIMS     dt_claim_key (push constant p.epoch): claims of one step.
+//   DT_FIX_EDGES  dt_fix_edge (verts, nbrs, claim, offsets, info, p.epoch): the neighbour repair after a round
+//                 of splits.
+//   DT_WALK       dt_walk (xy, verts, nbrs, counters): the relocation walk.
+//   DT_CHECK      dt_check_slot (xy, verts, nbrs, counters): the flip test of a slot's edges.
+//   DT_APPEND     dt_append_base (counters): subgroup-aggregated list appends.
+//   DT_LAST_GROUP dt_last_group, dt_write_args (counters, args): the last workgroup of a dispatch to finish
+//                 sizes the next indirect dispatch, which saves a one-invocation dispatch (and its barrier) per
+//                 step.
+// Predicates come in two builds of the same code: DT_EXACT 0 uses the floating-point filters alone and reports
+// DT_UNDECIDED when a filter cannot decide; DT_EXACT 1 finishes those cases with the exact stage. The exact
+// stage is big (private scratch arrays, expansion loops): inlined into the hot loop it made lavapipe 5-8x
+// slower even when never reached, and it costs registers on any GPU. So the main passes are built without it
+// and hand the rare undecided cases to a second, exact pass over a short list (docs/gpu-delaunay.md).
+#ifndef CDTGPU_DT_COMMON_GLSL
+#define CDTGPU_DT_COMMON_GLSL
+
+uint dt_next(uint k) { return k == 2u ? 0u : k + 1u; }
+uint dt_prev(uint k) { return k == 0u ? 2u : k - 1u; }
+
+// Unsigned keys in the order of the floats they come from (negative floats below positive ones).
+uint dt_orderable(float f) {
+  uint u = floatBitsToUint(f);
+  return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
+}
+
+uint dt_inf_corner(uint v0, uint v1, uint v2) {
+  return v0 == INF_VERTEX ? 0u : (v1 == INF_VERTEX ? 1u : (v2 == INF_VERTEX ? 2u : 3u));
+}
+
+#if defined(DT_WALK) || defined(DT_CHECK)
+#include "predicates.glsl"
+#define DT_UNDECIDED PRED_UNDECIDED
+
+#if DT_EXACT
+// The single exact-predicate site of a shader (lavapipe compiles every inlined site of pred_sign_of for
+// seconds): kind 0 returns orient2d(p0, p1, p2), kind 1 CGAL's side_of_oriented_circle(p0, p1, p2, p,
+// perturb = true), i.e. pred_incircle_perturbed, whose steps this repeats exactly.
+int dt_exact(int kind, dvec2 p0, dvec2 p1, dvec2 p2, dvec2 p) {
+  if (kind == 0) return pred_sign_of(0, p0, p1, p2, p2);
+  dvec2 pts[4] = dvec2[4](p0, p1, p2, p);
+  int order[4] = int[4](0, 1, 2, 3);
+  for (int i = 1; i < 4; ++i) {
+    int v = order[i];
+    int j = i;
+    while (j > 0) {
+      dvec2 u = pts[order[j - 1]];
+      bool less = pts[v].x < u.x || (pts[v].x == u.x && pts[v].y < u.y);
+      if (!less) break;
+      order[j] = order[j - 1];
+      --j;
+    }
+    order[j] = v;
+  }
+  for (int step = 0; step < 4; ++step) {
+    int k2 = 1;
+    dvec2 a = p0, b = p1, c = p2;
+    if (step > 0) {
+      int k = order[4 - step];
+      if (k == 3) return -1;
+      k2 = 0;
+      if (k == 0) a = p;
+      if (k == 1) b = p;
+      if (k == 2) c = p;
+    }
+    int s = pred_sign_of(k2, a, b, c, p);
+    if (s != 0) return s;
+  }
+  return -1;
+}
+#endif
+
+// kind 0: orient2d(a, b, c); kind 1: the perturbed incircle of (a, b, c) and d. The filter first (a non-zero
+// incircle is also the perturbed answer: the perturbation only breaks ties); DT_UNDECIDED without DT_EXACT.
+bool dt_used_exact = false;  // set when the exact stage ran (the inlined flip check counts its slots)
+
+int dt_sign(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
+  int s = kind == 0 ? pred_orient2d_filter(a, b, c) : pred_incircle_filter(a, b, c, d);
+  if (kind == 1 && s == 0) s = DT_UNDECIDED;
+#if DT_EXACT
+  if (s == DT_UNDECIDED) {
+    dt_used_exact = true;
+    s = dt_exact(kind, a, b, c, d);
+  }
+#endif
+  return s;
+}
+#endif
+
+#ifdef DT_WALK
+// Visibility walk from slot t to the slot holding q, edges tried in order 0, 1, 2: it steps across the first
+// edge that has q strictly on its far side. In a Delaunay triangulation such walks never cycle; the cap only
+// guards against bugs. An infinite slot (x, y, INF) holds the points strictly beyond its hull edge x->y
+// (orient2d(x, y, q) > 0); from any other infinite slot the walk steps back into the finite triangle across
+// that edge, and it steps from a finite slot into an infinite one only with q strictly beyond the hull edge,
+// so it ends there. Returns NBR(slot, edge q lies on or DT_INSIDE); `undecided`: a filter could not decide
+// (DT_EXACT 0 only), and the code is NBR(slot reached so far, DT_INSIDE), where the exact walk resumes.
+uint dt_walk(uint t, dvec2 q, uint max_steps, out bool undecided) {
+  uint k = 0u, on_edge = DT_INSIDE, steps = 0u;
+  undecided = false;
+  for (;;) {
+    uint inf = dt_inf_corner(verts[3u * t], verts[3u * t + 1u], verts[3u * t + 2u]);
+    uint e = inf < 3u ? inf : k;  // an infinite slot is tested on its hull edge only
+    int s = dt_sign(0, xy[verts[3u * t + dt_next(e)]], xy[verts[3u * t + dt_prev(e)]], q, q);
+    if (s == DT_UNDECIDED) {
+      undecided = true;
+      on_edge = DT_INSIDE;
+      break;
+    }
+    bool step;
+    if (inf < 3u) {
+      if (s > 0) break;
+      step = true;
+    } else if (s < 0) {
+      step = true;
+    } else {
+      if (s == 0) on_edge = e;
+      ++k;
+      if (k == 3u) break;
+      step = false;
+    }
+    if (step) {
+      t = NBR_TRI(nbrs[3u * t + e]);
+      k = 0u;
+      on_edge = DT_INSIDE;
+      if (++steps > max_steps) {
+        atomicAdd(counters[DT_WALK_FAIL], 1u);
+        break;
+      }
+    }
+  }
+  return NBR(t, on_edge);
+}
+
+// The bid of a point at loc code `code` for its slot (smaller wins): in a finite slot the squared distance to
+// the centroid, or to the edge's midpoint for a point on an edge (points on lines and grid borders then split
+// their edge in halves, not one by one); in an infinite slot the farthest beyond the hull edge wins
+// (quickhull-like). Float estimates: the choice changes the work, never the result.
+uint dt_bid_key(uint code, dvec2 q) {
+  uint t = NBR_TRI(code), k = NBR_EDGE(code);
+  uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
+  uint inf = dt_inf_corner(v0, v1, v2);
+  if (inf < 3u) {
+    dvec2 x = xy[verts[3u * t + dt_next(inf)]], y = xy[verts[3u * t + dt_prev(inf)]];
+    return dt_orderable(-float((y.x - x.x) * (q.y - x.y) - (y.y - x.y) * (q.x - x.x)));
+  }
+  dvec2 centre = k < 3u ? (xy[verts[3u * t + dt_next(k)]] + xy[verts[3u * t + dt_prev(k)]]) * 0.5lf
+                        : (xy[v0] + xy[v1] + xy[v2]) / 3.0lf;
+  dvec2 d = q - centre;
+  return dt_orderable(float(dot(d, d)));
+}
+#endif
+
+#ifdef DT_CHECK
+bool dt_lex_less(dvec2 a, dvec2 b) { return a.x < b.x || (a.x == b.x && a.y < b.y); }
+
+// The first illegal edge of slot t among those `mode`/`m` ask for (DT_CHECK_*), in order 0, 1, 2, with u
+// the neighbour across it:
+//   INF is never inside a finite circle, and an edge of a finite and an infinite slot is a hull edge: legal.
+//   Two infinite slots sharing the edge y-INF, t = (x, y, INF) and u with finite apex z: illegal iff
+//     orient2d(x, y, z) > 0 (z strictly beyond the hull edge x->y: the hull is not convex at y).
+//   Two finite slots: CGAL's perturbed incircle (side_of_oriented_circle(..., perturb = true)) > 0.
+// An illegal finite edge must have a strictly convex quad (the flip's two triangles counter-clockwise); that is
+// checked too, and a failure is counted and never flipped. Returns 1 (illegal: k and the neighbour code uc
+// set), 0 (all legal) or DT_UNDECIDED (DT_EXACT 0: a filter could not decide before an illegal edge was found).
+int dt_check_slot(uint t, uint mode, uint m, out uint k_out, out uint uc_out) {
+  k_out = 0u;
+  uc_out = 0u;
+  for (uint k = 0u; k < 3u; ++k) {
+    if ((mode == DT_CHECK_ONLY && k != m) || (mode == DT_CHECK_SKIP && k == m)) continue;
+    uint c = verts[3u * t + k], a = verts[3u * t + dt_next(k)], b = verts[3u * t + dt_prev(k)];
+    uint uc = nbrs[3u * t + k];
+    uint d = verts[3u * NBR_TRI(uc) + NBR_EDGE(uc)];
+    if (c == INF_VERTEX || d == INF_VERTEX) continue;
+    bool finite = a != INF_VERTEX && b != INF_VERTEX;
+    // (c, a, INF) has hull edge c->a; (c, INF, b) = (b, c, INF) has hull edge b->c.
+    uint x = b == INF_VERTEX ? c : b, y = b == INF_VERTEX ? a : c;
+    bool flip = true;
+    for (int q = 0; q < 3; ++q) {
+      int kind = 0;
+      dvec2 p0, p1, p2;
+      if (q == 0 && finite) {
+        kind = 1;
+        p0 = xy[c];
+        p1 = xy[a];
+        p2 = xy[b];
+      } else if (q == 0) {
+        p0 = xy[x];
+        p1 = xy[y];
+        p2 = xy[d];
+      } else if (q == 1) {
+        p0 = xy[c];
+        p1 = xy[a];
+        p2 = xy[d];
+      } else {
+        p0 = xy[d];
+        p1 = xy[b];
+        p2 = xy[c];
+      }
+      int s = dt_sign(kind, p0, p1, p2, xy[d]);
+      if (s == DT_UNDECIDED) return DT_UNDECIDED;
+      if (s <= 0) {
+        if (q > 0) atomicAdd(counters[DT_NONCONVEX], 1u);
+        if (q == 0 && !finite && s == 0 && (dt_lex_less(p0, p2) == dt_lex_less(p2, p1)))
+          atomicAdd(counters[DT_BEYOND], 1u);
+        flip = false;
+        break;
+      }
+      if (!finite) break;
+    }
+    if (flip) {
+      k_out = k;
+      uc_out = uc;
+      return 1;
+    }
+  }
+  return 0;
+}
+#endif
+
+#ifdef DT_APPEND
+// Reserves `count` entries of the list counted by counters[word] for this invocation and returns the first:
+// one atomicAdd per subgroup (every invocation of a dispatch appending to one counter would otherwise queue on
+// one address). Call in uniform control flow; count may be 0.
+uint dt_append_base(uint word, uint count) {
+  uint before = subgroupExclusiveAdd(count);
+  uint total = subgroupAdd(count);
+  uint base = 0u;
+  if (subgroupElect() && total > 0u) base = atomicAdd(counters[word], total);
+  return subgroupBroadcastFirst(base) + before;
+}
+#endif
+
+#ifdef DT_LAST_GROUP
+shared bool dt_last_flag;
+
+// Called by every invocation of the workgroup at the end of main (no early return before it): true in the
+// one workgroup that finishes last, when every other workgroup's buffer writes are done. Counters written by
+// other workgroups must then be read with atomics (dt_count).
+bool dt_last_group() {
+  memoryBarrierBuffer();
+  barrier();
+  if (gl_LocalInvocationIndex == 0u) {
+    uint total = gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z;
+    dt_last_flag = atomicAdd(counters[DT_DONE], 1u) == total - 1u;
+    if (dt_last_flag) atomicExchange(counters[DT_DONE], 0u);
+  }
+  barrier();
+  memoryBarrierBuffer();
+  return dt_last_flag;
+}
+
+uint dt_count(uint word) { return atomicAdd(counters[word], 0u); }
+
+// Indirect-dispatch arguments for n entries: groups of DT_WG split over x and y like Recorder::dispatch_groups,
+// at least one group, so that the dispatch's own last workgroup always runs.
+void dt_write_args(uint at, uint n) {
+  uint groups = max((n + DT_WG - 1u) / DT_WG, 1u);
+  uint x = min(groups, 65535u);
+  args[at] = x;
+  args[at + 1u] = (groups + x - 1u) / x;
+  args[at + 2u] = 1u;
+}
+#endif
+
+#ifdef DT_CLAIMS
+// Claims are 64-bit atomicMin words: (~epoch << 32) | priority, the priority being the requesting slot (splits)
+// or NBR(slot, edge) (flips). Every step (a round's splits, each flip pass) has a new epoch, and a newer epoch's
+// key is below every older one, so claims never need resetting: a claim word is current iff its high word is
+// ~p.epoch, and a request won iff its key still stands on every slot it claimed.
+uint64_t dt_claim_key(uint prio) { return (uint64_t(~p.epoch) << 32) | uint64_t(prio); }
+bool dt_claim_current(uint64_t c) { return uint(c >> 32) == ~p.epoch; }
+#endif
+
+#ifdef DT_FIX_EDGES
+// After a round of splits: slot q's edge e faces the outside of its split. nbrs[3q+e] still holds the
+// neighbour code from before. The neighbour u was split this round iff its current claim belongs to a granted
+// split. If it was not, it is pointed back at (q, e); this is its only writer. If it was, its edge either stayed
+// in place (same two vertices at the same index) or moved where info[u] says: NBR(X, 3) for a 1->3 split (edge
+// l went to slot X + l - 1, same index; l = 0 stayed), else NBR(w, l') = "the edge that left went to slot w,
+// index l'". The thread fixing u does the same from its side.
+bool dt_split_this_round(uint u) {
+  uint64_t c = claim[u];
+  uint t = uint(c);
+  return dt_claim_current(c) && offsets[t + 1u] != offsets[t];
+}
+
+void dt_fix_edge(uint q, uint e) {
+  uint c = nbrs[3u * q + e];
+  uint u = NBR_TRI(c), l = NBR_EDGE(c);
+  if (!dt_split_this_round(u)) {
+    nbrs[3u * u + l] = NBR(q, e);
+    return;
+  }
+  uint x = verts[3u * q + dt_next(e)], y = verts[3u * q + dt_prev(e)];
+  if (verts[3u * u + dt_next(l)] == y && verts[3u * u + dt_prev(l)] == x) return;
+  uint inf = info[u];
+  nbrs[3u * q + e] = NBR_EDGE(inf) == DT_INSIDE ? NBR(NBR_TRI(inf) + l - 1u, l) : inf;
+}
+#endif
+
+#endif

@@ -1,0 +1,34 @@
+// Insertion round, step 1b (indirect, over the exact list of step 1): the walks a floating-point filter could
+// not finish resume from where they stopped with exact predicates, then bid like step 1.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_EXT_shader_atomic_int64 : require
+#include "layout_dt.h"
+#include "common.glsl"
+
+layout(local_size_x = DT_WG) in;
+layout(std430, binding = 0) readonly buffer Points { dvec2 xy[]; };
+layout(std430, binding = 1) readonly buffer Verts { uint verts[]; };
+layout(std430, binding = 2) readonly buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 3) buffer Loc { uint loc[]; };
+layout(std430, binding = 4) buffer Pick { uint64_t pick[]; };
+layout(std430, binding = 5) readonly buffer Exact { uint exact_list[]; };
+layout(std430, binding = 6) buffer Counters { uint counters[]; };
+layout(push_constant) uniform Push { DtRoundPush p; };
+
+#define DT_EXACT 1
+#define DT_WALK
+#include "dt_common.glsl"
+
+void main() {
+  uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
+  if (i >= counters[DT_EXACT_RELOC]) return;
+  if (i == 0u) counters[DT_EXACT_WALKS] += counters[DT_EXACT_RELOC];
+  uint pt = exact_list[i];
+  dvec2 q = xy[pt];
+  bool undecided;
+  uint code = dt_walk(NBR_TRI(loc[pt]), q, p.max_steps, undecided);
+  loc[pt] = code;
+  atomicMin(pick[NBR_TRI(code)], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(pt));
+}

@@ -1,0 +1,112 @@
+// Insertion round, step 4, over the slots: every granted point splits its slot(s); new slots come from the
+// scan, two per split, X = base + 2 * offsets[t]. Edge indices are kept, so an edge that leaves a slot keeps its index and info[]
+// says where it went (dt_fix_edge reads it in the next step):
+//   1->3, p inside t = (v0, v1, v2): t = (p, v1, v2), X = (v0, p, v2), X+1 = (v0, v1, p); old edge k now lives
+//     in triangle k, index k (info[t] = NBR(X, 3)). Internal edges: triangle a's edge b meets triangle b's edge a.
+//   2->4, p on edge i of t = (c@i, a@i+1, b@i+2), whose neighbour s = (d@j, b@j+1, a@j+2) (possibly infinite):
+//     t = (c, a, p), X = (c, p, b) [t's edge i+1 moved there, info[t] = NBR(X, i+1)],
+//     s = (d, b, p), X+1 = (d, p, a) [s's edge j+1 moved there, info[s] = NBR(X+1, j+1)].
+// The changed slots go to flip list 0, with
+// the edges to check: a 1->3 triangle only its outer edge, a 2->4 triangle all but its spoke (the new edges at
+// p are locally Delaunay: docs/gpu-delaunay.md).
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+#include "layout_dt.h"
+#include "common.glsl"
+
+layout(local_size_x = DT_WG) in;
+layout(std430, binding = 0) buffer Verts { uint verts[]; };
+layout(std430, binding = 1) buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 2) readonly buffer Loc { uint loc[]; };
+layout(std430, binding = 3) readonly buffer Pick { uint pickw[]; };
+layout(std430, binding = 4) readonly buffer Offsets { uint offsets[]; };  // exclusive scan of dt_grant's flags
+layout(std430, binding = 5) writeonly buffer Info { uint info[]; };      // the partner buffer, idle now
+layout(std430, binding = 6) writeonly buffer Flip { uint flip_list[]; };
+layout(std430, binding = 7) buffer Counters { uint counters[]; };
+layout(push_constant) uniform Push { DtRoundPush p; };
+
+#define DT_APPEND
+#include "dt_common.glsl"
+
+// Slot t's split, if granted; returns how many changed slots it lists (0, 3 or 4), in e.
+uint split(uint t, out uvec4 e) {
+  e = uvec4(0u);
+  uint pt = pickw[2u * t];
+  if (pt == DT_NONE) return 0u;
+  uint sc = pickw[2u * t + 1u];
+  if (offsets[t + 1u] == offsets[t]) return 0u;  // not granted
+
+  uint k = NBR_EDGE(loc[pt]);
+  uint X = p.base + 2u * offsets[t], Y = X + 1u;
+  if (k == DT_INSIDE) {
+    uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
+    uint n1 = nbrs[3u * t + 1u], n2 = nbrs[3u * t + 2u];
+    verts[3u * t] = pt;
+    nbrs[3u * t + 1u] = NBR(X, 0u);
+    nbrs[3u * t + 2u] = NBR(Y, 0u);
+    verts[3u * X] = v0;
+    verts[3u * X + 1u] = pt;
+    verts[3u * X + 2u] = v2;
+    nbrs[3u * X] = NBR(t, 1u);
+    nbrs[3u * X + 1u] = n1;
+    nbrs[3u * X + 2u] = NBR(Y, 1u);
+    verts[3u * Y] = v0;
+    verts[3u * Y + 1u] = v1;
+    verts[3u * Y + 2u] = pt;
+    nbrs[3u * Y] = NBR(t, 2u);
+    nbrs[3u * Y + 1u] = NBR(X, 2u);
+    nbrs[3u * Y + 2u] = n2;
+    info[t] = NBR(X, DT_INSIDE);
+    e = uvec4(DT_ENTRY(t, DT_CHECK_ONLY, 0u), DT_ENTRY(X, DT_CHECK_ONLY, 1u), DT_ENTRY(Y, DT_CHECK_ONLY, 2u), 0u);
+    return 3u;
+  }
+  uint s = NBR_TRI(sc), j = NBR_EDGE(sc);
+  uint i1 = dt_next(k), i2 = dt_prev(k), j1 = dt_next(j), j2 = dt_prev(j);
+  uint c = verts[3u * t + k], a = verts[3u * t + i1], b = verts[3u * t + i2], d = verts[3u * s + j];
+  uint tn1 = nbrs[3u * t + i1], sn1 = nbrs[3u * s + j1];
+  // t = (c, a, p)
+  verts[3u * t + i2] = pt;
+  nbrs[3u * t + k] = NBR(Y, j);
+  nbrs[3u * t + i1] = NBR(X, i2);
+  // X = (c, p, b)
+  verts[3u * X + k] = c;
+  verts[3u * X + i1] = pt;
+  verts[3u * X + i2] = b;
+  nbrs[3u * X + k] = NBR(s, j);
+  nbrs[3u * X + i1] = tn1;
+  nbrs[3u * X + i2] = NBR(t, i1);
+  // s = (d, b, p)
+  verts[3u * s + j2] = pt;
+  nbrs[3u * s + j] = NBR(X, k);
+  nbrs[3u * s + j1] = NBR(Y, j2);
+  // Y = (d, p, a)
+  verts[3u * Y + j] = d;
+  verts[3u * Y + j1] = pt;
+  verts[3u * Y + j2] = a;
+  nbrs[3u * Y + j] = NBR(t, k);
+  nbrs[3u * Y + j1] = sn1;
+  nbrs[3u * Y + j2] = NBR(s, j1);
+  info[t] = NBR(X, i1);
+  info[s] = NBR(Y, j1);
+  e = uvec4(DT_ENTRY(t, DT_CHECK_SKIP, i1), DT_ENTRY(X, DT_CHECK_SKIP, i2), DT_ENTRY(s, DT_CHECK_SKIP, j1),
+            DT_ENTRY(Y, DT_CHECK_SKIP, j2));
+  return 4u;
+}
+
+void main() {
+  uint t = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
+  if (t == 0u) counters[DT_WINNERS] = offsets[p.n];
+  uvec4 e;
+  uint count = t < p.n ? split(t, e) : 0u;
+  uint at = dt_append_base(DT_COUNT_LIST0, count);
+  if (count > 0u) {
+    if (at + count > p.capacity) {
+      atomicAdd(counters[DT_OVERFLOW], 1u);
+    } else {
+      for (uint k = 0u; k < count; ++k) flip_list[at + k] = e[k];
+    }
+  }
+}

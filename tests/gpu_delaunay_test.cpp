@@ -1,0 +1,343 @@
+// gpu/delaunay against CGAL's Delaunay_triangulation_2 (Epick): the same finite triangles, in canonical
+// order, and a valid closed triangulation (check_triangulation), on uniform, clustered, grid (all
+// co-circular), lines, integer-with-duplicates, UTM-scale and collinear-hull inputs and 300 small degenerate
+// ones; the degenerate inputs (0..3 points, all collinear) give no triangles; two runs give the same slots.
+// CI sizes are tens of thousands of points. Environment:
+//   CDTGPU_LARGE=1             adds 1M and 4M uniform points and a 2000 x 1000 grid (for the GPU machine)
+//   CDTGPU_DT_BENCH=N          times N builds of CDTGPU_DT_BENCH_POINTS (default 2M) uniform points
+//                              (CDTGPU_DT_BENCH_GRID=1: a grid 2000 wide) and prints median GPU ms per stage
+//   CDTGPU_DT_PROFILE_KERNELS=1  per kernel too; CDTGPU_DT_FLIP_BATCH=K:
+//   DelaunayBuilder::flip_passes_per_submit CDTGPU_DT_EXACT=separate|inline|adaptive
+//   DelaunayBuilder::exact_checks CDTGPU_DT_SMALL_CASES=N    small degenerate cases (default 300)
+//   CDTGPU_VALIDATION=0        validation off (it is on by default, and a missing layer is then an error)
+#include <CGAL/Delaunay_triangulation_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "gpu/context.hpp"
+#include "gpu/delaunay.hpp"
+#include "gpu/triangulation.hpp"
+
+using namespace cdtgpu;
+using namespace cdtgpu::gpu;
+
+namespace {
+
+bool env_is(const char* name, const char* value) {
+  const char* v = std::getenv(name);
+  return v && std::strcmp(v, value) == 0;
+}
+
+Context& ctx() {
+  static Context c = [] {
+    // Validation on by default, and a missing layer is then an error; CDTGPU_VALIDATION=0 turns it off
+    // (timing, or a machine without the layer).
+    setenv("CDTGPU_VALIDATION", "1", 0);
+    ContextOptions options;
+    options.validation = std::strcmp(std::getenv("CDTGPU_VALIDATION"), "0") != 0;
+    return create_context(options);
+  }();
+  return c;
+}
+
+DelaunayBuilder& builder() {
+  static DelaunayBuilder b = [] {
+    DelaunayBuilder d(ctx());
+    if (const char* k = std::getenv("CDTGPU_DT_FLIP_BATCH"))
+      d.flip_passes_per_submit = uint32_t(std::atoi(k));
+    d.profile_kernels = env_is("CDTGPU_DT_PROFILE_KERNELS", "1");
+    if (const char* e = std::getenv("CDTGPU_DT_EXACT")) {
+      using E = DelaunayBuilder::ExactChecks;
+      d.exact_checks = std::strcmp(e, "inline") == 0     ? E::inlined
+                       : std::strcmp(e, "separate") == 0 ? E::separate
+                                                         : E::adaptive;
+    }
+    return d;
+  }();
+  return b;
+}
+
+bool large() { return env_is("CDTGPU_LARGE", "1"); }
+
+void no_validation_messages() {
+  for (auto& m : ctx().messages()) ADD_FAILURE() << m;
+  ctx().clear_messages();
+}
+
+struct Rng {
+  explicit Rng(uint64_t seed) : g(seed) {}
+  double unit() { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
+  double uniform(double lo, double hi) { return lo + (hi - lo) * unit(); }
+  double normal() {  // Box-Muller, written out so the numbers do not depend on the library
+    double u = unit(), v = unit();
+    return std::sqrt(-2.0 * std::log(1.0 - u)) * std::cos(6.283185307179586 * v);
+  }
+  std::mt19937_64 g;
+};
+
+// Canonical order, as core/prepare: sorted by (x, y), exact duplicates merged.
+std::vector<double> canonical(std::vector<std::pair<double, double>> pts) {
+  std::sort(pts.begin(), pts.end());
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  std::vector<double> xy;
+  xy.reserve(pts.size() * 2);
+  for (auto& [x, y] : pts) {
+    xy.push_back(x);
+    xy.push_back(y);
+  }
+  return xy;
+}
+
+std::vector<Triangle> cgal_delaunay(const std::vector<double>& xy) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Vb = CGAL::Triangulation_vertex_base_with_info_2<uint32_t, K>;
+  using Tds = CGAL::Triangulation_data_structure_2<Vb>;
+  using Dt = CGAL::Delaunay_triangulation_2<K, Tds>;
+  std::vector<std::pair<K::Point_2, uint32_t>> pts;
+  pts.reserve(xy.size() / 2);
+  for (uint32_t i = 0; i < xy.size() / 2; ++i) pts.push_back({K::Point_2(xy[2 * i], xy[2 * i + 1]), i});
+  Dt dt;
+  dt.insert(pts.begin(), pts.end());
+  std::vector<Triangle> out;
+  if (dt.dimension() < 2) return out;
+  for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f) {
+    Triangle t{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    out.push_back(t);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Builds on the GPU, checks the slots and compares with CGAL.
+void expect_cgal(const std::string& name, const std::vector<double>& xy) {
+  const size_t n = xy.size() / 2;
+  DelaunayStats stats;
+  auto t0 = std::chrono::steady_clock::now();
+  GpuTriangulation tri = builder().build(xy, &stats);
+  const double gpu_ms = ms_since(t0);
+  HostTriangulation host = download_host(ctx(), tri);
+  std::vector<Triangle> got = finite_triangles(host);
+  t0 = std::chrono::steady_clock::now();
+  std::vector<Triangle> want = cgal_delaunay(xy);
+  const double cgal_ms = ms_since(t0);
+  std::string stages;
+  for (auto& [stage, ms] : stats.stage_ms)
+    stages.append(" ").append(stage).append("=").append(std::to_string(ms).substr(0, 7));
+  std::printf(
+      "[ dt ] %-22s n=%zu triangles=%zu rounds=%u flip_passes=%u flips=%llu exact walks/checks=%llu/%llu "
+      "bytes/pt=%.1f build=%.0f ms (gpu:%s) cgal=%.0f ms\n",
+      name.c_str(), n, got.size(), stats.rounds, stats.flip_passes, (unsigned long long)stats.flips,
+      (unsigned long long)stats.exact_walks, (unsigned long long)stats.exact_checks,
+      n ? double(stats.peak_device_bytes) / double(n) : 0.0, gpu_ms, stages.c_str(), cgal_ms);
+  EXPECT_EQ(check_triangulation(host), "") << name;
+  ASSERT_EQ(got.size(), want.size()) << name;
+  size_t diff = 0;
+  for (size_t i = 0; i < got.size(); ++i)
+    if (got[i] != want[i] && diff++ < 3)
+      ADD_FAILURE() << name << ": triangle " << i << " is (" << got[i][0] << "," << got[i][1] << ","
+                    << got[i][2] << "), CGAL has (" << want[i][0] << "," << want[i][1] << "," << want[i][2]
+                    << ")";
+  EXPECT_EQ(diff, 0u) << name;
+  no_validation_messages();
+}
+
+std::vector<double> uniform(size_t n, uint64_t seed) {
+  Rng r(seed);
+  std::vector<std::pair<double, double>> pts(n);
+  for (auto& p : pts) p = {r.unit(), r.unit()};
+  return canonical(pts);
+}
+
+std::vector<double> grid(uint32_t nx, uint32_t ny, double x0, double y0, double step) {
+  std::vector<std::pair<double, double>> pts;
+  for (uint32_t i = 0; i < nx; ++i)
+    for (uint32_t j = 0; j < ny; ++j) pts.push_back({x0 + i * step, y0 + j * step});
+  return canonical(pts);
+}
+
+}  // namespace
+
+TEST(GpuDelaunay, UniformMatchesCgal) {
+  if (!env_is("CDTGPU_VALIDATION", "0")) {
+    EXPECT_TRUE(ctx().validation);
+  }
+  expect_cgal("uniform 20k", uniform(20000, 1));
+  expect_cgal("uniform 1k", uniform(1000, 2));
+}
+
+TEST(GpuDelaunay, ClusteredMatchesCgal) {
+  // Gaussian blobs 100x denser than the uniform background.
+  Rng r(3);
+  std::vector<std::pair<double, double>> pts;
+  for (int b = 0; b < 6; ++b) {
+    double cx = r.uniform(0.1, 0.9), cy = r.uniform(0.1, 0.9), s = r.uniform(0.005, 0.02);
+    for (int i = 0; i < 2000; ++i) pts.push_back({cx + s * r.normal(), cy + s * r.normal()});
+  }
+  for (int i = 0; i < 3000; ++i) pts.push_back({r.unit(), r.unit()});
+  expect_cgal("clustered", canonical(pts));
+}
+
+TEST(GpuDelaunay, GridDemAllCocircular) {
+  expect_cgal("grid 150x100", grid(150, 100, 0, 0, 1));
+  expect_cgal("grid 7x5 utm", grid(7, 5, 500000.25, 6000000.5, 10));
+}
+
+TEST(GpuDelaunay, PointsOnLines) {
+  Rng r(4);
+  std::vector<std::pair<double, double>> pts;
+  for (int l = 0; l < 5; ++l) {  // lines through random points with random rational-ish slopes, exact steps
+    double x0 = std::floor(r.uniform(0, 1000)), y0 = std::floor(r.uniform(0, 1000));
+    double dx = std::floor(r.uniform(-8, 9)), dy = std::floor(r.uniform(-8, 9));
+    if (dx == 0 && dy == 0) dx = 1;
+    for (int i = 0; i < 1500; ++i) pts.push_back({x0 + i * dx, y0 + i * dy});
+  }
+  for (int i = 0; i < 1000; ++i)
+    pts.push_back({std::floor(r.uniform(-5000, 5000)), std::floor(r.uniform(-5000, 5000))});
+  expect_cgal("lines", canonical(pts));
+}
+
+TEST(GpuDelaunay, IntegerCoordinatesWithDuplicates) {
+  Rng r(5);
+  std::vector<std::pair<double, double>> pts;
+  for (int i = 0; i < 30000; ++i)
+    pts.push_back({std::floor(r.uniform(0, 150)), std::floor(r.uniform(0, 120))});
+  std::vector<double> xy = canonical(pts);
+  EXPECT_LT(xy.size() / 2, pts.size());
+  expect_cgal("integers+duplicates", xy);
+}
+
+TEST(GpuDelaunay, UtmScaleMillimetres) {
+  Rng r(6);
+  std::vector<std::pair<double, double>> pts;
+  for (int i = 0; i < 20000; ++i)
+    pts.push_back(
+        {std::floor(500000000.0 + r.unit() * 2e6) / 1000, std::floor(6000000000.0 + r.unit() * 2e6) / 1000});
+  expect_cgal("utm mm", canonical(pts));
+}
+
+TEST(GpuDelaunay, HullWithManyCollinearPoints) {
+  // A grid's border (400 collinear points per side) around random inside points.
+  Rng r(7);
+  std::vector<std::pair<double, double>> pts;
+  for (int i = 0; i <= 400; ++i) {
+    pts.push_back({double(i), 0});
+    pts.push_back({double(i), 400});
+    pts.push_back({0, double(i)});
+    pts.push_back({400, double(i)});
+  }
+  for (int i = 0; i < 5000; ++i) pts.push_back({r.uniform(1, 399), r.uniform(1, 399)});
+  expect_cgal("collinear hull", canonical(pts));
+  expect_cgal("border only",
+              canonical(std::vector<std::pair<double, double>>(pts.begin(), pts.begin() + 1604)));
+}
+
+TEST(GpuDelaunay, DegenerateInputsGiveNoTriangles) {
+  for (size_t n : {0u, 1u, 2u}) {
+    std::vector<double> xy;
+    for (size_t i = 0; i < n; ++i) xy.insert(xy.end(), {double(i), 2.0 * i});
+    GpuTriangulation tri = builder().build(xy);
+    EXPECT_EQ(tri.num_slots, 0u) << n;
+    EXPECT_EQ(tri.num_points, n);
+  }
+  std::vector<std::pair<double, double>> line;
+  for (int i = 0; i < 5000; ++i)
+    line.push_back({500000.0 + 0.001 * i, 6000000.0 + 0.003 * i});  // rounded: near
+  expect_cgal("near-collinear utm", canonical(line));               // not collinear after rounding: slivers
+  std::vector<std::pair<double, double>> exact;
+  for (int i = 0; i < 5000; ++i) exact.push_back({3.0 * i, -7.0 * i + 11});
+  GpuTriangulation collinear = builder().build(canonical(exact));
+  EXPECT_EQ(collinear.num_slots, 0u);
+  expect_cgal("three points", {0, 0, 1, 5, 2, 1});
+  expect_cgal("three points cw", {0, 0, 1, -5, 2, 1});
+  expect_cgal("collinear + one", canonical([] {
+                std::vector<std::pair<double, double>> p;
+                for (int i = 0; i < 2000; ++i) p.push_back({double(i), double(i)});
+                p.push_back({1000, 0});
+                return p;
+              }()));
+  no_validation_messages();
+}
+
+TEST(GpuDelaunay, ManySmallDegenerateInputs) {
+  // Small point sets on tiny integer lattices (collinear and co-circular everywhere), lattices moved to UTM
+  // magnitudes, and lattice points nudged by an ulp: every round, flip and walk corner case, many times over.
+  const char* cases = std::getenv("CDTGPU_DT_SMALL_CASES");  // more for a soak run
+  const int count = cases ? std::atoi(cases) : 300;
+  Rng r(9);
+  int compared = 0;
+  for (int it = 0; it < count; ++it) {
+    const int n = 3 + int(r.g() % (it % 10 == 9 ? 400 : 60)), side = 2 + int(r.g() % (it % 10 == 9 ? 30 : 7));
+    const int style = int(r.g() % 3);
+    std::vector<std::pair<double, double>> pts;
+    for (int i = 0; i < n; ++i) {
+      double x = double(r.g() % side), y = double(r.g() % side);
+      if (style == 1) x = 500000.0 + 0.125 * x, y = 6000000.0 + 0.125 * y;
+      // An ulp off the lattice; not at 0, whose neighbours are denormals, outside the predicates' range.
+      if (style == 2 && (r.g() & 7) == 0 && x != 0) x = std::nextafter(x, r.g() & 1 ? HUGE_VAL : -HUGE_VAL);
+      pts.push_back({x, y});
+    }
+    std::vector<double> xy = canonical(pts);
+    HostTriangulation host = download_host(ctx(), builder().build(xy));
+    std::vector<Triangle> want = cgal_delaunay(xy);
+    if (!host.verts.empty()) {
+      ASSERT_EQ(check_triangulation(host), "") << "case " << it;
+    }
+    ASSERT_EQ(finite_triangles(host), want) << "case " << it << ", " << xy.size() / 2 << " points";
+    compared += !want.empty();
+  }
+  EXPECT_GT(compared, count * 2 / 3);
+  no_validation_messages();
+}
+
+TEST(GpuDelaunay, SameSlotsOnEveryRun) {
+  std::vector<double> xy = uniform(15000, 8);
+  HostTriangulation a = download_host(ctx(), builder().build(xy));
+  HostTriangulation b = download_host(ctx(), builder().build(xy));
+  EXPECT_EQ(a.verts, b.verts);
+  EXPECT_EQ(a.nbrs, b.nbrs);
+  no_validation_messages();
+}
+
+TEST(GpuDelaunay, Large) {
+  if (!large()) GTEST_SKIP() << "set CDTGPU_LARGE=1 (GPU machine) for 1M, 4M and a 2000 x 1000 grid";
+  expect_cgal("uniform 1M", uniform(1000000, 11));
+  expect_cgal("grid 2000x1000", grid(2000, 1000, 500000, 6000000, 1));
+  expect_cgal("uniform 4M", uniform(4000000, 12));
+}
+
+TEST(GpuDelaunay, Bench) {
+  const char* runs = std::getenv("CDTGPU_DT_BENCH");
+  if (!runs) GTEST_SKIP() << "set CDTGPU_DT_BENCH=N (runs) and optionally CDTGPU_DT_BENCH_POINTS";
+  const char* pts = std::getenv("CDTGPU_DT_BENCH_POINTS");
+  const size_t n = pts ? std::strtoull(pts, nullptr, 10) : 2000000;
+  const bool on_grid = env_is("CDTGPU_DT_BENCH_GRID", "1");
+  std::vector<double> xy =
+      on_grid ? grid(2000, uint32_t((n + 1999) / 2000), 500000, 6000000, 1) : uniform(n, 13);
+  std::printf("[ dt bench ] %zu %s points, %s runs, device %s, %.1f bytes/point\n", xy.size() / 2,
+              on_grid ? "grid" : "uniform", runs, ctx().info.name.c_str(),
+              double(DelaunayBuilder::peak_bytes(uint32_t(xy.size() / 2))) / (xy.size() / 2));
+  for (auto& [stage, ms] : bench_delaunay(builder(), xy, std::atoi(runs)))
+    std::printf("[ dt bench ] %-10s %9.3f ms (median)\n", stage.c_str(), ms);
+  DelaunayStats stats;
+  builder().build(xy, &stats);
+  std::string passes;
+  for (uint32_t p : stats.round_flip_passes) passes.append(" ").append(std::to_string(p));
+  std::printf("[ dt bench ] rounds %u, flips %llu, flip passes per round:%s\n", stats.rounds,
+              (unsigned long long)stats.flips, passes.c_str());
+}
