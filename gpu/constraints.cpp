@@ -1,0 +1,564 @@
+// Constraint insertion on the GPU; see constraints.hpp and docs/gpu-constraints.md. insert() reads as the method:
+//   vertex map -> rounds of { crossing detection (walk, scan, walk), adaptive flipping (claim, flip, fix) }
+//   -> mark the constrained edges -> rounds of { legalise (claim, flip, fix) }.
+// Rounds are recorded in batches into one command buffer; between batches only counters are read back.
+#include "gpu/constraints.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "core/predicates.hpp"
+
+#include "gpu/check.hpp"
+#include "gpu/profiler.hpp"
+#include "gpu/recorder.hpp"
+#include "shaders/layout_cdt.h"
+
+namespace cdtgpu::gpu {
+
+using namespace layout;
+
+namespace {
+
+constexpr uint32_t kMaxBatch = 64;  // rounds per command buffer once the first batches did not finish
+
+uint64_t groups(uint64_t items) { return (items + CDT_WG - 1) / CDT_WG; }
+
+// Stage times summed over the batches, in first-seen order.
+struct StageClock {
+  std::vector<std::pair<std::string, double>> stages;
+  void add(const Profiler& prof) {
+    for (const StageTime& s : prof.results()) {
+      auto it = std::find_if(stages.begin(), stages.end(), [&](const auto& e) { return e.first == s.name; });
+      if (it == stages.end())
+        stages.emplace_back(s.name, s.ms);
+      else
+        it->second += s.ms;
+    }
+  }
+};
+
+// Rounds to record next: enough for the crossings to fall to zero at the rate of the last two rounds (they shrink
+// geometrically), plus two, so few rounds run idle after the end and few batches are needed.
+uint32_t predict_rounds(uint32_t before, uint32_t last) {
+  if (last == 0) return 1;
+  const double rate = std::clamp(before ? double(last) / before : 0.5, 0.2, 0.9);
+  const double rounds = std::log(double(last) + 1) / -std::log(rate) + 2;
+  return std::clamp(uint32_t(std::ceil(rounds)), 4u, kMaxBatch);
+}
+
+// A host-visible, persistently mapped buffer: the counters of a batch are copied into it at the end of the
+// batch's command buffer, so reading them costs no extra submission.
+Buffer make_readback(const Context& ctx, VkDeviceSize bytes, void** mapped) {
+  Buffer b;
+  b.device = ctx.device;
+  b.size = bytes;
+  b.name = "cdt readback";
+  VkBufferCreateInfo bi{};
+  bi.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
+  bi.size = bytes;
+  bi.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  VK_CHECK(vkCreateBuffer(ctx.device, &bi, nullptr, &b.buffer));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(ctx.device, b.buffer, &req);
+  const VkMemoryPropertyFlags need = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  uint32_t type = UINT32_MAX;
+  for (VkMemoryPropertyFlags want : {need | VK_MEMORY_PROPERTY_HOST_CACHED_BIT, need})
+    for (uint32_t i = 0; i < ctx.memory.memoryTypeCount && type == UINT32_MAX; ++i)
+      if ((req.memoryTypeBits & (1u << i)) && (ctx.memory.memoryTypes[i].propertyFlags & want) == want) type = i;
+  if (type == UINT32_MAX) throw DeviceError("no host-visible memory type on " + ctx.info.name);
+  VkMemoryAllocateInfo ai{};
+  ai.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+  ai.allocationSize = req.size;
+  ai.memoryTypeIndex = type;
+  VK_CHECK(vkAllocateMemory(ctx.device, &ai, nullptr, &b.memory));
+  VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, b.memory, 0));
+  VK_CHECK(vkMapMemory(ctx.device, b.memory, 0, bytes, 0, mapped));
+  return b;
+}
+
+std::string describe_error(uint32_t code, uint32_t c, std::span<const Edge> cons) {
+  std::string which = "constraint " + std::to_string(c);
+  if (c < cons.size()) which += " (" + std::to_string(cons[c][0]) + ", " + std::to_string(cons[c][1]) + ")";
+  switch (code) {
+    case CDT_ERR_VERTEX_ON_CONSTRAINT:
+      return which + " passes through a vertex: split it there before insertion";
+    case CDT_ERR_OUTSIDE:
+      return which + " leaves the convex hull of the points";
+    case CDT_ERR_NOT_AN_EDGE:
+      return which + " is not an edge after insertion: it crosses another constraint (resolve crossings first)";
+    default:
+      return which + ": the walk lost its way (the triangulation is not valid)";
+  }
+}
+
+uint64_t directed(uint32_t x, uint32_t y) { return (uint64_t(x) << 32) | y; }
+
+// Splits the pseudo-polygon chain[i..j] (the chain left of the base chain[i] -> chain[j]) into triangles: the
+// apex is the chain vertex whose circle with the base holds no other chain vertex (Anglada's choice, with CGAL's
+// perturbation for ties). Its triangle is empty and crosses no chain edge because every chain vertex sees the
+// base (it is an endpoint of an edge that crossed the base), and both halves keep that property.
+void split_pseudo_polygon(const HostTriangulation& h, const std::vector<uint32_t>& chain, size_t i, size_t j,
+                          std::vector<Triangle>& out) {
+  auto xy = [&](uint32_t v) { return pred::XY{h.xy[2 * v], h.xy[2 * v + 1]}; };
+  if (j - i < 2) return;
+  size_t apex = i + 1;
+  for (size_t k = i + 2; k < j; ++k)
+    if (pred::incircle_perturbed(xy(chain[i]), xy(chain[j]), xy(chain[apex]), xy(chain[k])) > 0) apex = k;
+  out.push_back({chain[i], chain[j], chain[apex]});
+  split_pseudo_polygon(h, chain, i, apex, out);
+  split_pseudo_polygon(h, chain, apex, j, out);
+}
+
+// The safety net (ConstraintOptions::stall_rounds): inserts the constraints that are not yet edges one at a time
+// into host slots by retriangulating each one's cavity, the K + 1 triangles its segment crosses, as the K + 1
+// triangles of the two pseudo-polygons on either side, written into the same slots. Exact predicates throughout.
+// Returns how many constraints it inserted.
+uint32_t insert_on_host(HostTriangulation& h, std::span<const Edge> cons) {
+  const uint32_t slots = uint32_t(h.verts.size() / 3);
+  auto xy = [&](uint32_t v) { return pred::XY{h.xy[2 * v], h.xy[2 * v + 1]}; };
+  auto corner = [&](uint32_t t, uint32_t v) {
+    for (uint32_t k = 0; k < 3; ++k)
+      if (h.verts[3 * t + k] == v) return k;
+    return 3u;
+  };
+  std::vector<uint32_t> vmap(h.xy.size() / 2, CDT_NEVER);
+  for (uint32_t t = 0; t < slots; ++t)
+    for (uint32_t k = 0; k < 3; ++k)
+      if (h.verts[3 * t + k] != INF_VERTEX) vmap[h.verts[3 * t + k]] = t;
+  std::vector<uint32_t> in_cavity(slots, CDT_NEVER);
+  uint32_t inserted = 0;
+  for (uint32_t c = 0; c < cons.size(); ++c) {
+    const uint32_t a = cons[c][0], b = cons[c][1];
+    if (a == b) continue;
+    auto fail = [&](uint32_t code) { throw DeviceError(describe_error(code, c, cons)); };
+    uint32_t t = vmap[a], k = corner(t, a);
+    bool is_edge = false;
+    for (uint32_t step = 0;; ++step) {
+      if (step > 3 * slots) fail(CDT_ERR_LOST);
+      const uint32_t v1 = h.verts[3 * t + (k + 1) % 3], v2 = h.verts[3 * t + (k + 2) % 3];
+      if (v1 == b || v2 == b) {
+        is_edge = true;
+        break;
+      }
+      if (v1 != INF_VERTEX && v2 != INF_VERTEX && pred::orient2d(xy(a), xy(v1), xy(b)) > 0 &&
+          pred::orient2d(xy(a), xy(v2), xy(b)) < 0)
+        break;
+      const uint32_t code = h.nbrs[3 * t + (k + 1) % 3];
+      t = NBR_TRI(code);
+      k = (NBR_EDGE(code) + 1) % 3;
+    }
+    if (is_edge) continue;
+    ++inserted;
+    // The cavity, and its two chains from a to b: left of a->b (first v2) and right of it (first v1).
+    std::vector<uint32_t> cavity = {t};
+    std::vector<uint32_t> left = {a, h.verts[3 * t + (k + 2) % 3]}, right = {a, h.verts[3 * t + (k + 1) % 3]};
+    for (uint32_t ke = k;;) {
+      const uint32_t code = h.nbrs[3 * t + ke], u = NBR_TRI(code), ku = NBR_EDGE(code), w = h.verts[3 * u + ku];
+      if (w == INF_VERTEX) fail(CDT_ERR_OUTSIDE);
+      cavity.push_back(u);
+      if (w == b) break;
+      const int s = pred::orient2d(xy(a), xy(b), xy(w));
+      if (s == 0) fail(CDT_ERR_VERTEX_ON_CONSTRAINT);
+      (s > 0 ? left : right).push_back(w);
+      ke = s > 0 ? (ku + 1) % 3 : (ku + 2) % 3;
+      t = u;
+    }
+    left.push_back(b);
+    right.push_back(b);
+    for (uint32_t x : cavity) in_cavity[x] = c;
+    std::unordered_map<uint64_t, uint32_t> outside;  // boundary edge, directed as in the cavity -> neighbour
+    for (uint32_t x : cavity)
+      for (uint32_t e = 0; e < 3; ++e) {
+        const uint32_t code = h.nbrs[3 * x + e];
+        if (in_cavity[NBR_TRI(code)] != c)
+          outside[directed(h.verts[3 * x + (e + 1) % 3], h.verts[3 * x + (e + 2) % 3])] = code;
+      }
+    std::vector<Triangle> made;
+    split_pseudo_polygon(h, left, 0, left.size() - 1, made);  // left chain: left of a -> b
+    std::reverse(right.begin(), right.end());
+    split_pseudo_polygon(h, right, 0, right.size() - 1, made);  // right chain reversed: left of b -> a
+    if (made.size() != cavity.size()) fail(CDT_ERR_LOST);
+    std::unordered_map<uint64_t, uint32_t> here;
+    for (size_t i = 0; i < made.size(); ++i)
+      for (uint32_t e = 0; e < 3; ++e) {
+        h.verts[3 * cavity[i] + e] = made[i][e];
+        here[directed(made[i][(e + 1) % 3], made[i][(e + 2) % 3])] = NBR(cavity[i], e);
+      }
+    for (size_t i = 0; i < made.size(); ++i)
+      for (uint32_t e = 0; e < 3; ++e) {
+        const uint32_t x = made[i][(e + 1) % 3], y = made[i][(e + 2) % 3];
+        auto inner = here.find(directed(y, x));
+        if (inner != here.end()) {
+          h.nbrs[3 * cavity[i] + e] = inner->second;
+          continue;
+        }
+        auto outer = outside.find(directed(x, y));
+        if (outer == outside.end()) fail(CDT_ERR_LOST);
+        h.nbrs[3 * cavity[i] + e] = outer->second;
+        h.nbrs[3 * NBR_TRI(outer->second) + NBR_EDGE(outer->second)] = NBR(cavity[i], e);
+        vmap[x] = cavity[i];
+      }
+  }
+  return inserted;
+}
+
+}  // namespace
+
+ConstraintInserter::ConstraintInserter(const Context& ctx, const Primitives& prims)
+    : ctx_(ctx),
+      prims_(prims),
+      vertex_map_(create_pass(ctx, {"cdt_vertex_map", 2, sizeof(CdtSlotsPush)})),
+      walk_(create_pass(ctx, {"cdt_walk", 16, sizeof(CdtWalkPush)})),
+      args_(create_pass(ctx, {"cdt_args", 4, sizeof(CdtArgsPush)})),
+      insert_claim_(create_pass(ctx, {"cdt_insert_claim", 8, sizeof(CdtRoundPush)})),
+      insert_flip_(create_pass(ctx, {"cdt_insert_flip", 11, sizeof(CdtRoundPush)})),
+      fix_(create_pass(ctx, {"cdt_fix", 5, sizeof(CdtRoundPush)})),
+      legal_seed_(create_pass(ctx, {"cdt_legal_seed", 5, sizeof(CdtSlotsPush)})),
+      legal_claim_(create_pass(ctx, {"cdt_legal_claim", 9, sizeof(CdtRoundPush)})),
+      legal_flip_(create_pass(ctx, {"cdt_legal_flip", 13, sizeof(CdtRoundPush)})) {}
+
+// Device buffers kept between calls, each grown when a call needs more (allocation costs more than the work on
+// a fast GPU), and the mapped readback buffer.
+struct ConstraintInserter::Scratch {
+  std::map<std::string, Buffer> buffers;
+  Buffer readback;
+  void* mapped = nullptr;
+
+  const Buffer& get(const Context& ctx, const std::string& name, uint64_t bytes) {
+    Buffer& b = buffers[name];
+    if (!b.buffer || b.size < bytes) {
+      b = Buffer();
+      b = create_buffer(ctx, bytes, name);
+    }
+    return b;
+  }
+};
+
+ConstraintInserter::~ConstraintInserter() = default;
+
+void ConstraintInserter::release() const { scratch_.reset(); }
+
+ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<const Edge> constraints,
+                                            ConstraintStats* stats, const ConstraintOptions& options) const {
+  const uint32_t m = static_cast<uint32_t>(constraints.size());
+  const uint32_t slots = tri.num_slots;
+  const bool fixed_slots = options.layout == ConstraintOptions::Layout::FixedSlots;
+  const uint32_t one_per_constraint = options.flipping == ConstraintOptions::Flipping::OnePerConstraint ? 1u : 0u;
+  const uint32_t max_groups = ctx_.props.limits.maxComputeWorkGroupCount[0];
+  const uint32_t max_steps = 3 * slots + 64;
+  if (constraints.size() >= CDT_NEVER) throw std::invalid_argument("insert_constraints: too many constraints");
+  for (size_t i = 0; i < constraints.size(); ++i)
+    if (constraints[i][0] >= tri.num_points || constraints[i][1] >= tri.num_points)
+      throw std::invalid_argument("insert_constraints: constraint " + std::to_string(i) + " has a vertex index past " +
+                                  std::to_string(tri.num_points) + " points");
+
+  if (!scratch_) scratch_ = std::make_unique<Scratch>();
+  Scratch& sc = *scratch_;
+  const size_t readback_words = CDT_CTL_WORDS + 2 * kMaxBatch;
+  if (!sc.readback.buffer) sc.readback = make_readback(ctx_, readback_words * 4, &sc.mapped);
+  const uint32_t* rb = static_cast<const uint32_t*>(sc.mapped);
+  uint64_t needed = 0, table_bytes = 0;  // what this call uses (the cache may hold more from earlier calls)
+  auto get = [&](const char* name, uint64_t bytes) -> const Buffer& {
+    needed += bytes;
+    return sc.get(ctx_, name, bytes);
+  };
+
+  ConstrainedEdges result;
+  result.num_slots = slots;
+  result.flags = create_buffer(ctx_, uint64_t(slots) * 4, "cdt constrained bits");
+
+  std::vector<uint32_t> cons_host(2 * size_t(m));
+  for (uint32_t i = 0; i < m; ++i) {
+    cons_host[2 * i] = constraints[i][0];
+    cons_host[2 * i + 1] = constraints[i][1];
+  }
+  const Buffer& cons = get("cdt constraints", uint64_t(m) * 8);
+  if (m) upload(ctx_, cons, cons_host.data(), cons_host.size() * 4);
+  const Buffer& start = get("cdt start slots", uint64_t(m) * 4);
+  const Buffer& counts = get("cdt crossing counts", uint64_t(m) * 4);
+  const Buffer& offsets = get("cdt row offsets", uint64_t(m) * 4);
+  const Buffer& cache_base = get("cdt row cache base", uint64_t(m) * 4);
+  const Buffer& cache_cap = get("cdt row cache room", uint64_t(m) * 4);
+  const Buffer& first_row = get("cdt first candidate", uint64_t(m) * 8);
+  const Buffer& vmap = get("cdt vertex map", uint64_t(tri.num_points) * 4);
+  const Buffer& owner = get("cdt owners", uint64_t(slots) * 8);
+  const Buffer& claim = get("cdt claims", uint64_t(slots) * 8);
+  const Buffer& stamp = get("cdt flip stamps", uint64_t(slots) * 4);
+  const Buffer& partner = get("cdt flip partners", uint64_t(slots) * 4);
+  const Buffer& remap = get("cdt edge remap", uint64_t(slots) * 12);
+  const Buffer& qstamp = get("cdt queue stamps", uint64_t(slots) * 4);
+  const Buffer& flips = get("cdt flip list", (uint64_t(slots) / 2 + 1) * 8);
+  const Buffer& ctl = get("cdt control", CDT_CTL_WORDS * 4);
+  const Buffer& stat = get("cdt round stats", uint64_t(kMaxBatch) * 8);
+  const Buffer& cand = get("cdt legalise candidates", uint64_t(slots) * 12);
+  const Buffer* queue[2] = {&get("cdt queue 0", uint64_t(slots) * 4), &get("cdt queue 1", uint64_t(slots) * 4)};
+  const Buffer* table = nullptr;  // sized after the first count
+
+  StageClock clock;
+  ConstraintStats st;
+  uint32_t round = 1;
+
+  // Records the copy of the counters (and `rounds` rounds of statistics) into the mapped readback buffer.
+  auto copy_back = [&](Recorder& rec, uint32_t rounds) {
+    rec.copy(ctl, sc.readback, CDT_CTL_WORDS * 4);
+    if (rounds) rec.copy(stat, sc.readback, uint64_t(rounds) * 8, 0, CDT_CTL_WORDS * 4);
+  };
+  // After the submission: the counters, or the error a pass reported.
+  auto read_ctl = [&] {
+    std::vector<uint32_t> c(rb, rb + CDT_CTL_WORDS);
+    if (c[CDT_CTL_ERROR]) throw DeviceError(describe_error(c[CDT_CTL_ERROR], c[CDT_CTL_ERROR_CONS], constraints));
+    return c;
+  };
+  auto read_stats = [&](uint32_t rounds) { return std::vector<uint32_t>(rb + CDT_CTL_WORDS, rb + CDT_CTL_WORDS + 2 * rounds); };
+  const Buffer* row_cache = nullptr;
+  auto walk = [&](Recorder& rec, uint32_t mode, uint32_t r, uint32_t capacity, uint32_t stride) {
+    // Bound but unused before they exist.
+    const Buffer& rows = table ? *table : result.flags;
+    const Buffer& cached = row_cache ? *row_cache : result.flags;
+    CdtWalkPush push{m, mode, r, capacity, max_steps, stride, row_cache ? 1u : 0u};
+    rec.dispatch_groups(walk_, {tri.points, tri.verts, tri.nbrs, cons, start, counts, offsets, rows, owner,
+                                result.flags, vmap, partner, ctl, cached, cache_base, cache_cap},
+                        push, groups(m));
+  };
+  auto args = [&](Recorder& rec, uint32_t mode, uint32_t r, uint32_t slot, uint32_t capacity, uint32_t stride) {
+    CdtArgsPush push{mode, m, capacity, r, slot, max_groups, stride};
+    rec.dispatch(args_, {counts, offsets, ctl, stat}, push, 1);
+  };
+  auto vertex_map = [&](Recorder& rec) {
+    rec.fill(vmap, 0xFFFFFFFFu);
+    rec.dispatch_groups(vertex_map_, {tri.verts, vmap}, CdtSlotsPush{slots, 0, 0}, groups(slots));
+  };
+  auto fix = [&](Recorder& rec, uint32_t r) {
+    CdtRoundPush push{r, 0};
+    rec.dispatch_indirect(fix_, {tri.nbrs, remap, stamp, flips, ctl}, &push, ctl, CDT_CTL_ARGS_FLIPS * 4);
+  };
+
+  // 1. Vertex map and start slots; one counting walk sizes the intersected-edge table.
+  uint32_t crossed = 0, stride = 0;
+  uint64_t capacity = 0;
+  {
+    Recorder rec(ctx_);
+    Profiler prof(ctx_, 4);
+    prof.begin(rec, "vertex map");
+    for (const Buffer* b : {&owner, &claim, &first_row}) rec.fill(*b, 0xFFFFFFFFu);
+    for (const Buffer* b : {&stamp, &qstamp}) rec.fill(*b, CDT_NEVER);
+    rec.fill(result.flags, 0);
+    rec.fill(ctl, 0);
+    vertex_map(rec);
+    walk(rec, CDT_WALK_INIT, round, 0, 0);
+    prof.end(rec);
+    prof.begin(rec, "crossing detection");
+    walk(rec, CDT_WALK_COUNT, round, 0, 0);
+    if (!fixed_slots && m > 0) {  // the row cache's layout: the first counts, compacted
+      prims_.exclusive_scan(rec, counts, cache_base, m);
+      rec.copy(counts, cache_cap, uint64_t(m) * 4);
+    }
+    prof.end(rec);
+    copy_back(rec, 0);
+    rec.submit();
+    clock.add(prof);
+    std::vector<uint32_t> c = read_ctl();
+    crossed = c[CDT_CTL_CROSSED];
+    stride = c[CDT_CTL_MAXK];
+  }
+  st.crossed_edges = crossed;
+  bool fresh_table = false;
+  auto make_table = [&] {
+    capacity = fixed_slots ? uint64_t(m) * stride : uint64_t(crossed) + crossed / 2 + 1024;
+    if (capacity >= CDT_NEVER) throw DeviceError("insert_constraints: intersected-edge table too large");
+    table_bytes = std::max(table_bytes, capacity * sizeof(CdtCross));
+    table = &sc.get(ctx_, "cdt intersected-edge table", capacity * sizeof(CdtCross));
+    fresh_table = true;
+  };
+  // The row cache: each constraint's first count plus CDT_CACHE_SLACK rows, so the second stage of the layout
+  // copies rows instead of walking again (a round lasts as long as its longest walk).
+  if (!fixed_slots && crossed > 0) {
+    const uint64_t rows = uint64_t(crossed) + uint64_t(CDT_CACHE_SLACK) * m;
+    needed += rows * 8;
+    row_cache = &sc.get(ctx_, "cdt row cache", rows * 8);
+  }
+  st.longest_crossing = stride;
+
+  // 2. Insertion rounds: crossing detection, then adaptive parallel flipping, until no constraint crosses an edge.
+  bool legalise_all = options.legalise_all;
+  if (crossed > 0) {
+    make_table();
+    uint32_t fewest = UINT32_MAX, stalled = 0, before = 0, last = crossed;
+    uint32_t batch = std::clamp(options.rounds_per_submit, 1u, kMaxBatch);
+    for (bool done = false; !done;) {
+      Recorder rec(ctx_);
+      Profiler prof(ctx_, 2 * batch);
+      const uint32_t cap = static_cast<uint32_t>(capacity), s = fixed_slots ? stride : 0;
+      rec.fill(ctl, 0);  // clears the overflow flag; per-round counters are zero between rounds anyway
+      if (fresh_table && fixed_slots) rec.fill(*table, 0xFFFFFFFFu);  // every row empty
+      fresh_table = false;
+      for (uint32_t b = 0; b < batch; ++b) {
+        const uint32_t r = round + b;
+        prof.begin(rec, "crossing detection");
+        walk(rec, CDT_WALK_COUNT, r, cap, s);
+        if (!fixed_slots) prims_.exclusive_scan(rec, counts, offsets, m);
+        args(rec, CDT_ARGS_INSERT, r, b, cap, s);
+        if (!fixed_slots) walk(rec, CDT_WALK_WRITE, r, cap, 0);
+        prof.end(rec);
+        prof.begin(rec, "flipping");
+        CdtRoundPush push{r, one_per_constraint};
+        rec.dispatch_indirect(insert_claim_, {tri.points, tri.verts, tri.nbrs, *table, owner, claim, ctl, first_row},
+                              &push, ctl, CDT_CTL_ARGS_TABLE * 4);
+        rec.dispatch_indirect(insert_flip_, {tri.verts, tri.nbrs, *table, claim, result.flags, remap, stamp, partner,
+                                             flips, ctl, first_row},
+                              &push, ctl, CDT_CTL_ARGS_TABLE * 4);
+        args(rec, CDT_ARGS_FLIPS, r, b, cap, s);
+        fix(rec, r);
+        prof.end(rec);
+      }
+      copy_back(rec, batch);
+      rec.submit();
+      clock.add(prof);
+      std::vector<uint32_t> c = read_ctl();
+      std::vector<uint32_t> per_round = read_stats(batch);
+      const bool overflow = c[CDT_CTL_OVERFLOW] != 0;
+      for (uint32_t b = 0; b < batch && !done; ++b) {
+        const uint32_t found = per_round[2 * b], flipped = per_round[2 * b + 1];
+        if (found == 0) {
+          done = true;
+          break;
+        }
+        ++st.flip_rounds;
+        st.rounds.push_back({found, flipped});
+        crossed = std::max(crossed, found);
+        if (found < fewest) {
+          fewest = found;
+          stalled = 0;
+        } else {
+          ++stalled;
+        }
+        if (flipped == CDT_NEVER) continue;  // the table was too small this round
+        st.insertion_flips += flipped;
+        // The smallest unfinished constraint owns its whole domain, and some edge it crosses has a strictly
+        // convex quadrilateral, so a round without a flip means the input broke a requirement.
+        if (flipped == 0)
+          throw DeviceError("insert_constraints: round " + std::to_string(round + b) + " found " +
+                            std::to_string(found) + " crossed edges and no flip (degenerate input?)");
+      }
+      round += batch;
+      if (!done && (stalled >= options.stall_rounds || st.flip_rounds >= options.flip_round_limit)) {
+        HostTriangulation host = download_host(ctx_, tri);
+        st.fallback_constraints = insert_on_host(host, constraints);
+        upload(ctx_, tri.verts, host.verts.data(), host.verts.size() * 4);
+        upload(ctx_, tri.nbrs, host.nbrs.data(), host.nbrs.size() * 4);
+        legalise_all = true;
+        done = true;
+      }
+      if (overflow && !done) {
+        stride = std::max(stride, c[CDT_CTL_MAXK]);
+        make_table();
+      }
+      batch = predict_rounds(before, last);
+    }
+  }
+
+  // 3. Which edges are constraints (the flags then travel with their edges through the legalising flips).
+  {
+    Recorder rec(ctx_);
+    Profiler prof(ctx_, 1);
+    prof.begin(rec, "mark constrained");
+    vertex_map(rec);
+    walk(rec, CDT_WALK_MARK, round, 0, 0);
+    prof.end(rec);
+    copy_back(rec, 0);
+    rec.submit();
+    clock.add(prof);
+    read_ctl();
+  }
+
+  // 4. Legalisation rounds: flip every unconstrained edge that fails the perturbed incircle test.
+  {
+    bool seeded = false;
+    uint32_t batch = std::clamp(options.rounds_per_submit, 1u, kMaxBatch);
+    for (bool done = false; !done;) {
+      Recorder rec(ctx_);
+      Profiler prof(ctx_, batch + 1);
+      if (!seeded) {
+        prof.begin(rec, "legalise seed");
+        CdtSlotsPush push{slots, round, legalise_all ? 1u : 0u};
+        rec.dispatch_groups(legal_seed_, {tri.verts, stamp, qstamp, *queue[round & 1], ctl}, push, groups(slots));
+        prof.end(rec);
+        seeded = true;
+      }
+      for (uint32_t b = 0; b < batch; ++b) {
+        const uint32_t r = round + b;
+        const Buffer& q = *queue[r & 1];
+        const Buffer& next = *queue[(r + 1) & 1];
+        CdtRoundPush push{r, 0};
+        prof.begin(rec, "legalise");
+        args(rec, CDT_ARGS_QUEUE, r, b, 0, 0);
+        rec.dispatch_indirect(legal_claim_,
+                              {tri.points, tri.verts, tri.nbrs, result.flags, qstamp, q, claim, cand, ctl}, &push,
+                              ctl, CDT_CTL_ARGS_QUEUE * 4);
+        rec.dispatch_indirect(legal_flip_,
+                              {tri.verts, tri.nbrs, result.flags, remap, stamp, partner, qstamp, q, next, claim, cand,
+                               flips, ctl},
+                              &push, ctl, CDT_CTL_ARGS_QUEUE * 4);
+        args(rec, CDT_ARGS_FLIPS, r, b, 0, 0);
+        fix(rec, r);
+        prof.end(rec);
+      }
+      copy_back(rec, batch);
+      rec.submit();
+      clock.add(prof);
+      read_ctl();
+      std::vector<uint32_t> per_round = read_stats(batch);
+      for (uint32_t b = 0; b < batch; ++b) {
+        if (per_round[2 * b] == 0) {
+          done = true;
+          break;
+        }
+        ++st.legalise_rounds;
+        st.legalise_flips += per_round[2 * b + 1];
+      }
+      round += batch;
+      if (round > options.max_rounds)
+        throw DeviceError("insert_constraints: more than " + std::to_string(options.max_rounds) + " rounds");
+      batch = std::min(batch * 2, kMaxBatch);
+    }
+  }
+
+  if (stats) {
+    st.stage_ms = std::move(clock.stages);
+    st.peak_device_bytes =
+        tri.points.size + tri.verts.size + tri.nbrs.size + result.flags.size + sc.readback.size + needed + table_bytes;
+    *stats = std::move(st);
+  }
+  return result;
+}
+
+ConstrainedEdges insert_constraints(const Context& ctx, GpuTriangulation& tri, std::span<const Edge> constraints,
+                                    ConstraintStats* stats, const ConstraintOptions& options) {
+  Primitives prims(ctx);
+  ConstraintInserter inserter(ctx, prims);
+  return inserter.insert(tri, constraints, stats, options);
+}
+
+std::vector<Edge> download_constrained_edges(const Context& ctx, const GpuTriangulation& tri,
+                                             const ConstrainedEdges& edges) {
+  const uint32_t slots = std::min(tri.num_slots, edges.num_slots);
+  std::vector<uint32_t> flags = download_vector<uint32_t>(ctx, edges.flags, slots);
+  std::vector<uint32_t> verts = download_vector<uint32_t>(ctx, tri.verts, size_t(slots) * 3);
+  std::vector<Edge> out;
+  for (uint32_t t = 0; t < slots; ++t)
+    for (uint32_t k = 0; k < 3; ++k)
+      if ((flags[t] >> k) & 1u) {
+        uint32_t a = verts[3 * t + (k + 1) % 3], b = verts[3 * t + (k + 2) % 3];
+        out.push_back({std::min(a, b), std::max(a, b)});
+      }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+}  // namespace cdtgpu::gpu

@@ -1,0 +1,119 @@
+// Constraint insertion on the GPU (Chen, Kong, Chen, Song 2026, see docs/gpu-constraints.md): makes every
+// constraint segment an edge of a Delaunay triangulation already on the GPU by edge flips, then restores the
+// constrained Delaunay property by flipping. The result equals CGAL's Constrained_Delaunay_triangulation_2
+// triangle for triangle (exact predicates, CGAL's symbolic perturbation for co-circular points).
+//
+//   gpu::Primitives prims(ctx);
+//   gpu::ConstraintInserter inserter(ctx, prims);              // builds the pipelines once
+//   gpu::GpuTriangulation tri = gpu::upload_triangulation(ctx, host_dt);
+//   gpu::ConstraintStats stats;
+//   gpu::ConstrainedEdges ce = inserter.insert(tri, constraints, &stats);
+//   std::vector<Triangle> mesh = gpu::download_triangles(ctx, tri);
+//
+// Requirements on the input: `tri` holds the Delaunay triangulation of its points (the perturbed one, as CGAL
+// builds it; set ConstraintOptions::legalise_all otherwise); constraints are pairs of vertex indices, inside the
+// convex hull, that cross no other constraint and pass through no vertex (split them there first). Shared
+// endpoints, repeated constraints and constraints that already are edges are fine. A violation is reported as a
+// DeviceError naming the constraint.
+//
+// Cost per round: two walks per unfinished constraint (orient2d per crossed edge), a scan over the constraints,
+// one light pass over the crossed edges; memory ~64 bytes per slot (2 slots per point), 20 bytes per
+// constraint and 16 per crossed edge.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/model.hpp"
+#include "gpu/buffers.hpp"
+#include "gpu/context.hpp"
+#include "gpu/passes.hpp"
+#include "gpu/primitives.hpp"
+#include "gpu/triangulation.hpp"
+
+namespace cdtgpu::gpu {
+
+// Switches for the ablation of the paper's Table 3. Defaults are the full method.
+struct ConstraintOptions {
+  enum class Layout {
+    PrefixSum,   // count, scan, write: the compact dynamic intersected-edge table
+    FixedSlots,  // one walk writes into a fixed number of rows per constraint (the longest constraint's count)
+  };
+  enum class Flipping {
+    Adaptive,       // every candidate edge of every constraint may flip each round
+    OnePerConstraint,  // each constraint flips at most one edge per round
+  };
+  Layout layout = Layout::PrefixSum;
+  Flipping flipping = Flipping::Adaptive;
+  // Seed legalisation with every finite slot, not only the slots flipped during insertion: for inputs that are
+  // not the (perturbed) Delaunay triangulation of their points.
+  bool legalise_all = false;
+  uint32_t rounds_per_submit = 8;  // rounds recorded into one command buffer before the counts are read
+  // Safety net. Flips that keep a crossing have no known potential function, so flipping is not proven to end
+  // (it ends in every test; the per-round hashed schedule keeps it from repeating itself). When the number of
+  // crossed edges has not reached a new low for `stall_rounds` rounds, or after `flip_round_limit` rounds, the
+  // constraints still crossing are inserted on the host, one at a time, by retriangulating their cavities
+  // exactly (counted in ConstraintStats::fallback_constraints); legalisation then checks every slot.
+  uint32_t stall_rounds = 256;
+  uint32_t flip_round_limit = UINT32_MAX;
+  uint32_t max_rounds = 1u << 20;  // legalisation beyond this many rounds is reported as an error
+};
+
+struct ConstraintStats {
+  uint32_t flip_rounds = 0;      // insertion rounds that found crossed edges
+  uint32_t legalise_rounds = 0;  // legalisation rounds with a non-empty queue
+  uint64_t crossed_edges = 0;    // edges crossed by the constraints in the input triangulation
+  uint32_t longest_crossing = 0;  // the most edges one constraint crosses in the input triangulation
+  uint64_t insertion_flips = 0;
+  uint64_t legalise_flips = 0;
+  uint32_t fallback_constraints = 0;  // inserted by the host safety net (see ConstraintOptions::stall_rounds)
+  // Per insertion round: edges crossed at its start and flips made (UINT32_MAX: skipped, table grown).
+  std::vector<std::array<uint32_t, 2>> rounds;
+  std::vector<std::pair<std::string, double>> stage_ms;  // GPU time per stage, in pipeline order
+  uint64_t peak_device_bytes = 0;  // the triangulation, the constrained bits and the inserter's scratch
+};
+
+// Which edges are constrained, kept on the GPU: bit k of flags[t] is set when the edge opposite corner k of
+// slot t is a constraint (set on both sides of the edge). Valid for the slots of the triangulation it came from.
+struct ConstrainedEdges {
+  Buffer flags;
+  uint32_t num_slots = 0;
+};
+
+// Holds the pipelines, and the scratch buffers between calls (grown as needed; release() frees them). One call
+// at a time per inserter.
+class ConstraintInserter {
+ public:
+  ConstraintInserter(const Context& ctx, const Primitives& prims);
+  ~ConstraintInserter();
+  ConstraintInserter(const ConstraintInserter&) = delete;
+  ConstraintInserter& operator=(const ConstraintInserter&) = delete;
+
+  // Makes every constraint an edge of `tri`, then restores the constrained Delaunay property. Throws
+  // DeviceError when a constraint breaks the input requirements (crossing, through a vertex, outside the hull).
+  ConstrainedEdges insert(GpuTriangulation& tri, std::span<const Edge> constraints, ConstraintStats* stats = nullptr,
+                          const ConstraintOptions& options = {}) const;
+  // Frees the scratch buffers kept since the last call.
+  void release() const;
+
+ private:
+  struct Scratch;
+  const Context& ctx_;
+  const Primitives& prims_;
+  mutable std::unique_ptr<Scratch> scratch_;
+  Pass vertex_map_, walk_, args_, insert_claim_, insert_flip_, fix_, legal_seed_, legal_claim_, legal_flip_;
+};
+
+// One-shot convenience (builds the pipelines on every call; keep a ConstraintInserter for repeated use).
+ConstrainedEdges insert_constraints(const Context& ctx, GpuTriangulation& tri, std::span<const Edge> constraints,
+                                    ConstraintStats* stats = nullptr, const ConstraintOptions& options = {});
+
+// The constrained edges as vertex pairs (smaller index first), sorted, each once.
+std::vector<Edge> download_constrained_edges(const Context& ctx, const GpuTriangulation& tri,
+                                             const ConstrainedEdges& edges);
+
+}  // namespace cdtgpu::gpu
