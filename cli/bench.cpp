@@ -9,6 +9,7 @@
 #include <ctime>
 #include <fstream>
 #include <numeric>
+#include <optional>
 #include <thread>
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
@@ -25,6 +26,7 @@
 #include "core/cdt_cgal.hpp"
 #include "core/error.hpp"
 #include "core/workloads.hpp"
+#include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
 
 namespace cdtgpu {
@@ -130,7 +132,9 @@ double mean_length_in_spacings(const PreparedInput& p) {
 }
 
 struct Timings {
-  std::vector<double> total;
+  std::vector<double> total, device;
+  uint32_t rounds = 0;
+  uint64_t peak_device_bytes = 0;
   std::vector<std::pair<std::string, std::vector<double>>> stages;  // in run order
   Mesh mesh;                                                        // of the last run, canonical
 
@@ -138,6 +142,12 @@ struct Timings {
     json j;
     j["median_ms"] = median(total);
     j["runs_ms"] = total;
+    if (!device.empty()) {
+      j["device_median_ms"] = median(device);
+      j["device_runs_ms"] = device;
+      j["rounds"] = rounds;
+      j["peak_device_bytes"] = peak_device_bytes;
+    }
     json sm = json::object(), sr = json::object();
     for (const auto& [name, v] : stages) {
       sm[name] = median(v);
@@ -155,6 +165,9 @@ Timings time_backend(const BenchBackend& backend, const PreparedInput& p, int ru
   for (int r = 0; r < runs; ++r) {
     BackendRun run = backend(p);
     t.total.push_back(run.total_ms);
+    if (run.device_ms > 0) t.device.push_back(run.device_ms);
+    t.rounds = run.rounds;
+    t.peak_device_bytes = std::max(t.peak_device_bytes, run.peak_device_bytes);
     for (const auto& [name, ms] : run.stage_ms) {
       auto it = std::find_if(t.stages.begin(), t.stages.end(), [&](const auto& s) { return s.first == name; });
       if (it == t.stages.end()) it = t.stages.insert(t.stages.end(), {name, {}});
@@ -260,19 +273,142 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_option("--json", o.json_path, "write every figure (each run's times too) and machine info here");
   cmd->add_option("--seed", o.seed, "seed of the workload generators")->default_val(1);
   cmd->add_flag("--check", o.check, "compare with the reference CGAL backend at every size (default: up to 200K)");
+  cmd->add_flag("!--cgal-only", o.gpu, "time CGAL only (no Vulkan device needed)");
+  cmd->add_flag("--ablation", o.ablation,
+                "the paper's Table 3: table 1's workload at the first --sizes value (default 2M, 40K with --quick), "
+                "the full method and each part switched off");
 }
 
+namespace {
+
+// The GPU backend as the bench times it: total_ms is the host wall clock of the whole backend (CPU resolve,
+// uploads, every submit and readback, download in canonical order); stage_ms splits it into the CPU resolve, the
+// device time of each GPU stage, the download and the rest (host work between submits, waiting).
+BenchBackend gpu_backend(const gpu::GpuCdt& cdt) {
+  return [&cdt](const PreparedInput& p) {
+    gpu::GpuCdtStats s;
+    BackendRun r;
+    CdtResult res = cdt.triangulate(p, &s);
+    r.mesh = std::move(res.mesh);
+    double accounted = 0;
+    for (const auto& [name, ms] : s.wall_ms)
+      if (name == std::string("resolve") || name == std::string("download")) {
+        r.stage_ms.emplace_back(name + " (host)", ms);
+        accounted += ms;
+      }
+    for (const auto& [name, ms] : s.gpu_ms) {
+      auto it = std::find_if(r.stage_ms.begin(), r.stage_ms.end(), [&](const auto& x) { return x.first == name; });
+      if (it == r.stage_ms.end()) r.stage_ms.emplace_back(name, ms);
+      else it->second += ms;
+    }
+    r.stage_ms.emplace_back("host overhead", std::max(0.0, s.wall_total_ms - accounted - s.gpu_total_ms));
+    r.total_ms = s.wall_total_ms;
+    r.device_ms = s.gpu_total_ms;
+    r.rounds = s.delaunay.rounds + s.constraints.flip_rounds + s.constraints.legalise_rounds;
+    r.peak_device_bytes = s.peak_device_bytes;
+    return r;
+  };
+}
+
+std::string bytes_per_point(const Timings& t, const PreparedInput& p) {
+  if (!t.peak_device_bytes || p.vertices.empty()) return "-";
+  return std::to_string(t.peak_device_bytes / p.vertices.size());
+}
+
+// The paper's Table 3: one workload, the full method, then each part switched off in turn.
+int run_ablation(const BenchOptions& o, const gpu::GpuCdt& base) {
+  const uint64_t n = o.sizes.empty() ? (o.quick ? 40000 : 2000000) : parse_size(o.sizes.front());
+  Workload w{"ablation", "uniform+dt-edges", n, n / 4, kFraction, 0};
+  InputSet in = generate(w, o.seed);
+  PreparedInput p = prepare(in);
+  Timings cgal = time_backend(run_cgal_fast, p, o.runs);
+  std::printf("ablation (the paper's Table 3): %zu vertices, %zu constraints; CGAL %s ms\n\n", p.vertices.size(),
+              p.constraints.size(), fmt_ms(median(cgal.total)).c_str());
+  std::printf("%-44s %10s %10s %12s %8s %6s %s\n", "variant", "GPU ms", "wall ms", "constraints", "rounds", "B/pt",
+              "check");
+  using Opt = gpu::ConstraintOptions;
+  struct Variant {
+    std::string name;
+    Opt options;
+  };
+  std::vector<Variant> variants(3);
+  variants[0].name = "full method";
+  variants[1].name = "no prefix-sum layout (fixed slots per constraint)";
+  variants[1].options.layout = Opt::Layout::FixedSlots;
+  variants[2].name = "no adaptive flipping (one flip per constraint)";
+  variants[2].options.flipping = Opt::Flipping::OnePerConstraint;
+
+  json rows = json::array();
+  int failures = 0;
+  for (const Variant& v : variants) {
+    gpu::GpuCdt cdt(base.context());
+    cdt.constraint_options = v.options;
+    Timings t = time_backend(gpu_backend(cdt), p, o.runs);
+    std::string diff = mesh_difference(t.mesh, cgal.mesh);
+    failures += !diff.empty();
+    if (!diff.empty()) spdlog::error("ablation '{}' differs from CGAL: {}", v.name, diff);
+    auto stage = [&](const char* name) {
+      for (const auto& [k, runs] : t.stages)
+        if (k == name) return median(runs);
+      return 0.0;
+    };
+    const double insert_ms = stage("cdt crossing detection") + stage("cdt prefix-sum layout") + stage("cdt flipping");
+    std::printf("%-44s %10s %10s %12s %8u %6s %s\n", v.name.c_str(), fmt_ms(median(t.device)).c_str(),
+                fmt_ms(median(t.total)).c_str(), fmt_ms(insert_ms).c_str(), t.rounds, bytes_per_point(t, p).c_str(),
+                diff.empty() ? "ok" : "FAIL");
+    std::fflush(stdout);
+    json row = t.to_json();
+    row["variant"] = v.name;
+    row["constraint_insertion_ms"] = insert_ms;
+    row["cgal_equal"] = diff.empty();
+    rows.push_back(row);
+  }
+  std::printf("%-44s %s\n", "no influence-domain index (global search)",
+              "not implemented: see docs/gpu-constraints.md, 'Ablation switches'");
+  std::printf("\n'constraints' = device time of crossing detection + prefix-sum layout + flip rounds (median)\n");
+  if (!o.json_path.empty()) {
+    json j;
+    j["tool"] = "cdtgpu bench --ablation";
+    j["date"] = utc_now();
+    j["device"] = base.context().info.name;
+    j["vertices"] = p.vertices.size();
+    j["constraints"] = p.constraints.size();
+    j["cgal"] = cgal.to_json();
+    j["variants"] = rows;
+    write_file_atomically(o.json_path, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+  }
+  return failures ? 1 : 0;
+}
+
+}  // namespace
+
 int run_bench(const BenchOptions& o) {
+  std::optional<gpu::Context> ctx;
+  std::optional<gpu::GpuCdt> cdt;
+  std::string device = "none (--cgal-only)";
+  if (o.gpu || o.ablation) {
+    gpu::ContextOptions co;
+    co.device = o.device;
+    ctx.emplace(gpu::create_context(co));
+    cdt.emplace(*ctx);
+    device = ctx->info.name + ", driver " + ctx->info.driver_name + " " + ctx->info.driver_info;
+  }
+  if (o.ablation) return run_ablation(o, *cdt);
+  const BenchBackend gpu = cdt ? gpu_backend(*cdt) : BenchBackend();
+
   const std::vector<Workload> work = plan(o);
   const std::string cpu = cpu_model(), date = utc_now();
   const unsigned threads = std::thread::hardware_concurrency();
   std::printf("cdtgpu bench, %s\n", date.c_str());
   std::printf("CPU: %s, %u hardware threads\n", cpu.c_str(), threads);
+  std::printf("GPU: %s\n", device.c_str());
   std::printf("CGAL column: %s\n", kCgalConfig);
-  std::printf("%s column: %s\n", o.gpu_name.c_str(), o.gpu ? "total of its stages" : "no GPU backend yet ('-')");
+  std::printf("GPU columns: 'GPU ms' = device timestamps of the GPU stages; 'wall ms' = the whole GPU backend on the "
+              "host clock (CPU constraint resolution, submits, readbacks, download in canonical order); speedup = "
+              "CGAL / wall\n");
   std::printf("median of %d runs after 1 warm-up, seed %llu\n\n", o.runs, static_cast<unsigned long long>(o.seed));
-  std::printf("%-8s %-22s %10s %10s %11s %10s %10s %8s %10s %6s %s\n", "table", "workload", "points", "vertices",
-              "constraints", "CGAL ms", (o.gpu_name + " ms").c_str(), "speedup", "triangles", "len", "check");
+  std::printf("%-8s %9s %9s %11s %9s %9s %9s %8s %6s %6s %9s %5s %s\n", "table", "points", "vertices",
+              "constraints", "CGAL ms", "GPU ms", "wall ms", "speedup", "rounds", "B/pt", "triangles", "len", "check");
   std::fflush(stdout);
 
   json rows = json::array();
@@ -286,8 +422,8 @@ int run_bench(const BenchOptions& o) {
     double prepare_ms = ms_since(tp);
 
     Timings cgal = time_backend(run_cgal_fast, p, o.runs);
-    Timings gpu;
-    if (o.gpu) gpu = time_backend(o.gpu, p, o.runs);
+    Timings g;
+    if (gpu) g = time_backend(gpu, p, o.runs);
 
     json check = json::object();
     std::string status = "-";
@@ -306,24 +442,28 @@ int run_bench(const BenchOptions& o) {
       status = diff.empty() ? "ok" : "FAIL";
       failures += !diff.empty();
     }
-    if (o.gpu) {
+    if (gpu) {
       // The GPU result must equal CGAL's at every size, checked or not.
-      std::string diff = mesh_difference(gpu.mesh, cgal.mesh);
+      std::string diff = mesh_difference(g.mesh, cgal.mesh);
       check["gpu_equal"] = diff.empty();
       if (!diff.empty()) {
-        spdlog::error("{} {} points: {} differs from CGAL: {}", w.table, w.points, o.gpu_name, diff);
+        spdlog::error("{} {} points: the GPU backend differs from CGAL: {}", w.table, w.points, diff);
         check["gpu_difference"] = diff;
         status = "FAIL";
         ++failures;
+      } else if (status == "-") {
+        status = "gpu=cgal";
       }
     }
 
     const double cgal_ms = median(cgal.total);
-    const double gpu_ms = o.gpu ? median(gpu.total) : 0;
+    const double wall_ms = gpu ? median(g.total) : 0;
+    const double dev_ms = gpu ? median(g.device) : 0;
     const double len = mean_length_in_spacings(p);
-    std::printf("%-8s %-22s %10zu %10zu %11zu %10s %10s %8s %10zu %6.2f %s\n", w.table.c_str(), w.name.c_str(),
-                in.points.size(), p.vertices.size(), p.constraints.size(), fmt_ms(cgal_ms).c_str(),
-                o.gpu ? fmt_ms(gpu_ms).c_str() : "-", o.gpu ? fmt_ms(cgal_ms / gpu_ms).c_str() : "-",
+    std::printf("%-8s %9zu %9zu %11zu %9s %9s %9s %8s %6s %6s %9zu %5.2f %s\n", w.table.c_str(), in.points.size(),
+                p.vertices.size(), p.constraints.size(), fmt_ms(cgal_ms).c_str(), gpu ? fmt_ms(dev_ms).c_str() : "-",
+                gpu ? fmt_ms(wall_ms).c_str() : "-", gpu ? fmt_ms(cgal_ms / wall_ms).c_str() : "-",
+                gpu ? std::to_string(g.rounds).c_str() : "-", gpu ? bytes_per_point(g, p).c_str() : "-",
                 cgal.mesh.triangles.size(), len, status.c_str());
     std::fflush(stdout);
 
@@ -342,8 +482,9 @@ int run_bench(const BenchOptions& o) {
     row["generate_ms"] = generate_ms;
     row["prepare_ms"] = prepare_ms;
     row["cgal"] = cgal.to_json();
-    row["gpu"] = o.gpu ? gpu.to_json() : json();
-    row["speedup"] = o.gpu ? json(cgal_ms / gpu_ms) : json();
+    row["gpu"] = gpu ? g.to_json() : json();
+    row["speedup"] = gpu ? json(cgal_ms / wall_ms) : json();
+    row["speedup_device"] = gpu ? json(cgal_ms / dev_ms) : json();
     row["check"] = check;
     rows.push_back(row);
   }
@@ -352,9 +493,9 @@ int run_bench(const BenchOptions& o) {
     json j;
     j["tool"] = "cdtgpu bench";
     j["date"] = date;
-    j["machine"] = {{"cpu", cpu}, {"hardware_threads", threads}};
+    j["machine"] = {{"cpu", cpu}, {"hardware_threads", threads}, {"gpu", device}};
     j["cgal_config"] = kCgalConfig;
-    j["gpu_backend"] = o.gpu ? json(o.gpu_name) : json();
+    j["gpu_backend"] = gpu ? json("GPU (" + ctx->info.name + ")") : json();
     j["runs"] = o.runs;
     j["warmup_runs"] = 1;
     j["seed"] = o.seed;

@@ -1,5 +1,6 @@
 // cdtgpu bench: times the CDT of the deterministic workloads (core/workloads.hpp) with a CGAL configured for
-// speed and, once one exists, a GPU backend, and prints a table like the paper's (Chen et al. 2026).
+// speed and with the GPU backend (gpu/cdt_pipeline.hpp), checks both give the same triangles, and prints a
+// table like the paper's (Chen et al. 2026); --ablation prints its Table 3.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -15,11 +16,14 @@
 namespace cdtgpu {
 
 // One run of a backend on a prepared input. The mesh may be in any order (the bench canonicalizes it to
-// compare backends); total_ms is the figure the table compares, stage_ms its parts (and any extras) in order.
+// compare backends); total_ms is the figure the table compares (host wall clock), stage_ms its parts in order.
 struct BackendRun {
   Mesh mesh;
   std::vector<std::pair<std::string, double>> stage_ms;
   double total_ms = 0;
+  double device_ms = 0;         // GPU: the sum of the device timestamps of its stages
+  uint32_t rounds = 0;          // GPU: Delaunay insertion rounds + constraint flip rounds + legalise rounds
+  uint64_t peak_device_bytes = 0;
 };
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
 
@@ -31,8 +35,9 @@ struct BenchOptions {
   std::string json_path;            // empty: no JSON
   uint64_t seed = 1;
   bool check = false;               // compare with triangulate_cgal at every size, not only up to 200K points
-  BenchBackend gpu;                 // empty until a GPU backend exists: its column prints "-"
-  std::string gpu_name = "GPU";
+  bool gpu = true;                  // false (--cgal-only): CGAL column only
+  std::string device;               // Vulkan device override, as `cdtgpu devices` lists
+  bool ablation = false;            // the paper's Table 3 instead of the tables
 };
 
 // Adds the options above to a `bench` subcommand.

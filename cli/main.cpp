@@ -63,7 +63,9 @@ int main(int argc, char** argv) {
   t->add_option("--format", tri.format, "obj, ply or wkt (default: from the output's extension)");
   t->add_flag("--ascii", tri.write.ascii, "PLY: ascii instead of binary little-endian");
   t->add_flag("--wkt-multipolygon", tri.write.wkt_multipolygon, "WKT: MULTIPOLYGON Z instead of TIN Z");
-  t->add_option("--backend", tri.backend, "cgal (CPU reference)")->default_val("cgal");
+  t->add_option("--backend", tri.backend, "gpu (Vulkan compute, default) or cgal (the CPU reference)")
+      ->default_val("gpu")
+      ->check(CLI::IsMember({"gpu", "cgal"}));
   t->add_option("--stats", tri.stats_path, "write counts, CRS and stage times as JSON to this file");
   add_input_options(t, tri.input, crs, utm_zone, epsg);
 
@@ -91,6 +93,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*t) {
+      tri.device = device;
       tri.input.crs = crs_from(crs, utm_zone, epsg);
       return run_triangulate(tri);
     }
@@ -98,7 +101,10 @@ int main(int argc, char** argv) {
       ver.crs = crs_from(crs, utm_zone, epsg);
       return run_verify(mesh_path, ver);
     }
-    if (*b) return run_bench(bench);
+    if (*b) {
+      bench.device = device;
+      return run_bench(bench);
+    }
     if (*d) {
       std::cout << gpu::describe_devices(device);
       return 0;

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <fstream>
 #include <functional>
+#include <optional>
 
 #include <spdlog/spdlog.h>
 
@@ -11,6 +12,7 @@
 #include "core/prepare.hpp"
 #include "core/stats.hpp"
 #include "core/verify.hpp"
+#include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
 
 namespace cdtgpu {
@@ -98,10 +100,38 @@ int run_triangulate(const TriangulateOptions& options) {
     throw UsageError("writing to stdout needs --format (obj, ply or wkt)");
   else
     write.format = format_from_extension(options.output);
-  if (options.backend != "cgal") throw UsageError("unknown backend '" + options.backend + "' (use cgal)");
+  if (options.backend != "gpu" && options.backend != "cgal")
+    throw UsageError("unknown backend '" + options.backend + "' (use gpu or cgal)");
+
+  // The device comes first: a machine that cannot run the GPU backend fails before reading anything.
+  std::optional<gpu::Context> ctx;
+  if (options.backend == "gpu") {
+    gpu::ContextOptions co;
+    co.device = options.device;
+    ctx.emplace(gpu::create_context(co));
+    stats.device = ctx->info.name;
+    spdlog::debug("device: {} ({} {})", ctx->info.name, ctx->info.driver_name, ctx->info.driver_info);
+  }
 
   Loaded l = load(options.input, stats);
-  CdtResult result = timed(stats, "triangulate", [&] { return triangulate_cgal(l.prepared); });
+  CdtResult result = timed(stats, "triangulate", [&] {
+    if (!ctx) return triangulate_cgal(l.prepared);
+    gpu::GpuCdt cdt(*ctx);
+    gpu::GpuCdtStats gs;
+    CdtResult r = cdt.triangulate(l.prepared, &gs);
+    for (const auto& [name, ms] : gs.wall_ms) stats.stage_ms.emplace_back("triangulate: " + name, ms);
+    auto& g = stats.gpu_stage_ms;
+    for (const auto& [name, ms] : gs.gpu_ms) g[name] = (g.contains(name) ? g[name].get<double>() : 0.0) + ms;
+    g["total"] = gs.gpu_total_ms;
+    for (const auto& [name, ms] : gs.gpu_ms) spdlog::debug("gpu {}: {:.3f} ms", name, ms);
+    spdlog::debug("gpu total {:.2f} ms, peak device memory {} bytes", gs.gpu_total_ms, gs.peak_device_bytes);
+    stats.counts["constraint_splits_at_vertices"] = gs.split_at_vertices;
+    stats.counts["gpu_delaunay_rounds"] = gs.delaunay.rounds;
+    stats.counts["gpu_constraint_flip_rounds"] = gs.constraints.flip_rounds;
+    stats.counts["gpu_legalise_rounds"] = gs.constraints.legalise_rounds;
+    stats.counts["gpu_peak_device_bytes"] = gs.peak_device_bytes;
+    return r;
+  });
   if (result.mesh.triangles.empty())
     spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
   timed(stats, "write", [&] { write_mesh_file(result.mesh, l.crs, write, options.output); });

@@ -20,7 +20,8 @@ struct TriangulateOptions {
   std::string output;        // "-" for stdout
   std::string format;        // empty: from the output's extension
   WriteOptions write;
-  std::string backend = "cgal";
+  std::string backend = "gpu";  // gpu (default) or cgal (the CPU reference)
+  std::string device;           // Vulkan device override for the gpu backend
   std::string stats_path;    // empty: none
 };
 

@@ -12,6 +12,7 @@ struct RunStats {
   nlohmann::ordered_json counts = nlohmann::ordered_json::object();
   std::string crs;
   std::string backend;
+  std::string device;  // the Vulkan device, for the gpu backend
   std::vector<std::pair<std::string, double>> stage_ms;  // in run order
   nlohmann::ordered_json gpu_stage_ms = nlohmann::ordered_json::object();  // device timestamps, if any
 
@@ -20,6 +21,7 @@ struct RunStats {
     j["counts"] = counts;
     j["crs"] = crs;
     j["backend"] = backend;
+    if (!device.empty()) j["device"] = device;
     nlohmann::ordered_json s = nlohmann::ordered_json::object();
     for (const auto& [k, v] : stage_ms) s[k] = v;
     j["stage_ms"] = s;

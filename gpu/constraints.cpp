@@ -392,7 +392,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     uint32_t batch = std::clamp(options.rounds_per_submit, 1u, kMaxBatch);
     for (bool done = false; !done;) {
       Recorder rec(ctx_);
-      Profiler prof(ctx_, 2 * batch);
+      Profiler prof(ctx_, 3 * batch);
       const uint32_t cap = static_cast<uint32_t>(capacity), s = fixed_slots ? stride : 0;
       rec.fill(ctl, 0);  // clears the overflow flag; per-round counters are zero between rounds anyway
       if (fresh_table && fixed_slots) rec.fill(*table, 0xFFFFFFFFu);  // every row empty
@@ -401,6 +401,8 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         const uint32_t r = round + b;
         prof.begin(rec, "crossing detection");
         walk(rec, CDT_WALK_COUNT, r, cap, s);
+        prof.end(rec);
+        prof.begin(rec, "prefix-sum layout");  // stage 2 of the table: offsets, then the rows written compactly
         if (!fixed_slots) prims_.exclusive_scan(rec, counts, offsets, m);
         args(rec, CDT_ARGS_INSERT, r, b, cap, s);
         if (!fixed_slots) walk(rec, CDT_WALK_WRITE, r, cap, 0);

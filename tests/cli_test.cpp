@@ -106,6 +106,32 @@ TEST_F(Cli, SameInputGivesSameBytes) {
   EXPECT_EQ(slurp(path("c.obj")), slurp(path("d.obj")));
 }
 
+// The GPU backend is the default; its bytes equal the CGAL reference backend's in every format.
+TEST_F(Cli, GpuBackendWritesTheSameBytesAsCgal) {
+  write_terrain();
+  std::string in = path("dem.csv") + " " + path("lines.wkt");
+  for (std::string ext : {"obj", "ply", "wkt"}) {
+    Result g = run("triangulate " + in + " -q -o " + path("gpu." + ext) + " --stats " + path("gpu.json"));
+    ASSERT_EQ(g.code, 0) << g.err;
+    Result c = run("triangulate " + in + " -q --backend cgal -o " + path("cgal." + ext));
+    ASSERT_EQ(c.code, 0) << c.err;
+    EXPECT_EQ(slurp(path("gpu." + ext)), slurp(path("cgal." + ext))) << ext;
+  }
+  auto stats = nlohmann::json::parse(slurp(path("gpu.json")));
+  EXPECT_EQ(stats["backend"], "gpu");
+  EXPECT_FALSE(stats["device"].get<std::string>().empty());
+  EXPECT_GT(stats["gpu_stage_ms"]["total"].get<double>(), 0);
+  EXPECT_TRUE(stats["gpu_stage_ms"].contains("dt flip"));
+  EXPECT_TRUE(stats["gpu_stage_ms"].contains("cdt crossing detection"));
+  Result bad = run("triangulate " + in + " -q --backend fast -o " + path("x.ply"));
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_EQ(files_matching("x."), 0u);
+  Result nodev = run("triangulate " + in + " -q --device no-such-gpu -o " + path("y.ply"));
+  EXPECT_EQ(nodev.code, 3) << nodev.err;
+  EXPECT_NE(nodev.err.find("no-such-gpu"), std::string::npos) << nodev.err;
+  EXPECT_EQ(files_matching("y."), 0u);
+}
+
 TEST_F(Cli, StdinToStdoutAndStats) {
   write("pts.wkt", "MULTIPOINT ((0 0), (1 0), (0 1), (1 1), (0.5 0.5))\nPOINT (1 1)\n");
   Result r = run("triangulate - --crs none --format wkt -o - --stats " + path("s.json") + " < " + path("pts.wkt"),

@@ -212,7 +212,13 @@ TEST(Bench, QuickRunEndToEnd) {
   for (const auto& row : j["rows"]) {
     EXPECT_TRUE(row["check"]["cgal_equal"].get<bool>()) << row["table"];
     EXPECT_EQ(row["cgal"]["runs_ms"].size(), 1u);
-    EXPECT_TRUE(row["gpu"].is_null());
+    // The GPU backend ran too, and gave CGAL's triangles.
+    EXPECT_TRUE(row["check"]["gpu_equal"].get<bool>()) << row["table"];
+    EXPECT_EQ(row["gpu"]["runs_ms"].size(), 1u);
+    EXPECT_GT(row["gpu"]["device_median_ms"].get<double>(), 0);
+    EXPECT_GT(row["gpu"]["peak_device_bytes"].get<uint64_t>(), 0u);
+    EXPECT_TRUE(row["gpu"]["stage_median_ms"].contains("dt flip"));
+    EXPECT_TRUE(row["gpu"]["stage_median_ms"].contains("cdt legalise"));
     EXPECT_GT(row["triangles"].get<uint64_t>(), 0u);
   }
   EXPECT_EQ(j["rows"][1]["points"], 6000);       // table 2: twice the smallest size
@@ -220,8 +226,41 @@ TEST(Bench, QuickRunEndToEnd) {
   std::filesystem::remove(json_path);
 }
 
+TEST(Bench, AblationVariantsAllGiveCgalsTriangles) {
+  auto json_path = std::filesystem::temp_directory_path() / "cdtgpu_workloads_test_ablation.json";
+  BenchOptions o;
+  o.ablation = true;
+  o.sizes = {"4K"};
+  o.runs = 1;
+  o.json_path = json_path.string();
+  ASSERT_EQ(run_bench(o), 0);
+  std::ifstream f(json_path);
+  nlohmann::json j = nlohmann::json::parse(f);
+  EXPECT_EQ(j["constraints"], 1000);
+  ASSERT_EQ(j["variants"].size(), 3u);
+  for (const auto& v : j["variants"]) EXPECT_TRUE(v["cgal_equal"].get<bool>()) << v["variant"];
+  std::filesystem::remove(json_path);
+}
+
+TEST(Bench, CgalOnlyLeavesTheGpuColumnsEmpty) {
+  auto json_path = std::filesystem::temp_directory_path() / "cdtgpu_workloads_test_cgal_only.json";
+  BenchOptions o;
+  o.table = "1";
+  o.sizes = {"2K"};
+  o.runs = 1;
+  o.gpu = false;
+  o.json_path = json_path.string();
+  ASSERT_EQ(run_bench(o), 0);
+  std::ifstream f(json_path);
+  nlohmann::json j = nlohmann::json::parse(f);
+  ASSERT_EQ(j["rows"].size(), 1u);
+  EXPECT_TRUE(j["rows"][0]["gpu"].is_null());
+  std::filesystem::remove(json_path);
+}
+
 TEST(Bench, BadSizeIsAUsageError) {
   BenchOptions o;
+  o.gpu = false;
   o.sizes = {"12Q"};
   EXPECT_THROW(run_bench(o), UsageError);
 }

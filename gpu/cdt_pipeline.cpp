@@ -1,0 +1,78 @@
+#include "gpu/cdt_pipeline.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include <spdlog/spdlog.h>
+
+#include "core/resolve.hpp"
+#include "gpu/triangulation.hpp"
+
+namespace cdtgpu::gpu {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+void add_gpu(GpuCdtStats& s, const std::string& prefix, const std::vector<std::pair<std::string, double>>& stages) {
+  for (const auto& [name, ms] : stages) {
+    s.gpu_ms.emplace_back(prefix + name, ms);
+    s.gpu_total_ms += ms;
+  }
+}
+
+}  // namespace
+
+GpuCdt::GpuCdt(const Context& ctx) : ctx_(ctx), prims_(ctx), delaunay_(ctx), inserter_(ctx, prims_) {}
+
+CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats) const {
+  GpuCdtStats local;
+  GpuCdtStats& s = stats ? *stats : local;
+  s = GpuCdtStats{};
+  const auto t_all = Clock::now();
+  auto stage = [&](const char* name, Clock::time_point t0) {
+    s.wall_ms.emplace_back(name, ms_since(t0));
+    spdlog::debug("gpu backend: {}: {:.1f} ms", name, s.wall_ms.back().second);
+  };
+
+  // 1. CPU: constraints that pass through vertices are split there, crossings get Steiner vertices, so the
+  //    GPU sees a planar straight-line graph on canonical vertices.
+  auto t = Clock::now();
+  ResolvedInput in = resolve_constraints(prepared, resolve_threads);
+  s.split_at_vertices = in.split_at_vertices;
+  stage("resolve", t);
+
+  CdtResult result;
+  result.steiner_points = in.steiner_points;
+  result.mesh.vertices = std::move(in.vertices);
+
+  // 2. GPU: the Delaunay triangulation of every vertex, left on the device.
+  t = Clock::now();
+  std::vector<double> xy;
+  xy.reserve(result.mesh.vertices.size() * 2);
+  for (const Point3& v : result.mesh.vertices) xy.insert(xy.end(), {v.x, v.y});
+  GpuTriangulation tri = delaunay_.build(xy, &s.delaunay);
+  stage("delaunay", t);
+  add_gpu(s, "dt ", s.delaunay.stage_ms);
+  s.peak_device_bytes = s.delaunay.peak_device_bytes;
+
+  // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
+  //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change.
+  t = Clock::now();
+  if (tri.num_slots > 0) {
+    inserter_.insert(tri, in.constraints, &s.constraints, constraint_options);
+    add_gpu(s, "cdt ", s.constraints.stage_ms);
+    s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
+  }
+  stage("constraints", t);
+
+  // 4. The finite triangles, in canonical order.
+  t = Clock::now();
+  if (tri.num_slots > 0) result.mesh.triangles = download_triangles(ctx_, tri);
+  stage("download", t);
+  s.wall_total_ms = ms_since(t_all);
+  return result;
+}
+
+}  // namespace cdtgpu::gpu

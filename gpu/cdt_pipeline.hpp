@@ -1,0 +1,62 @@
+// The whole GPU backend in one place: prepared input -> constrained Delaunay triangulation, equal to
+// triangulate_cgal's result (same vertices, same triangles, same canonical order, same Steiner count).
+//
+//   gpu::Context ctx = gpu::create_context();
+//   gpu::GpuCdt cdt(ctx);                       // builds every pipeline once
+//   gpu::GpuCdtStats stats;
+//   CdtResult r = cdt.triangulate(prepared, &stats);
+//
+// Stages (gpu/cdt_pipeline.cpp reads as this list):
+//   resolve      CPU, core/resolve: split constraints at vertices, Steiner vertices at crossings
+//   delaunay     GPU, gpu/delaunay: Delaunay triangulation of all vertices (docs/gpu-delaunay.md)
+//   constraints  GPU, gpu/constraints: the paper's insertion by flips, then legalisation (docs/gpu-constraints.md)
+//   download     GPU -> host: finite triangles in canonical order
+#pragma once
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/cdt_cgal.hpp"
+#include "core/prepare.hpp"
+#include "gpu/constraints.hpp"
+#include "gpu/context.hpp"
+#include "gpu/delaunay.hpp"
+#include "gpu/primitives.hpp"
+
+namespace cdtgpu::gpu {
+
+struct GpuCdtStats {
+  // Host wall clock per stage ("resolve", "delaunay", "constraints", "download"), in order.
+  std::vector<std::pair<std::string, double>> wall_ms;
+  // Device timestamps per GPU stage, "dt ..." then "cdt ...", in order; gpu_total_ms is their sum.
+  std::vector<std::pair<std::string, double>> gpu_ms;
+  double gpu_total_ms = 0;
+  double wall_total_ms = 0;  // resolve to download, all included
+  DelaunayStats delaunay;
+  ConstraintStats constraints;
+  uint64_t split_at_vertices = 0;
+  uint64_t peak_device_bytes = 0;  // the larger of the two GPU stages' peaks
+};
+
+class GpuCdt {
+ public:
+  explicit GpuCdt(const Context& ctx);
+
+  CdtResult triangulate(const PreparedInput& prepared, GpuCdtStats* stats = nullptr) const;
+
+  // The paper's ablation switches (docs/gpu-constraints.md); defaults are the full method.
+  ConstraintOptions constraint_options;
+  // Threads of the CPU resolve stage (0: all).
+  unsigned resolve_threads = 0;
+
+  const Context& context() const { return ctx_; }
+
+ private:
+  const Context& ctx_;
+  Primitives prims_;
+  DelaunayBuilder delaunay_;
+  ConstraintInserter inserter_;
+};
+
+}  // namespace cdtgpu::gpu

@@ -1,0 +1,195 @@
+// The whole GPU backend (gpu/cdt_pipeline.hpp): prepared input -> CPU resolve -> GPU Delaunay -> GPU constraint
+// insertion -> canonical mesh, against the CGAL reference backend (triangulate_cgal). Without crossing
+// constraints the meshes must be identical (vertices, triangles, order); with crossings too, where the Steiner
+// vertices round the same way (checked: every peer input), and verify must pass. Inputs: every peer input of
+// ../shared/data/cdt-peer-inputs, the bundled Katoomba sample, the bench workloads (uniform + Delaunay edges,
+// long constraints, terrain contours), random crossing segments, degenerate inputs. Validation layer on.
+// CDTGPU_LARGE=1 adds 2M points + 500K constraints (the paper's headline) for the GPU machine.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/cdt_cgal.hpp"
+#include "core/prepare.hpp"
+#include "core/projection.hpp"
+#include "core/verify.hpp"
+#include "core/workloads.hpp"
+#include "gpu/cdt_pipeline.hpp"
+#include "io/readers.hpp"
+
+namespace cdtgpu {
+namespace {
+
+gpu::Context& ctx() {
+  static gpu::Context c = [] {
+    gpu::ContextOptions options;
+    options.validation = true;
+    return gpu::create_context(options);
+  }();
+  return c;
+}
+
+const gpu::GpuCdt& cdt() {
+  static gpu::GpuCdt c(ctx());
+  return c;
+}
+
+void no_validation_messages() {
+  for (auto& m : ctx().messages()) ADD_FAILURE() << m;
+  ctx().clear_messages();
+}
+
+// GPU result equal to the reference backend's, and valid by verify. Returns the GPU stats (and the Steiner count).
+gpu::GpuCdtStats expect_equal_to_cgal(const std::string& name, const InputSet& in, uint64_t* steiner = nullptr) {
+  PreparedInput p = prepare(in);
+  CdtResult ref = triangulate_cgal(p);
+  gpu::GpuCdtStats stats;
+  CdtResult got = cdt().triangulate(p, &stats);
+  EXPECT_EQ(got.steiner_points, ref.steiner_points) << name;
+  EXPECT_EQ(got.mesh.vertices.size(), ref.mesh.vertices.size()) << name;
+  EXPECT_TRUE(got.mesh.vertices == ref.mesh.vertices) << name << ": vertices differ";
+  EXPECT_EQ(got.mesh.triangles.size(), ref.mesh.triangles.size()) << name;
+  if (got.mesh.triangles != ref.mesh.triangles) {
+    size_t i = 0;
+    while (i < std::min(got.mesh.triangles.size(), ref.mesh.triangles.size()) &&
+           got.mesh.triangles[i] == ref.mesh.triangles[i])
+      ++i;
+    ADD_FAILURE() << name << ": triangles differ from CGAL's first at index " << i;
+  }
+  VerifyReport v = verify_mesh(got.mesh, p);
+  std::string msg;
+  for (const std::string& f : v.failures) msg += "  " + f + "\n";
+  EXPECT_TRUE(v.ok()) << name << ":\n" << msg;
+  EXPECT_EQ(v.steiner_vertices, got.steiner_points) << name;
+  no_validation_messages();
+  if (steiner) *steiner = ref.steiner_points;
+  return stats;
+}
+
+InputSet workload(uint64_t n, uint64_t m, double f, uint64_t seed) {
+  InputSet in = uniform_points(n, seed);
+  add_dt_edge_constraints(in, m, f, seed);
+  return in;
+}
+
+TEST(GpuPipeline, EveryPeerInput) {
+  const std::filesystem::path dir = std::filesystem::path(CDTGPU_SHARED_DATA) / "cdt-peer-inputs";
+  std::vector<std::filesystem::path> files;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    if (e.path().extension() == ".txt") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  ASSERT_GE(files.size(), 30u);
+  int with_steiner = 0;  // inputs whose constraints cross: the CPU resolve stage is exercised
+  for (const auto& f : files) {
+    std::ifstream file(f, std::ios::binary);
+    InputSet in;
+    read_peer_input(file, f.string(), in);
+    uint64_t steiner = 0;
+    expect_equal_to_cgal(f.filename().string(), in, &steiner);
+    with_steiner += steiner > 0;
+  }
+  EXPECT_GE(with_steiner, 5);
+}
+
+TEST(GpuPipeline, KatoombaSample) {
+  const std::string dir = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
+  InputSet in;
+  ReadOptions ro;
+  ro.z_field = "ELEV";
+  for (const char* name : {"contours.shp", "dem.xyz", "buildings.shp"}) read_input(dir + name, ro, in);
+  project(in, choose_crs(in, parse_crs("auto")));
+  gpu::GpuCdtStats s = expect_equal_to_cgal("katoomba", in);
+  EXPECT_GT(s.gpu_total_ms, 0);
+  EXPECT_GT(s.peak_device_bytes, 0u);
+}
+
+TEST(GpuPipeline, BenchWorkloads) {
+  expect_equal_to_cgal("uniform 20K + 5K DT edges", workload(20000, 5000, 0.5, 3));
+  expect_equal_to_cgal("uniform 20K + long DT edges", workload(20000, 400, 0.02, 4));
+  TerrainOptions t;
+  t.grid = 120;
+  t.seed = 5;
+  expect_equal_to_cgal("terrain 120x120 + contours", terrain_workload(t));
+}
+
+// Random segments that cross each other many times: Steiner vertices, splits, z interpolation.
+TEST(GpuPipeline, CrossingConstraints) {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1000);
+  InputSet in;
+  in.sources = {"random crossings"};
+  for (int i = 0; i < 3000; ++i) in.points.push_back({u(rng), u(rng), u(rng) / 10});
+  for (int i = 0; i < 60; ++i) {
+    Polyline l;
+    l.points = {{u(rng), u(rng), 1}, {u(rng), u(rng), 2}};
+    in.lines.push_back(l);
+  }
+  PreparedInput p = prepare(in);
+  CdtResult ref = triangulate_cgal(p);
+  ASSERT_GT(ref.steiner_points, 100u);
+  expect_equal_to_cgal("random crossings", in);
+}
+
+// A grid DEM (every cell co-circular) with constraints along grid lines (through collinear vertices) and
+// diagonals crossing them at vertices and between them.
+TEST(GpuPipeline, GridWithConstraintsThroughVertices) {
+  InputSet in;
+  in.sources = {"grid"};
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 60; ++j) in.points.push_back({double(i), double(j), double(i + j)});
+  in.lines.push_back({{{0, 10, 0}, {59, 10, 0}}});
+  in.lines.push_back({{{5, 0, 0}, {5, 59, 0}}});
+  in.lines.push_back({{{0, 0, 0}, {59, 59, 0}}});
+  in.lines.push_back({{{0.5, 3, 0}, {40.5, 50, 0}}});
+  in.lines.push_back({{{59, 0, 0}, {0, 59, 0}}});
+  expect_equal_to_cgal("grid with constraints", in);
+}
+
+TEST(GpuPipeline, DegenerateInputs) {
+  auto run = [](const std::vector<Point3>& pts, const std::vector<Polyline>& lines) {
+    InputSet in;
+    in.points = pts;
+    in.lines = lines;
+    PreparedInput p = prepare(in);
+    CdtResult got = cdt().triangulate(p);
+    CdtResult ref = triangulate_cgal(p);
+    EXPECT_EQ(got.mesh.vertices, ref.mesh.vertices);
+    EXPECT_EQ(got.mesh.triangles, ref.mesh.triangles);
+    return got.mesh.triangles.size();
+  };
+  EXPECT_EQ(run({}, {}), 0u);
+  EXPECT_EQ(run({{1, 1, 1}}, {}), 0u);
+  EXPECT_EQ(run({{1, 1, 1}, {2, 2, 2}}, {}), 0u);
+  EXPECT_EQ(run({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {}), 1u);
+  EXPECT_EQ(run({{0, 0, 0}, {1, 1, 0}, {2, 2, 0}, {3, 3, 0}}, {{{{0, 0, 0}, {3, 3, 0}}}}), 0u);  // collinear
+  EXPECT_EQ(run({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 0}}, {{{{0, 0, 0}, {2, 2, 0}}}, {{{2, 0, 0}, {0, 2, 0}}}}),
+            4u);  // two crossing diagonals: one Steiner vertex
+  no_validation_messages();
+}
+
+TEST(GpuPipeline, SameResultEveryRun) {
+  PreparedInput p = prepare(workload(15000, 4000, 0.3, 9));
+  CdtResult a = cdt().triangulate(p);
+  CdtResult b = cdt().triangulate(p);
+  EXPECT_EQ(a.mesh.triangles, b.mesh.triangles);
+  EXPECT_EQ(a.mesh.vertices, b.mesh.vertices);
+}
+
+TEST(GpuPipeline, LargePaperHeadline) {
+  const char* v = std::getenv("CDTGPU_LARGE");
+  if (!v || std::strcmp(v, "1") != 0) GTEST_SKIP() << "set CDTGPU_LARGE=1 (GPU machine): 2M points + 500K";
+  gpu::GpuCdtStats s = expect_equal_to_cgal("2M + 500K DT edges", workload(2000000, 500000, 0.5, 1));
+  std::string line;
+  for (const auto& [name, ms] : s.gpu_ms) line += " " + name + "=" + std::to_string(ms);
+  std::printf("[ 2M+500K ] wall %.1f ms, gpu %.1f ms:%s\n", s.wall_total_ms, s.gpu_total_ms, line.c_str());
+}
+
+}  // namespace
+}  // namespace cdtgpu
