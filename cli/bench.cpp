@@ -13,6 +13,7 @@
 #include <thread>
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Spatial_sort_traits_adapter_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
@@ -50,6 +51,10 @@ const char* kCgalConfig =
     "CGAL " CGAL_VERSION_STR " Constrained_Delaunay_triangulation_2<Epick, TDS with vertex index, "
     "Exact_predicates_tag>; points spatially sorted (CGAL::spatial_sort) and inserted with a hint, constraints "
     "inserted by vertex handle; time = point insertion + constraint insertion, one thread";
+
+const char* kCgalDtConfig =
+    "CGAL " CGAL_VERSION_STR " Delaunay_triangulation_2<Epick, TDS with vertex index>, range insertion (spatial "
+    "sort, then insertion with hints); time = construction, one thread";
 
 double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
@@ -98,14 +103,32 @@ std::vector<Workload> plan(const BenchOptions& o) {
     for (int k = 1; k <= 5; ++k) w.push_back({"2", "uniform+dt-edges", 2 * smallest, 2 * smallest * k / 10, kFraction, 0});
   if (all || o.table == "long")
     for (uint64_t n : sizes) w.push_back({"long", "uniform+long-dt-edges", n, n / 50, kLongFraction, 0});
+  if (o.table == "dt") {  // Delaunay only (issue 4's measure): uniform sizes, then a square grid DEM
+    std::vector<uint64_t> dt_sizes = o.sizes.empty() && !o.quick ? std::vector<uint64_t>{1000000, 2000000, 4000000, 8000000}
+                                                                 : sizes;
+    for (uint64_t n : dt_sizes) w.push_back({"dt", "uniform", n, 0, 0, 0});
+    const uint32_t side = static_cast<uint32_t>(std::llround(2 * std::sqrt(double(dt_sizes.front()))));
+    w.push_back({"dt", "grid", uint64_t(side) * side, 0, 0, side});
+  }
   if (all || o.table == "terrain")
     for (uint64_t n : sizes)
       w.push_back({"terrain", "dem+contours", n, 0, 0, static_cast<uint32_t>(std::llround(std::sqrt(double(n))))});
-  if (w.empty()) throw UsageError("--table must be 1, 2, long, terrain or all, got '" + o.table + "'");
+  if (w.empty()) throw UsageError("--table must be 1, 2, long, terrain, dt or all, got '" + o.table + "'");
   return w;
 }
 
+// A grid DEM of side x side nodes 10 m apart: every cell's four corners are co-circular.
+InputSet grid_points(uint32_t side) {
+  InputSet in;
+  in.sources = {"grid(" + std::to_string(side) + "x" + std::to_string(side) + ")"};
+  in.points.reserve(uint64_t(side) * side);
+  for (uint32_t i = 0; i < side; ++i)
+    for (uint32_t j = 0; j < side; ++j) in.points.push_back({500000 + 10.0 * i, 6000000 + 10.0 * j, 0});
+  return in;
+}
+
 InputSet generate(const Workload& w, uint64_t seed) {
+  if (w.table == "dt") return w.grid ? grid_points(w.grid) : uniform_points(w.points, seed);
   if (w.grid) {
     TerrainOptions t;
     t.grid = w.grid;
@@ -133,6 +156,7 @@ double mean_length_in_spacings(const PreparedInput& p) {
 
 struct Timings {
   std::vector<double> total, device;
+  std::vector<std::pair<std::string, std::vector<double>>> wall;  // GPU: host clock per pipeline stage
   uint32_t rounds = 0;
   uint64_t peak_device_bytes = 0;
   std::vector<std::pair<std::string, std::vector<double>>> stages;  // in run order
@@ -155,6 +179,11 @@ struct Timings {
     }
     j["stage_median_ms"] = sm;
     j["stage_runs_ms"] = sr;
+    if (!wall.empty()) {
+      json w = json::object();
+      for (const auto& [name, v] : wall) w[name] = median(v);
+      j["wall_stage_median_ms"] = w;
+    }
     return j;
   }
 };
@@ -171,6 +200,11 @@ Timings time_backend(const BenchBackend& backend, const PreparedInput& p, int ru
     for (const auto& [name, ms] : run.stage_ms) {
       auto it = std::find_if(t.stages.begin(), t.stages.end(), [&](const auto& s) { return s.first == name; });
       if (it == t.stages.end()) it = t.stages.insert(t.stages.end(), {name, {}});
+      it->second.push_back(ms);
+    }
+    for (const auto& [name, ms] : run.wall_ms) {
+      auto it = std::find_if(t.wall.begin(), t.wall.end(), [&](const auto& s) { return s.first == name; });
+      if (it == t.wall.end()) it = t.wall.insert(t.wall.end(), {name, {}});
       it->second.push_back(ms);
     }
     if (r + 1 == runs) t.mesh = std::move(run.mesh);
@@ -259,16 +293,35 @@ BackendRun run_cgal_fast(const PreparedInput& p) {
   return r;
 }
 
+BackendRun run_cgal_delaunay(const PreparedInput& p) {
+  using Dt = CGAL::Delaunay_triangulation_2<K, CGAL::Triangulation_data_structure_2<Vb>>;
+  BackendRun r;
+  auto t0 = Clock::now();
+  std::vector<std::pair<K::Point_2, uint32_t>> pts;
+  pts.reserve(p.vertices.size());
+  for (size_t i = 0; i < p.vertices.size(); ++i) pts.push_back({{p.vertices[i].x, p.vertices[i].y}, uint32_t(i)});
+  Dt dt(pts.begin(), pts.end());  // range insertion: spatial sort, then insertion with hints
+  r.total_ms = ms_since(t0);
+  r.stage_ms = {{"points", r.total_ms}};
+  r.mesh.vertices = p.vertices;
+  for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f)
+    r.mesh.triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+  return r;
+}
+
 void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_option("--table", o.table,
                   "1 (1M..4M points, 500K constraints), 2 (2M points, 200K..1M constraints), long (long "
-                  "constraints), terrain (DEM grid + contours) or all")
+                  "constraints), terrain (DEM grid + contours), all (these four), or dt (Delaunay only: 1M..8M "
+                  "uniform points and a grid, CGAL's Delaunay_triangulation_2)")
       ->default_val("all")
-      ->check(CLI::IsMember({"1", "2", "long", "terrain", "all"}));
+      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all"}));
   cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points) that finish in about a minute on 2 cores");
   cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
   cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
       ->default_val(5)
+      ->check(CLI::Range(1, 1000));
+  cmd->add_option("--cgal-runs", o.cgal_runs, "timed CGAL runs (default: --runs); CGAL takes seconds per run")
       ->check(CLI::Range(1, 1000));
   cmd->add_option("--json", o.json_path, "write every figure (each run's times too) and machine info here");
   cmd->add_option("--seed", o.seed, "seed of the workload generators")->default_val(1);
@@ -292,7 +345,7 @@ BenchBackend gpu_backend(const gpu::GpuCdt& cdt) {
     r.mesh = std::move(res.mesh);
     double accounted = 0;
     for (const auto& [name, ms] : s.wall_ms)
-      if (name == std::string("resolve") || name == std::string("download")) {
+      if (name == std::string("resolve") || name == std::string("upload") || name == std::string("download")) {
         r.stage_ms.emplace_back(name + " (host)", ms);
         accounted += ms;
       }
@@ -304,6 +357,7 @@ BenchBackend gpu_backend(const gpu::GpuCdt& cdt) {
     r.stage_ms.emplace_back("host overhead", std::max(0.0, s.wall_total_ms - accounted - s.gpu_total_ms));
     r.total_ms = s.wall_total_ms;
     r.device_ms = s.gpu_total_ms;
+    r.wall_ms = s.wall_ms;
     r.rounds = s.delaunay.rounds + s.constraints.flip_rounds + s.constraints.legalise_rounds;
     r.peak_device_bytes = s.peak_device_bytes;
     return r;
@@ -321,7 +375,7 @@ int run_ablation(const BenchOptions& o, const gpu::GpuCdt& base) {
   Workload w{"ablation", "uniform+dt-edges", n, n / 4, kFraction, 0};
   InputSet in = generate(w, o.seed);
   PreparedInput p = prepare(in);
-  Timings cgal = time_backend(run_cgal_fast, p, o.runs);
+  Timings cgal = time_backend(run_cgal_fast, p, o.cgal_runs > 0 ? o.cgal_runs : o.runs);
   std::printf("ablation (the paper's Table 3): %zu vertices, %zu constraints; CGAL %s ms\n\n", p.vertices.size(),
               p.constraints.size(), fmt_ms(median(cgal.total)).c_str());
   std::printf("%-44s %10s %10s %12s %8s %6s %s\n", "variant", "GPU ms", "wall ms", "constraints", "rounds", "B/pt",
@@ -402,11 +456,12 @@ int run_bench(const BenchOptions& o) {
   std::printf("cdtgpu bench, %s\n", date.c_str());
   std::printf("CPU: %s, %u hardware threads\n", cpu.c_str(), threads);
   std::printf("GPU: %s\n", device.c_str());
-  std::printf("CGAL column: %s\n", kCgalConfig);
+  std::printf("CGAL column: %s\n", o.table == "dt" ? kCgalDtConfig : kCgalConfig);
   std::printf("GPU columns: 'GPU ms' = device timestamps of the GPU stages; 'wall ms' = the whole GPU backend on the "
               "host clock (CPU constraint resolution, submits, readbacks, download in canonical order); speedup = "
               "CGAL / wall\n");
-  std::printf("median of %d runs after 1 warm-up, seed %llu\n\n", o.runs, static_cast<unsigned long long>(o.seed));
+  std::printf("median of %d runs (CGAL: %d) after 1 warm-up, seed %llu\n\n", o.runs,
+              o.cgal_runs > 0 ? o.cgal_runs : o.runs, static_cast<unsigned long long>(o.seed));
   std::printf("%-8s %9s %9s %11s %9s %9s %9s %8s %6s %6s %9s %5s %s\n", "table", "points", "vertices",
               "constraints", "CGAL ms", "GPU ms", "wall ms", "speedup", "rounds", "B/pt", "triangles", "len", "check");
   std::fflush(stdout);
@@ -421,7 +476,8 @@ int run_bench(const BenchOptions& o) {
     PreparedInput p = prepare(in);
     double prepare_ms = ms_since(tp);
 
-    Timings cgal = time_backend(run_cgal_fast, p, o.runs);
+    const int cgal_runs = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
+    Timings cgal = time_backend(w.table == "dt" ? run_cgal_delaunay : run_cgal_fast, p, cgal_runs);
     Timings g;
     if (gpu) g = time_backend(gpu, p, o.runs);
 
@@ -494,9 +550,10 @@ int run_bench(const BenchOptions& o) {
     j["tool"] = "cdtgpu bench";
     j["date"] = date;
     j["machine"] = {{"cpu", cpu}, {"hardware_threads", threads}, {"gpu", device}};
-    j["cgal_config"] = kCgalConfig;
+    j["cgal_config"] = o.table == "dt" ? kCgalDtConfig : kCgalConfig;
     j["gpu_backend"] = gpu ? json("GPU (" + ctx->info.name + ")") : json();
     j["runs"] = o.runs;
+    j["cgal_runs"] = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
     j["warmup_runs"] = 1;
     j["seed"] = o.seed;
     j["quick"] = o.quick;

@@ -24,14 +24,16 @@ struct BackendRun {
   double device_ms = 0;         // GPU: the sum of the device timestamps of its stages
   uint32_t rounds = 0;          // GPU: Delaunay insertion rounds + constraint flip rounds + legalise rounds
   uint64_t peak_device_bytes = 0;
+  std::vector<std::pair<std::string, double>> wall_ms;  // GPU: host clock per pipeline stage (resolve, delaunay, ...)
 };
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
 
 struct BenchOptions {
-  std::string table = "all";        // 1, 2, long, terrain or all
+  std::string table = "all";        // 1, 2, long, terrain, all (those four) or dt (Delaunay only)
   bool quick = false;               // 20K..80K points instead of 1M..4M
   std::vector<std::string> sizes;   // point counts overriding the table's, e.g. 50000 or 1.5M
   int runs = 5;                     // timed runs per backend and workload (median), after one warm-up
+  int cgal_runs = 0;                // timed CGAL runs; 0: `runs`
   std::string json_path;            // empty: no JSON
   uint64_t seed = 1;
   bool check = false;               // compare with triangulate_cgal at every size, not only up to 200K points

@@ -24,7 +24,8 @@ void add_gpu(GpuCdtStats& s, const std::string& prefix, const std::vector<std::p
 
 }  // namespace
 
-GpuCdt::GpuCdt(const Context& ctx) : ctx_(ctx), prims_(ctx), delaunay_(ctx), inserter_(ctx, prims_) {}
+GpuCdt::GpuCdt(const Context& ctx)
+    : ctx_(ctx), prims_(ctx), delaunay_(ctx), inserter_(ctx, prims_), sorter_(ctx, prims_) {}
 
 CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats) const {
   GpuCdtStats local;
@@ -49,27 +50,33 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats)
 
   // 2. GPU: the Delaunay triangulation of every vertex, left on the device.
   t = Clock::now();
-  std::vector<double> xy;
-  xy.reserve(result.mesh.vertices.size() * 2);
-  for (const Point3& v : result.mesh.vertices) xy.insert(xy.end(), {v.x, v.y});
-  GpuTriangulation tri = delaunay_.build(xy, &s.delaunay);
+  const uint32_t n = static_cast<uint32_t>(result.mesh.vertices.size());
+  std::vector<double> xy(size_t(n) * 2);
+  for (uint32_t i = 0; i < n; ++i) xy[2 * i] = result.mesh.vertices[i].x, xy[2 * i + 1] = result.mesh.vertices[i].y;
+  Buffer points = upload_new(ctx_, xy, "points");
+  stage("upload", t);
+  t = Clock::now();
+  GpuTriangulation tri = delaunay_.build(std::move(points), n, &s.delaunay);
   stage("delaunay", t);
   add_gpu(s, "dt ", s.delaunay.stage_ms);
   s.peak_device_bytes = s.delaunay.peak_device_bytes;
 
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
-  //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change.
+  //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
+  //    constraints: the Delaunay triangulation is the answer.
   t = Clock::now();
-  if (tri.num_slots > 0) {
+  if (tri.num_slots > 0 && !in.constraints.empty()) {
     inserter_.insert(tri, in.constraints, &s.constraints, constraint_options);
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
   }
   stage("constraints", t);
 
-  // 4. The finite triangles, in canonical order.
+  // 4. The finite triangles, sorted into canonical order on the GPU, then downloaded.
   t = Clock::now();
-  if (tri.num_slots > 0) result.mesh.triangles = download_triangles(ctx_, tri);
+  double sort_ms = 0;
+  result.mesh.triangles = sorter_.download(tri, &sort_ms);
+  add_gpu(s, "", {{"canonical order", sort_ms}});
   stage("download", t);
   s.wall_total_ms = ms_since(t_all);
   return result;

@@ -10,7 +10,7 @@
 //   resolve      CPU, core/resolve: split constraints at vertices, Steiner vertices at crossings
 //   delaunay     GPU, gpu/delaunay: Delaunay triangulation of all vertices (docs/gpu-delaunay.md)
 //   constraints  GPU, gpu/constraints: the paper's insertion by flips, then legalisation (docs/gpu-constraints.md)
-//   download     GPU -> host: finite triangles in canonical order
+//   download     GPU: finite triangles sorted into canonical order (gpu/canonical), then to the host
 #pragma once
 #include <cstdint>
 #include <string>
@@ -19,6 +19,7 @@
 
 #include "core/cdt_cgal.hpp"
 #include "core/prepare.hpp"
+#include "gpu/canonical.hpp"
 #include "gpu/constraints.hpp"
 #include "gpu/context.hpp"
 #include "gpu/delaunay.hpp"
@@ -27,7 +28,7 @@
 namespace cdtgpu::gpu {
 
 struct GpuCdtStats {
-  // Host wall clock per stage ("resolve", "delaunay", "constraints", "download"), in order.
+  // Host wall clock per stage ("resolve", "upload", "delaunay", "constraints", "download"), in order.
   std::vector<std::pair<std::string, double>> wall_ms;
   // Device timestamps per GPU stage, "dt ..." then "cdt ...", in order; gpu_total_ms is their sum.
   std::vector<std::pair<std::string, double>> gpu_ms;
@@ -57,6 +58,7 @@ class GpuCdt {
   Primitives prims_;
   DelaunayBuilder delaunay_;
   ConstraintInserter inserter_;
+  TriangleSorter sorter_;
 };
 
 }  // namespace cdtgpu::gpu

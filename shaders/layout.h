@@ -57,6 +57,13 @@ struct RadixPush {
 #define NBR_TRI(code) ((code) >> 2)
 #define NBR_EDGE(code) ((code) & 3u)
 
+// Canonical output order (gpu/canonical.cpp): one sort key per slot.
+#define CANONICAL_WG 256
+struct CanonicalKeysPush {
+  uint num_slots;
+  uint num_points;  // infinite slots get key num_points << 32, after every finite one
+};
+
 #ifdef __cplusplus
 }  // namespace cdtgpu::gpu::layout
 #endif

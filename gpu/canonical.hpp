@@ -1,0 +1,26 @@
+// The finite triangles of a GPU triangulation in core's canonical order (core/canonical.hpp), sorted on the GPU:
+// one key per slot, a 64-bit radix sort, one download. Replaces a host sort that took 0.3-0.7 s for 1M-2M points.
+#pragma once
+#include <vector>
+
+#include "core/model.hpp"
+#include "gpu/passes.hpp"
+#include "gpu/primitives.hpp"
+#include "gpu/triangulation.hpp"
+
+namespace cdtgpu::gpu {
+
+class TriangleSorter {
+ public:
+  TriangleSorter(const Context& ctx, const Primitives& prims);
+  // Finite triangles, each starting at its smallest vertex, counter-clockwise, sorted. `gpu_ms`: device time of
+  // the key pass and the sort (timestamps), if given.
+  std::vector<Triangle> download(const GpuTriangulation& tri, double* gpu_ms = nullptr) const;
+
+ private:
+  const Context& ctx_;
+  const Primitives& prims_;
+  Pass keys_;
+};
+
+}  // namespace cdtgpu::gpu
