@@ -134,32 +134,53 @@ Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& 
   return make(ctx, bytes, name, false);
 }
 
+namespace {
+
+// One host-visible buffer per context, mapped for its whole life, grown to the largest copy so far.
+struct Staging {
+  Buffer buffer;
+  void* mapped = nullptr;
+  ~Staging() {
+    if (mapped) vkUnmapMemory(buffer.device, buffer.memory);
+  }
+};
+
+Staging& staging_of(const Context& ctx, VkDeviceSize bytes) {
+  auto& slot = ctx.staging;
+  auto* s = static_cast<Staging*>(slot.get());
+  if (!s || s->buffer.size < bytes) {
+    slot.reset();
+    auto fresh = std::make_shared<Staging>();
+    fresh->buffer = make(ctx, bytes, "staging", true);
+    VK_CHECK(vkMapMemory(ctx.device, fresh->buffer.memory, 0, VK_WHOLE_SIZE, 0, &fresh->mapped));
+    slot = fresh;
+    s = fresh.get();
+  }
+  return *s;
+}
+
+}  // namespace
+
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
   check_range(dst, bytes, offset, "upload");
   if (!bytes) return;
-  Buffer staging = make(ctx, bytes, dst.name + " (staging)", true);
-  void* p = nullptr;
-  VK_CHECK(vkMapMemory(ctx.device, staging.memory, 0, bytes, 0, &p));
-  std::memcpy(p, data, bytes);
-  vkUnmapMemory(ctx.device, staging.memory);
+  Staging& staging = staging_of(ctx, bytes);
+  std::memcpy(staging.mapped, data, bytes);
   run_once(ctx, [&](VkCommandBuffer cmd) {
     VkBufferCopy region{0, offset, bytes};
-    vkCmdCopyBuffer(cmd, staging.buffer, dst.buffer, 1, &region);
+    vkCmdCopyBuffer(cmd, staging.buffer.buffer, dst.buffer, 1, &region);
   });
 }
 
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset) {
   check_range(src, bytes, offset, "download");
   if (!bytes) return;
-  Buffer staging = make(ctx, bytes, src.name + " (staging)", true);
+  Staging& staging = staging_of(ctx, bytes);
   run_once(ctx, [&](VkCommandBuffer cmd) {
     VkBufferCopy region{offset, 0, bytes};
-    vkCmdCopyBuffer(cmd, src.buffer, staging.buffer, 1, &region);
+    vkCmdCopyBuffer(cmd, src.buffer, staging.buffer.buffer, 1, &region);
   });
-  void* p = nullptr;
-  VK_CHECK(vkMapMemory(ctx.device, staging.memory, 0, bytes, 0, &p));
-  std::memcpy(data, p, bytes);
-  vkUnmapMemory(ctx.device, staging.memory);
+  std::memcpy(data, staging.mapped, bytes);
 }
 
 void fill(const Context& ctx, const Buffer& dst, uint32_t value) {

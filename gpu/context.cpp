@@ -276,6 +276,7 @@ namespace {
 void release(Context& c) {
   if (c.device) {
     vkDeviceWaitIdle(c.device);
+    c.staging.reset();
     if (c.pool) vkDestroyCommandPool(c.device, c.pool, nullptr);
     vkDestroyDevice(c.device, nullptr);
   }
@@ -311,6 +312,7 @@ Context& Context::operator=(Context&& o) noexcept {
   cmd_push_descriptor_set = o.cmd_push_descriptor_set;
   messages_ = std::move(o.messages_);
   o.messages_ = std::make_unique<std::vector<std::string>>();
+  staging = std::move(o.staging);
   return *this;
 }
 

@@ -85,6 +85,9 @@ struct Context {
   ~Context();
 
   std::unique_ptr<std::vector<std::string>> messages_ = std::make_unique<std::vector<std::string>>();
+  // The host-visible staging buffer upload() and download() reuse (gpu/buffers.cpp; grown as needed, freed
+  // before the device): allocating and pinning host memory for every copy cost more than the copy itself.
+  mutable std::shared_ptr<void> staging;
 };
 
 // Creates the context; throws DeviceError (naming the device and the missing features) when the chosen device
