@@ -95,10 +95,12 @@ std::vector<Workload> plan(const BenchOptions& o) {
   if (sizes.empty()) sizes = o.quick ? std::vector<uint64_t>{20000, 40000, 60000, 80000}
                                      : std::vector<uint64_t>{1000000, 2000000, 3000000, 4000000};
   const uint64_t smallest = *std::min_element(sizes.begin(), sizes.end());
+  // --table 1 alone: the paper's sizes, 1.0 .. 4.0M points in steps of 0.5M.
+  const std::vector<uint64_t> paper_table1{1000000, 1500000, 2000000, 2500000, 3000000, 3500000, 4000000};
   const bool all = o.table == "all";
   std::vector<Workload> w;
   if (all || o.table == "1")
-    for (uint64_t n : sizes) w.push_back({"1", "uniform+dt-edges", n, smallest / 2, kFraction, 0});
+    for (uint64_t n : o.table == "1" && o.sizes.empty() && !o.quick ? paper_table1 : sizes) w.push_back({"1", "uniform+dt-edges", n, smallest / 2, kFraction, 0});
   if (all || o.table == "2")
     for (int k = 1; k <= 5; ++k) w.push_back({"2", "uniform+dt-edges", 2 * smallest, 2 * smallest * k / 10, kFraction, 0});
   if (all || o.table == "long")
@@ -159,6 +161,7 @@ struct Timings {
   std::vector<std::pair<std::string, std::vector<double>>> wall;  // GPU: host clock per pipeline stage
   uint32_t rounds = 0;
   uint64_t peak_device_bytes = 0;
+  uint32_t host_fallback = 0;
   std::vector<std::pair<std::string, std::vector<double>>> stages;  // in run order
   Mesh mesh;                                                        // of the last run, canonical
 
@@ -171,6 +174,7 @@ struct Timings {
       j["device_runs_ms"] = device;
       j["rounds"] = rounds;
       j["peak_device_bytes"] = peak_device_bytes;
+      j["host_fallback_constraints"] = host_fallback;
     }
     json sm = json::object(), sr = json::object();
     for (const auto& [name, v] : stages) {
@@ -197,6 +201,7 @@ Timings time_backend(const BenchBackend& backend, const PreparedInput& p, int ru
     if (run.device_ms > 0) t.device.push_back(run.device_ms);
     t.rounds = run.rounds;
     t.peak_device_bytes = std::max(t.peak_device_bytes, run.peak_device_bytes);
+    t.host_fallback = std::max(t.host_fallback, run.host_fallback);
     for (const auto& [name, ms] : run.stage_ms) {
       auto it = std::find_if(t.stages.begin(), t.stages.end(), [&](const auto& s) { return s.first == name; });
       if (it == t.stages.end()) it = t.stages.insert(t.stages.end(), {name, {}});
@@ -360,8 +365,21 @@ BenchBackend gpu_backend(const gpu::GpuCdt& cdt) {
     r.wall_ms = s.wall_ms;
     r.rounds = s.delaunay.rounds + s.constraints.flip_rounds + s.constraints.legalise_rounds;
     r.peak_device_bytes = s.peak_device_bytes;
+    r.host_fallback = s.constraints.fallback_constraints;
     return r;
   };
+}
+
+// Times the GPU backend on a context of its own, created after CGAL's runs, as each `cdtgpu triangulate` call
+// creates one. Why: the H100's driver raises the SM clock to 1980 MHz when a context is created and drops it to
+// 345 MHz after ~3 s without sustained load (CGAL's seconds are such a gap); our bursts of work do not raise it
+// again, so one context shared by every workload timed its later rows ~3.5x slow (nvidia-smi, docs/performance.md).
+Timings time_gpu(const gpu::ContextOptions& co, const gpu::ConstraintOptions& options, const PreparedInput& p,
+                 int runs) {
+  gpu::Context ctx = gpu::create_context(co);
+  gpu::GpuCdt cdt(ctx);
+  cdt.constraint_options = options;
+  return time_backend(gpu_backend(cdt), p, runs);
 }
 
 std::string bytes_per_point(const Timings& t, const PreparedInput& p) {
@@ -370,7 +388,7 @@ std::string bytes_per_point(const Timings& t, const PreparedInput& p) {
 }
 
 // The paper's Table 3: one workload, the full method, then each part switched off in turn.
-int run_ablation(const BenchOptions& o, const gpu::GpuCdt& base) {
+int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std::string& device) {
   const uint64_t n = o.sizes.empty() ? (o.quick ? 40000 : 2000000) : parse_size(o.sizes.front());
   Workload w{"ablation", "uniform+dt-edges", n, n / 4, kFraction, 0};
   InputSet in = generate(w, o.seed);
@@ -378,26 +396,26 @@ int run_ablation(const BenchOptions& o, const gpu::GpuCdt& base) {
   Timings cgal = time_backend(run_cgal_fast, p, o.cgal_runs > 0 ? o.cgal_runs : o.runs);
   std::printf("ablation (the paper's Table 3): %zu vertices, %zu constraints; CGAL %s ms\n\n", p.vertices.size(),
               p.constraints.size(), fmt_ms(median(cgal.total)).c_str());
-  std::printf("%-44s %10s %10s %12s %8s %6s %s\n", "variant", "GPU ms", "wall ms", "constraints", "rounds", "B/pt",
+  std::printf("%-50s %10s %10s %12s %8s %6s %5s %s\n", "variant", "GPU ms", "wall ms", "constraints", "rounds", "B/pt", "host",
               "check");
   using Opt = gpu::ConstraintOptions;
   struct Variant {
     std::string name;
     Opt options;
   };
-  std::vector<Variant> variants(3);
+  std::vector<Variant> variants(4);
   variants[0].name = "full method";
   variants[1].name = "no prefix-sum layout (fixed slots per constraint)";
   variants[1].options.layout = Opt::Layout::FixedSlots;
   variants[2].name = "no adaptive flipping (one flip per constraint)";
   variants[2].options.flipping = Opt::Flipping::OnePerConstraint;
+  variants[3].name = "no influence-domain index (slot claims alone)";
+  variants[3].options.domain_index = false;
 
   json rows = json::array();
   int failures = 0;
   for (const Variant& v : variants) {
-    gpu::GpuCdt cdt(base.context());
-    cdt.constraint_options = v.options;
-    Timings t = time_backend(gpu_backend(cdt), p, o.runs);
+    Timings t = time_gpu(co, v.options, p, o.runs);
     std::string diff = mesh_difference(t.mesh, cgal.mesh);
     failures += !diff.empty();
     if (!diff.empty()) spdlog::error("ablation '{}' differs from CGAL: {}", v.name, diff);
@@ -407,9 +425,9 @@ int run_ablation(const BenchOptions& o, const gpu::GpuCdt& base) {
       return 0.0;
     };
     const double insert_ms = stage("cdt crossing detection") + stage("cdt prefix-sum layout") + stage("cdt flipping");
-    std::printf("%-44s %10s %10s %12s %8u %6s %s\n", v.name.c_str(), fmt_ms(median(t.device)).c_str(),
+    std::printf("%-50s %10s %10s %12s %8u %6s %5u %s\n", v.name.c_str(), fmt_ms(median(t.device)).c_str(),
                 fmt_ms(median(t.total)).c_str(), fmt_ms(insert_ms).c_str(), t.rounds, bytes_per_point(t, p).c_str(),
-                diff.empty() ? "ok" : "FAIL");
+                t.host_fallback, diff.empty() ? "ok" : "FAIL");
     std::fflush(stdout);
     json row = t.to_json();
     row["variant"] = v.name;
@@ -417,14 +435,13 @@ int run_ablation(const BenchOptions& o, const gpu::GpuCdt& base) {
     row["cgal_equal"] = diff.empty();
     rows.push_back(row);
   }
-  std::printf("%-44s %s\n", "no influence-domain index (global search)",
-              "not implemented: see docs/gpu-constraints.md, 'Ablation switches'");
-  std::printf("\n'constraints' = device time of crossing detection + prefix-sum layout + flip rounds (median)\n");
+  std::printf("\n'constraints' = device time of crossing detection + prefix-sum layout + flip rounds (median); "
+              "'host' = constraints the host safety net inserted (stalled flipping)\n");
   if (!o.json_path.empty()) {
     json j;
     j["tool"] = "cdtgpu bench --ablation";
     j["date"] = utc_now();
-    j["device"] = base.context().info.name;
+    j["device"] = device;
     j["vertices"] = p.vertices.size();
     j["constraints"] = p.constraints.size();
     j["cgal"] = cgal.to_json();
@@ -437,18 +454,16 @@ int run_ablation(const BenchOptions& o, const gpu::GpuCdt& base) {
 }  // namespace
 
 int run_bench(const BenchOptions& o) {
-  std::optional<gpu::Context> ctx;
-  std::optional<gpu::GpuCdt> cdt;
-  std::string device = "none (--cgal-only)";
-  if (o.gpu || o.ablation) {
-    gpu::ContextOptions co;
-    co.device = o.device;
-    ctx.emplace(gpu::create_context(co));
-    cdt.emplace(*ctx);
-    device = ctx->info.name + ", driver " + ctx->info.driver_name + " " + ctx->info.driver_info;
+  gpu::ContextOptions co;
+  co.device = o.device;
+  std::string device = "none (--cgal-only)", device_name;
+  const bool gpu = o.gpu || o.ablation;
+  if (gpu) {  // fails early on a missing device; each workload gets a context of its own (time_gpu)
+    gpu::Context ctx = gpu::create_context(co);
+    device_name = ctx.info.name;
+    device = ctx.info.name + ", driver " + ctx.info.driver_name + " " + ctx.info.driver_info;
   }
-  if (o.ablation) return run_ablation(o, *cdt);
-  const BenchBackend gpu = cdt ? gpu_backend(*cdt) : BenchBackend();
+  if (o.ablation) return run_ablation(o, co, device);
 
   const std::vector<Workload> work = plan(o);
   const std::string cpu = cpu_model(), date = utc_now();
@@ -460,8 +475,9 @@ int run_bench(const BenchOptions& o) {
   std::printf("GPU columns: 'GPU ms' = device timestamps of the GPU stages; 'wall ms' = the whole GPU backend on the "
               "host clock (CPU constraint resolution, submits, readbacks, download in canonical order); speedup = "
               "CGAL / wall\n");
-  std::printf("median of %d runs (CGAL: %d) after 1 warm-up, seed %llu\n\n", o.runs,
-              o.cgal_runs > 0 ? o.cgal_runs : o.runs, static_cast<unsigned long long>(o.seed));
+  std::printf("median of %d runs (CGAL: %d) after 1 warm-up; the GPU backend gets a fresh Vulkan context per "
+              "workload, as each `cdtgpu triangulate` run does; seed %llu\n\n",
+              o.runs, o.cgal_runs > 0 ? o.cgal_runs : o.runs, static_cast<unsigned long long>(o.seed));
   std::printf("%-8s %9s %9s %11s %9s %9s %9s %8s %6s %6s %9s %5s %s\n", "table", "points", "vertices",
               "constraints", "CGAL ms", "GPU ms", "wall ms", "speedup", "rounds", "B/pt", "triangles", "len", "check");
   std::fflush(stdout);
@@ -479,7 +495,7 @@ int run_bench(const BenchOptions& o) {
     const int cgal_runs = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
     Timings cgal = time_backend(w.table == "dt" ? run_cgal_delaunay : run_cgal_fast, p, cgal_runs);
     Timings g;
-    if (gpu) g = time_backend(gpu, p, o.runs);
+    if (gpu) g = time_gpu(co, {}, p, o.runs);
 
     json check = json::object();
     std::string status = "-";
@@ -551,10 +567,11 @@ int run_bench(const BenchOptions& o) {
     j["date"] = date;
     j["machine"] = {{"cpu", cpu}, {"hardware_threads", threads}, {"gpu", device}};
     j["cgal_config"] = o.table == "dt" ? kCgalDtConfig : kCgalConfig;
-    j["gpu_backend"] = gpu ? json("GPU (" + ctx->info.name + ")") : json();
+    j["gpu_backend"] = gpu ? json("GPU (" + device_name + ")") : json();
     j["runs"] = o.runs;
     j["cgal_runs"] = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
     j["warmup_runs"] = 1;
+    j["gpu_context"] = "one per workload, created after CGAL's runs";
     j["seed"] = o.seed;
     j["quick"] = o.quick;
     j["rows"] = rows;

@@ -24,6 +24,7 @@ struct BackendRun {
   double device_ms = 0;         // GPU: the sum of the device timestamps of its stages
   uint32_t rounds = 0;          // GPU: Delaunay insertion rounds + constraint flip rounds + legalise rounds
   uint64_t peak_device_bytes = 0;
+  uint32_t host_fallback = 0;   // GPU: constraints the host safety net inserted (gpu::ConstraintStats)
   std::vector<std::pair<std::string, double>> wall_ms;  // GPU: host clock per pipeline stage (resolve, delaunay, ...)
 };
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;

@@ -249,6 +249,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   const uint32_t slots = tri.num_slots;
   const bool fixed_slots = options.layout == ConstraintOptions::Layout::FixedSlots;
   const uint32_t one_per_constraint = options.flipping == ConstraintOptions::Flipping::OnePerConstraint ? 1u : 0u;
+  const uint32_t domain = options.domain_index ? 1u : 0u;
   const uint32_t max_groups = ctx_.props.limits.maxComputeWorkGroupCount[0];
   const uint32_t max_steps = 3 * slots + 64;
   if (constraints.size() >= CDT_NEVER) throw std::invalid_argument("insert_constraints: too many constraints");
@@ -320,7 +321,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     // Bound but unused before they exist.
     const Buffer& rows = table ? *table : result.flags;
     const Buffer& cached = row_cache ? *row_cache : result.flags;
-    CdtWalkPush push{m, mode, r, capacity, max_steps, stride, row_cache ? 1u : 0u};
+    CdtWalkPush push{m, mode, r, capacity, max_steps, stride, row_cache ? 1u : 0u, domain};
     rec.dispatch_groups(walk_, {tri.points, tri.verts, tri.nbrs, cons, start, counts, offsets, rows, owner,
                                 result.flags, vmap, partner, ctl, cached, cache_base, cache_cap},
                         push, groups(m));
@@ -334,7 +335,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     rec.dispatch_groups(vertex_map_, {tri.verts, vmap}, CdtSlotsPush{slots, 0, 0}, groups(slots));
   };
   auto fix = [&](Recorder& rec, uint32_t r) {
-    CdtRoundPush push{r, 0};
+    CdtRoundPush push{r, 0, 0};
     rec.dispatch_indirect(fix_, {tri.nbrs, remap, stamp, flips, ctl}, &push, ctl, CDT_CTL_ARGS_FLIPS * 4);
   };
 
@@ -408,7 +409,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         if (!fixed_slots) walk(rec, CDT_WALK_WRITE, r, cap, 0);
         prof.end(rec);
         prof.begin(rec, "flipping");
-        CdtRoundPush push{r, one_per_constraint};
+        CdtRoundPush push{r, one_per_constraint, domain};
         rec.dispatch_indirect(insert_claim_, {tri.points, tri.verts, tri.nbrs, *table, owner, claim, ctl, first_row},
                               &push, ctl, CDT_CTL_ARGS_TABLE * 4);
         rec.dispatch_indirect(insert_flip_, {tri.verts, tri.nbrs, *table, claim, result.flags, remap, stamp, partner,
@@ -496,7 +497,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         const uint32_t r = round + b;
         const Buffer& q = *queue[r & 1];
         const Buffer& next = *queue[(r + 1) & 1];
-        CdtRoundPush push{r, 0};
+        CdtRoundPush push{r, 0, 0};
         prof.begin(rec, "legalise");
         args(rec, CDT_ARGS_QUEUE, r, b, 0, 0);
         rec.dispatch_indirect(legal_claim_,

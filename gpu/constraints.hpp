@@ -49,6 +49,11 @@ struct ConstraintOptions {
   };
   Layout layout = Layout::PrefixSum;
   Flipping flipping = Flipping::Adaptive;
+  // The influence-domain index: each round the smallest constraint crossing a triangle owns it, and a flip runs
+  // only inside its own constraint's domain, so it never disturbs a constraint of higher priority (progress).
+  // false (ablation): no owners; conflicting flips are settled by the slot claims alone, and progress rests on
+  // the claims' per-round hashed order and the stall safety net below.
+  bool domain_index = true;
   // Seed legalisation with every finite slot, not only the slots flipped during insertion: for inputs that are
   // not the (perturbed) Delaunay triangulation of their points.
   bool legalise_all = false;

@@ -5,7 +5,8 @@
 // crosses c (the apexes of T_{i-1} and T_i on the same side of c, or one is an endpoint of c): claims in class 0;
 // convex and the new edge still crosses c: class 1, so it yields to a flip that removes a crossing; concave:
 // not a candidate, waits for its neighbours to change. Candidates claim both slots; cdt_insert_flip flips the
-// ones that won both. (Ablation one_per_constraint: only the candidate with the constraint's smallest key flips.)
+// ones that won both. (Ablations: one_per_constraint, only the candidate with the constraint's smallest key flips;
+// domain = 0, no owner check, conflicts are settled by the slot claims alone.)
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -35,7 +36,7 @@ void main() {
   uint code2 = nbrs[3u * t1 + k1];
   uint t2 = NBR_TRI(code2), k2 = NBR_EDGE(code2);
   uint64_t okey = cdt_owner_key(p.round, e.cons);
-  if (owner[t1] != okey || owner[t2] != okey) return;
+  if (p.domain != 0u && (owner[t1] != okey || owner[t2] != okey)) return;
   uint side = e.info & CDT_SIDE_MASK;
   bool removes = (e.info & CDT_FIRST) != 0u || side == CDT_SIDE_END || (table[g - 1u].info & CDT_SIDE_MASK) == side;
   dvec2 P = pts[verts[3u * t1 + k1]], V1 = pts[verts[3u * t1 + cdt_next(k1)]];

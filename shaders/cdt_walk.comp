@@ -89,9 +89,9 @@ void main() {
       for (uint i = 0u; i < k_rows; ++i) {
         row = row_cache[cbase + i];
         table[base + i] = CdtCross(row.x, c, row.y, 0u);
-        atomicMin(owner[NBR_TRI(row.x)], okey);
+        if (p.domain != 0u) atomicMin(owner[NBR_TRI(row.x)], okey);
       }
-      atomicMin(owner[NBR_TRI(nbrs[3u * NBR_TRI(row.x) + NBR_EDGE(row.x)])], okey);  // T_K, holding b
+      if (p.domain != 0u) atomicMin(owner[NBR_TRI(nbrs[3u * NBR_TRI(row.x) + NBR_EDGE(row.x)])], okey);  // T_K
       return;
     }
   } else {
@@ -179,8 +179,10 @@ void main() {
         uint info = CDT_SIDE_END | (rows == 1u ? CDT_FIRST : 0u);
         if (writing && rows <= limit) {
           table[base + rows - 1u] = CdtCross(NBR(t, ke), c, info, 0u);
-          atomicMin(owner[t], okey);
-          atomicMin(owner[u], okey);
+          if (p.domain != 0u) {
+            atomicMin(owner[t], okey);
+            atomicMin(owner[u], okey);
+          }
         }
         if (caching && rows <= ccap) row_cache[cbase + rows - 1u] = uvec2(NBR(t, ke), info);
         found = FOUND_CROSSED;
@@ -205,7 +207,7 @@ void main() {
       uint info = (s > 0 ? CDT_SIDE_LEFT : CDT_SIDE_RIGHT) | (rows == 1u ? CDT_FIRST : 0u);
       if (writing && rows <= limit) {
         table[base + rows - 1u] = CdtCross(NBR(t, ke), c, info, 0u);
-        atomicMin(owner[t], okey);
+        if (p.domain != 0u) atomicMin(owner[t], okey);
       }
       if (caching && rows <= ccap) row_cache[cbase + rows - 1u] = uvec2(NBR(t, ke), info);
       // Left apex w: the segment leaves across R-w, the edge opposite the old left vertex; right: across w-L.

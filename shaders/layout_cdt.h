@@ -66,6 +66,7 @@ struct CdtWalkPush {
   uint stride;     // 0: prefix-sum layout (rows at offsets[c]); > 0: fixed slots, rows at c * stride
   uint cache;      // 1: COUNT keeps each constraint's rows (edge, info) in the row cache, and WRITE copies them
                    // instead of walking again when all of them fit (prefix-sum layout)
+  uint domain;     // 1: claim T_0 .. T_K in owner[] (the influence-domain index); 0: ablation without it
 };
 
 // Row cache: constraint c owns rows [cache_base[c] + CDT_CACHE_SLACK * c, + cache_cap[c] + CDT_CACHE_SLACK), laid
@@ -94,6 +95,7 @@ struct CdtArgsPush {
 struct CdtRoundPush {
   uint round;
   uint one_per_constraint;  // ablation: a constraint flips at most one edge per round
+  uint domain;              // 1: a flip needs its constraint to own both triangles; 0: ablation, claims alone
 };
 
 #ifdef __cplusplus

@@ -298,6 +298,10 @@ TEST(GpuCdt, AblationVariantsGiveTheSameTriangulation) {
   ConstraintOptions one;
   one.flipping = ConstraintOptions::Flipping::OnePerConstraint;
   Outcome b = check_against_cgal("ablation: one flip per constraint", in, one);
+  ConstraintOptions claims;
+  claims.domain_index = false;
+  Outcome c = check_against_cgal("ablation: no influence-domain index", in, claims);
+  EXPECT_EQ(c.stats.fallback_constraints, 0u);
   EXPECT_EQ(a.stats.crossed_edges, full.stats.crossed_edges);
   EXPECT_GE(b.stats.flip_rounds, full.stats.flip_rounds);
 }
