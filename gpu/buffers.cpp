@@ -161,18 +161,20 @@ Staging& staging_of(const Context& ctx, VkDeviceSize bytes) {
 
 }  // namespace
 
-void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, const std::function<void(void*)>& write,
+                 VkDeviceSize offset) {
   check_range(dst, bytes, offset, "upload");
   if (!bytes) return;
   Staging& staging = staging_of(ctx, bytes);
-  std::memcpy(staging.mapped, data, bytes);
+  write(staging.mapped);
   run_once(ctx, [&](VkCommandBuffer cmd) {
     VkBufferCopy region{0, offset, bytes};
     vkCmdCopyBuffer(cmd, staging.buffer.buffer, dst.buffer, 1, &region);
   });
 }
 
-void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+void download_with(const Context& ctx, const Buffer& src, VkDeviceSize bytes,
+                   const std::function<void(const void*)>& read, VkDeviceSize offset) {
   check_range(src, bytes, offset, "download");
   if (!bytes) return;
   Staging& staging = staging_of(ctx, bytes);
@@ -180,7 +182,15 @@ void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize by
     VkBufferCopy region{offset, 0, bytes};
     vkCmdCopyBuffer(cmd, src.buffer, staging.buffer.buffer, 1, &region);
   });
-  std::memcpy(data, staging.mapped, bytes);
+  read(staging.mapped);
+}
+
+void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+  upload_with(ctx, dst, bytes, [&](void* mapped) { std::memcpy(mapped, data, bytes); }, offset);
+}
+
+void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset) {
+  download_with(ctx, src, bytes, [&](const void* mapped) { std::memcpy(data, mapped, bytes); }, offset);
 }
 
 void fill(const Context& ctx, const Buffer& dst, uint32_t value) {

@@ -18,9 +18,15 @@ std::vector<Triangle> TriangleSorter::download(const GpuTriangulation& tri, doub
   if (gpu_ms) *gpu_ms = 0;
   const uint32_t slots = tri.num_slots;
   if (slots == 0) return out;
-  Buffer keys = create_buffer(ctx_, uint64_t(slots) * 8, "canonical keys");
-  Buffer payload = create_buffer(ctx_, uint64_t(slots) * 4, "canonical payload");
-  Buffer count = create_buffer(ctx_, 4, "canonical count");
+  if (!scratch_ || scratch_->slots < slots) {  // kept between calls: allocation costs more than the sort
+    scratch_.reset();
+    scratch_ = std::make_unique<Scratch>(Scratch{slots, create_buffer(ctx_, uint64_t(slots) * 8, "canonical keys"),
+                                                 create_buffer(ctx_, uint64_t(slots) * 4, "canonical payload"),
+                                                 create_buffer(ctx_, 4, "canonical count")});
+  }
+  const Buffer& keys = scratch_->keys;
+  const Buffer& payload = scratch_->payload;
+  const Buffer& count = scratch_->count;
   {
     Recorder rec(ctx_);
     Profiler prof(ctx_, 1);
@@ -36,10 +42,16 @@ std::vector<Triangle> TriangleSorter::download(const GpuTriangulation& tri, doub
   }
   uint32_t finite = 0;
   gpu::download(ctx_, count, &finite, 4);
-  std::vector<uint32_t> k = download_vector<uint32_t>(ctx_, keys, size_t(finite) * 2);
-  std::vector<uint32_t> c = download_vector<uint32_t>(ctx_, payload, finite);
+  // Straight from the mapped staging memory into the result: no intermediate host vectors (page faults).
   out.resize(finite);
-  for (uint32_t i = 0; i < finite; ++i) out[i] = {k[2 * i + 1], k[2 * i], c[i]};
+  download_with(ctx_, keys, uint64_t(finite) * 8, [&](const void* mapped) {
+    const uint32_t* k = static_cast<const uint32_t*>(mapped);
+    for (uint32_t i = 0; i < finite; ++i) out[i][0] = k[2 * i + 1], out[i][1] = k[2 * i];
+  });
+  download_with(ctx_, payload, uint64_t(finite) * 4, [&](const void* mapped) {
+    const uint32_t* c = static_cast<const uint32_t*>(mapped);
+    for (uint32_t i = 0; i < finite; ++i) out[i][2] = c[i];
+  });
   return out;
 }
 

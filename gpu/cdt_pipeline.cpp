@@ -51,9 +51,11 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats)
   // 2. GPU: the Delaunay triangulation of every vertex, left on the device.
   t = Clock::now();
   const uint32_t n = static_cast<uint32_t>(result.mesh.vertices.size());
-  std::vector<double> xy(size_t(n) * 2);
-  for (uint32_t i = 0; i < n; ++i) xy[2 * i] = result.mesh.vertices[i].x, xy[2 * i + 1] = result.mesh.vertices[i].y;
-  Buffer points = upload_new(ctx_, xy, "points");
+  Buffer points = create_buffer(ctx_, uint64_t(n) * 16, "points");
+  upload_with(ctx_, points, uint64_t(n) * 16, [&](void* mapped) {
+    double* xy = static_cast<double*>(mapped);
+    for (uint32_t i = 0; i < n; ++i) xy[2 * i] = result.mesh.vertices[i].x, xy[2 * i + 1] = result.mesh.vertices[i].y;
+  });
   stage("upload", t);
   t = Clock::now();
   GpuTriangulation tri = delaunay_.build(std::move(points), n, &s.delaunay);
