@@ -237,8 +237,9 @@ TEST(Bench, AblationVariantsAllGiveCgalsTriangles) {
   std::ifstream f(json_path);
   nlohmann::json j = nlohmann::json::parse(f);
   EXPECT_EQ(j["constraints"], 1000);
-  ASSERT_EQ(j["variants"].size(), 3u);
+  ASSERT_EQ(j["variants"].size(), 4u);  // full, fixed slots, one flip per constraint, no influence-domain index
   for (const auto& v : j["variants"]) EXPECT_TRUE(v["cgal_equal"].get<bool>()) << v["variant"];
+  EXPECT_EQ(j["variants"][3]["variant"], "no influence-domain index (slot claims alone)");
   std::filesystem::remove(json_path);
 }
 
