@@ -1,10 +1,12 @@
 // cdtgpu_microbench: throughput of the GPU primitives, timed with GPU timestamps. After two warm-up runs,
 // prints the median of N runs (default 11) of: exclusive scan (16M, 64M uint32), radix sort (16M keys of
-// 32 and 64 bits with a uint32 payload), and 4M predicate quadruples when shaders/predicates_eval.comp exists.
+// 32 and 64 bits with a uint32 payload), and 4M predicate quadruples when shaders/predicates_eval.comp exists;
+// then host costs (buffer allocation, submit round trip, staging transfers) on the host clock.
 // Sizes over the device's maxStorageBufferRange are skipped with a note.
 //
 //   cdtgpu_microbench [--device NAME|INDEX] [--runs N] [--scale F]   (--scale 0.05: small sizes for lavapipe)
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
@@ -132,6 +134,51 @@ void bench_predicates(const Context& ctx, const Options& o, uint64_t n) {
   }
 }
 
+// Host costs the pipeline pays on every call, on the host clock: a device-local buffer allocated, filled once
+// and freed, against the same fill on a kept buffer (their difference is the allocation); one submit + wait of
+// a tiny command buffer (each host round trip between GPU stages costs this); an upload and a download of 64 MiB
+// through the staging buffer.
+void bench_host(const Context& ctx, const Options& o) {
+  using Clock = std::chrono::steady_clock;
+  auto median_host_ms = [&](const std::function<void()>& body) {
+    std::vector<double> ms;
+    for (int i = 0; i < o.runs + 2; ++i) {
+      auto t0 = Clock::now();
+      body();
+      if (i >= 2) ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    }
+    std::sort(ms.begin(), ms.end());
+    return ms[ms.size() / 2];
+  };
+  for (uint64_t mib : {16, 64, 256}) {
+    const uint64_t bytes = std::max<uint64_t>(4, uint64_t(double(mib << 20) * o.scale) & ~uint64_t(3));
+    if (!fits(ctx, bytes, "host: allocate", bytes)) continue;
+    Buffer kept = create_buffer(ctx, bytes, "kept");
+    double fresh = median_host_ms([&] {
+      Buffer b = create_buffer(ctx, bytes, "fresh");
+      fill(ctx, b, 0);
+    });
+    double reuse = median_host_ms([&] { fill(ctx, kept, 0); });
+    std::printf("host: allocate+fill+free %10llu B  median %9.3f ms  (fill of a kept buffer %.3f ms)\n",
+                static_cast<unsigned long long>(bytes), fresh, reuse);
+  }
+  Buffer word = create_buffer(ctx, 4, "word");
+  double trip = median_host_ms([&] {
+    Recorder rec(ctx);
+    rec.fill(word, 0);
+    rec.submit();
+  });
+  std::printf("host: one submit + wait (tiny fill)           median %9.3f ms\n", trip);
+  const uint64_t bytes = std::max<uint64_t>(4, uint64_t(double(64u << 20) * o.scale) & ~uint64_t(3));
+  if (!fits(ctx, bytes, "host: transfers", bytes)) return;
+  Buffer big = create_buffer(ctx, bytes, "transfer");
+  std::vector<uint8_t> host(bytes, 1);
+  double up = median_host_ms([&] { upload(ctx, big, host.data(), bytes); });
+  double down = median_host_ms([&] { download(ctx, big, host.data(), bytes); });
+  std::printf("host: upload / download %10llu B  median %9.3f / %.3f ms (%.1f / %.1f GB/s)\n",
+              static_cast<unsigned long long>(bytes), up, down, bytes / up * 1e-6, bytes / down * 1e-6);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -160,6 +207,7 @@ int main(int argc, char** argv) {
     bench_sort(ctx, prims, o, size(16u << 20), 32);
     bench_sort(ctx, prims, o, size(16u << 20), 64);
     bench_predicates(ctx, o, size(4u << 20));
+    bench_host(ctx, o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cdtgpu_microbench: %s\n", e.what());
     return 3;
