@@ -99,8 +99,9 @@ std::vector<Workload> plan(const BenchOptions& o) {
   const std::vector<uint64_t> paper_table1{1000000, 1500000, 2000000, 2500000, 3000000, 3500000, 4000000};
   const bool all = o.table == "all";
   std::vector<Workload> w;
+  const std::vector<uint64_t>& table1 = o.table == "1" && o.sizes.empty() && !o.quick ? paper_table1 : sizes;
   if (all || o.table == "1")
-    for (uint64_t n : o.table == "1" && o.sizes.empty() && !o.quick ? paper_table1 : sizes) w.push_back({"1", "uniform+dt-edges", n, smallest / 2, kFraction, 0});
+    for (uint64_t n : table1) w.push_back({"1", "uniform+dt-edges", n, smallest / 2, kFraction, 0});
   if (all || o.table == "2")
     for (int k = 1; k <= 5; ++k) w.push_back({"2", "uniform+dt-edges", 2 * smallest, 2 * smallest * k / 10, kFraction, 0});
   if (all || o.table == "long")
@@ -396,8 +397,8 @@ int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std
   Timings cgal = time_backend(run_cgal_fast, p, o.cgal_runs > 0 ? o.cgal_runs : o.runs);
   std::printf("ablation (the paper's Table 3): %zu vertices, %zu constraints; CGAL %s ms\n\n", p.vertices.size(),
               p.constraints.size(), fmt_ms(median(cgal.total)).c_str());
-  std::printf("%-50s %10s %10s %12s %8s %6s %5s %s\n", "variant", "GPU ms", "wall ms", "constraints", "rounds", "B/pt", "host",
-              "check");
+  std::printf("%-50s %10s %10s %12s %8s %6s %5s %s\n", "variant", "GPU ms", "wall ms", "constraints", "rounds",
+              "B/pt", "host", "check");
   using Opt = gpu::ConstraintOptions;
   struct Variant {
     std::string name;

@@ -193,6 +193,15 @@ void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize by
   download_with(ctx, src, bytes, [&](const void* mapped) { std::memcpy(data, mapped, bytes); }, offset);
 }
 
+const Buffer& BufferCache::get(const Context& ctx, const std::string& name, VkDeviceSize bytes) {
+  Buffer& b = buffers_[name];
+  if (!b.buffer || b.size < bytes) {
+    b = Buffer();  // the old one goes first: a lower peak
+    b = create_buffer(ctx, bytes, name);
+  }
+  return b;
+}
+
 void fill(const Context& ctx, const Buffer& dst, uint32_t value) {
   run_once(ctx, [&](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, dst.buffer, 0, VK_WHOLE_SIZE, value); });
 }

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <span>
 #include <string>
 #include <vector>
@@ -45,6 +46,16 @@ void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, cons
                  VkDeviceSize offset = 0);
 void download_with(const Context& ctx, const Buffer& src, VkDeviceSize bytes,
                    const std::function<void(const void*)>& read, VkDeviceSize offset = 0);
+// Device buffers kept between calls by name, each grown when a call needs more: allocation costs more than the
+// work on a fast GPU (about 35 us per MiB on the lent H100 machine, docs/gpu.md).
+class BufferCache {
+ public:
+  const Buffer& get(const Context& ctx, const std::string& name, VkDeviceSize bytes);
+
+ private:
+  std::map<std::string, Buffer> buffers_;
+};
+
 // Fills the whole buffer with a 32-bit pattern, synchronously.
 void fill(const Context& ctx, const Buffer& dst, uint32_t value);
 

@@ -18,15 +18,9 @@ std::vector<Triangle> TriangleSorter::download(const GpuTriangulation& tri, doub
   if (gpu_ms) *gpu_ms = 0;
   const uint32_t slots = tri.num_slots;
   if (slots == 0) return out;
-  if (!scratch_ || scratch_->slots < slots) {  // kept between calls: allocation costs more than the sort
-    scratch_.reset();
-    scratch_ = std::make_unique<Scratch>(Scratch{slots, create_buffer(ctx_, uint64_t(slots) * 8, "canonical keys"),
-                                                 create_buffer(ctx_, uint64_t(slots) * 4, "canonical payload"),
-                                                 create_buffer(ctx_, 4, "canonical count")});
-  }
-  const Buffer& keys = scratch_->keys;
-  const Buffer& payload = scratch_->payload;
-  const Buffer& count = scratch_->count;
+  const Buffer& keys = scratch_.get(ctx_, "canonical keys", uint64_t(slots) * 8);
+  const Buffer& payload = scratch_.get(ctx_, "canonical payload", uint64_t(slots) * 4);
+  const Buffer& count = scratch_.get(ctx_, "canonical count", 4);
   {
     Recorder rec(ctx_);
     Profiler prof(ctx_, 1);

@@ -1,7 +1,6 @@
 // The finite triangles of a GPU triangulation in core's canonical order (core/canonical.hpp), sorted on the GPU:
 // one key per slot, a 64-bit radix sort, one download. Replaces a host sort that took 0.3-0.7 s for 1M-2M points.
 #pragma once
-#include <memory>
 #include <vector>
 
 #include "core/model.hpp"
@@ -22,11 +21,7 @@ class TriangleSorter {
   const Context& ctx_;
   const Primitives& prims_;
   Pass keys_;
-  struct Scratch {
-    uint32_t slots;
-    Buffer keys, payload, count;
-  };
-  mutable std::unique_ptr<Scratch> scratch_;  // grown to the largest triangulation so far
+  mutable BufferCache scratch_;  // kept between calls, grown to the largest triangulation so far
 };
 
 }  // namespace cdtgpu::gpu

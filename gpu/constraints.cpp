@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -222,21 +221,11 @@ ConstraintInserter::ConstraintInserter(const Context& ctx, const Primitives& pri
       legal_claim_(create_pass(ctx, {"cdt_legal_claim", 9, sizeof(CdtRoundPush)})),
       legal_flip_(create_pass(ctx, {"cdt_legal_flip", 13, sizeof(CdtRoundPush)})) {}
 
-// Device buffers kept between calls, each grown when a call needs more (allocation costs more than the work on
-// a fast GPU), and the mapped readback buffer.
+// Device buffers kept between calls, and the mapped readback buffer.
 struct ConstraintInserter::Scratch {
-  std::map<std::string, Buffer> buffers;
+  BufferCache buffers;
   Buffer readback;
   void* mapped = nullptr;
-
-  const Buffer& get(const Context& ctx, const std::string& name, uint64_t bytes) {
-    Buffer& b = buffers[name];
-    if (!b.buffer || b.size < bytes) {
-      b = Buffer();
-      b = create_buffer(ctx, bytes, name);
-    }
-    return b;
-  }
 };
 
 ConstraintInserter::~ConstraintInserter() = default;
@@ -266,7 +255,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   uint64_t needed = 0, table_bytes = 0;  // what this call uses (the cache may hold more from earlier calls)
   auto get = [&](const char* name, uint64_t bytes) -> const Buffer& {
     needed += bytes;
-    return sc.get(ctx_, name, bytes);
+    return sc.buffers.get(ctx_, name, bytes);
   };
 
   ConstrainedEdges result;
@@ -373,7 +362,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     capacity = fixed_slots ? uint64_t(m) * stride : uint64_t(crossed) + crossed / 2 + 1024;
     if (capacity >= CDT_NEVER) throw DeviceError("insert_constraints: intersected-edge table too large");
     table_bytes = std::max(table_bytes, capacity * sizeof(CdtCross));
-    table = &sc.get(ctx_, "cdt intersected-edge table", capacity * sizeof(CdtCross));
+    table = &sc.buffers.get(ctx_, "cdt intersected-edge table", capacity * sizeof(CdtCross));
     fresh_table = true;
   };
   // The row cache: each constraint's first count plus CDT_CACHE_SLACK rows, so the second stage of the layout
@@ -381,7 +370,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   if (!fixed_slots && crossed > 0) {
     const uint64_t rows = uint64_t(crossed) + uint64_t(CDT_CACHE_SLACK) * m;
     needed += rows * 8;
-    row_cache = &sc.get(ctx_, "cdt row cache", rows * 8);
+    row_cache = &sc.buffers.get(ctx_, "cdt row cache", rows * 8);
   }
   st.longest_crossing = stride;
 
