@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <numeric>
@@ -375,12 +376,40 @@ BenchBackend gpu_backend(const gpu::GpuCdt& cdt) {
 // creates one. Why: the H100's driver raises the SM clock to 1980 MHz when a context is created and drops it to
 // 345 MHz after ~3 s without sustained load (CGAL's seconds are such a gap); our bursts of work do not raise it
 // again, so one context shared by every workload timed its later rows ~3.5x slow (nvidia-smi, docs/performance.md).
+// `merge`, when given: also prepare `in` with the GPU's duplicate merging (as `cdtgpu triangulate` does), once
+// after a warm-up, into merge->ms, and check it equals `p` (the CPU's) into merge->difference.
+struct GpuMerge {
+  const InputSet* in = nullptr;
+  double ms = 0;
+  std::string difference;
+};
+
+std::string prepared_difference(const PreparedInput& a, const PreparedInput& b) {
+  if (a.vertices.size() != b.vertices.size())
+    return std::to_string(a.vertices.size()) + " vs " + std::to_string(b.vertices.size()) + " vertices";
+  for (size_t v = 0; v < a.vertices.size(); ++v)
+    if (std::memcmp(&a.vertices[v], &b.vertices[v], sizeof(Point3)) != 0) return "vertex " + std::to_string(v);
+  if (a.constraints != b.constraints || a.constraint_line != b.constraint_line) return "constraints";
+  if (a.merged_duplicates != b.merged_duplicates || a.z_conflicts != b.z_conflicts ||
+      a.max_z_conflict != b.max_z_conflict || a.duplicate_segments != b.duplicate_segments)
+    return "counts";
+  return "";
+}
+
 Timings time_gpu(const gpu::ContextOptions& co, const gpu::ConstraintOptions& options, const PreparedInput& p,
-                 int runs) {
+                 int runs, GpuMerge* merge = nullptr) {
   gpu::Context ctx = gpu::create_context(co);
   gpu::GpuCdt cdt(ctx);
   cdt.constraint_options = options;
-  return time_backend(gpu_backend(cdt), p, runs);
+  Timings t = time_backend(gpu_backend(cdt), p, runs);
+  if (merge) {
+    prepare(*merge->in, cdt.merger());  // warm-up
+    const auto t0 = Clock::now();
+    const PreparedInput q = prepare(*merge->in, cdt.merger());
+    merge->ms = ms_since(t0);
+    merge->difference = prepared_difference(p, q);
+  }
+  return t;
 }
 
 std::string bytes_per_point(const Timings& t, const PreparedInput& p) {
@@ -496,7 +525,9 @@ int run_bench(const BenchOptions& o) {
     const int cgal_runs = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
     Timings cgal = time_backend(w.table == "dt" ? run_cgal_delaunay : run_cgal_fast, p, cgal_runs);
     Timings g;
-    if (gpu) g = time_gpu(co, {}, p, o.runs);
+    GpuMerge merge;
+    merge.in = &in;
+    if (gpu) g = time_gpu(co, {}, p, o.runs, &merge);
 
     json check = json::object();
     std::string status = "-";
@@ -527,6 +558,12 @@ int run_bench(const BenchOptions& o) {
       } else if (status == "-") {
         status = "gpu=cgal";
       }
+      check["gpu_prepare_equal"] = merge.difference.empty();
+      if (!merge.difference.empty()) {
+        spdlog::error("{} {} points: prepare with the GPU's merging differs: {}", w.table, w.points, merge.difference);
+        status = "FAIL";
+        ++failures;
+      }
     }
 
     const double cgal_ms = median(cgal.total);
@@ -554,6 +591,7 @@ int run_bench(const BenchOptions& o) {
     row["triangles"] = cgal.mesh.triangles.size();
     row["generate_ms"] = generate_ms;
     row["prepare_ms"] = prepare_ms;
+    if (gpu) row["prepare_gpu_merge_ms"] = merge.ms;
     row["cgal"] = cgal.to_json();
     row["gpu"] = gpu ? g.to_json() : json();
     row["speedup"] = gpu ? json(cgal_ms / wall_ms) : json();

@@ -43,14 +43,15 @@ struct Loaded {
   PreparedInput prepared;
 };
 
-Loaded load(const InputOptions& options, RunStats& stats) {
+// `merge`: the duplicate merging of prepare (the CPU's by default; the GPU backend passes its own).
+Loaded load(const InputOptions& options, RunStats& stats, const PointMerger& merge = merge_points) {
   Loaded l;
   timed(stats, "read", [&] {
     for (const std::string& path : options.inputs) read_input(path, options.read, l.in);
   });
   l.crs = choose_crs(l.in, options.crs);
   timed(stats, "project", [&] { project(l.in, l.crs); });
-  l.prepared = timed(stats, "prepare", [&] { return prepare(l.in); });
+  l.prepared = timed(stats, "prepare", [&] { return prepare(l.in, merge); });
   spdlog::info("CRS: {}", l.crs.name);
 
   const Repairs& r = l.in.repairs;
@@ -105,20 +106,22 @@ int run_triangulate(const TriangulateOptions& options) {
 
   // The device comes first: a machine that cannot run the GPU backend fails before reading anything.
   std::optional<gpu::Context> ctx;
+  std::optional<gpu::GpuCdt> cdt;
   if (options.backend == "gpu") {
     gpu::ContextOptions co;
     co.device = options.device;
     ctx.emplace(gpu::create_context(co));
+    cdt.emplace(*ctx);
     stats.device = ctx->info.name;
     spdlog::debug("device: {} ({} {})", ctx->info.name, ctx->info.driver_name, ctx->info.driver_info);
   }
 
-  Loaded l = load(options.input, stats);
+  // With the GPU backend, duplicates are merged on the GPU too (the same result as the CPU's merge).
+  Loaded l = load(options.input, stats, cdt ? cdt->merger() : PointMerger(merge_points));
   CdtResult result = timed(stats, "triangulate", [&] {
-    if (!ctx) return triangulate_cgal(l.prepared);
-    gpu::GpuCdt cdt(*ctx);
+    if (!cdt) return triangulate_cgal(l.prepared);
     gpu::GpuCdtStats gs;
-    CdtResult r = cdt.triangulate(l.prepared, &gs);
+    CdtResult r = cdt->triangulate(l.prepared, &gs);
     for (const auto& [name, ms] : gs.wall_ms) stats.stage_ms.emplace_back("triangulate: " + name, ms);
     auto& g = stats.gpu_stage_ms;
     for (const auto& [name, ms] : gs.gpu_ms) g[name] = (g.contains(name) ? g[name].get<double>() : 0.0) + ms;

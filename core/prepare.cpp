@@ -1,7 +1,8 @@
 // prepare: merges exact duplicate (x, y) vertices and turns polylines into unique index segments.
 // Cost: two sorts (all occurrences by (x, y), all segments by index pair), O(n log n), no hashing, so the
 // result is the same on every run. The sorts run in parallel (std::execution::par, TBB underneath): both orders
-// are total, so any correct sort gives the same result; on 2M points + 500K lines it was most of the run.
+// are total, so any correct sort gives the same result. The merge of duplicates is a parameter: the GPU backend
+// passes gpu::merge_points, which gives the same answer (tests/gpu_dedupe_test.cpp).
 #include "core/prepare.hpp"
 
 #include <algorithm>
@@ -16,14 +17,14 @@ namespace cdtgpu {
 namespace {
 
 struct Occurrence {
-  double x, y, z;
+  double x, y;
   uint32_t occ;  // position in reading order: in.points first, then the vertices of in.lines
 };
 
 bool xy_less(const Occurrence& a, const Occurrence& b) {
   if (a.x != b.x) return a.x < b.x;
   if (a.y != b.y) return a.y < b.y;
-  return a.occ < b.occ;  // the first occurrence leads its group: its z wins
+  return a.occ < b.occ;  // the first occurrence leads its group
 }
 
 struct SegmentKey {
@@ -33,7 +34,25 @@ struct SegmentKey {
 
 }  // namespace
 
-PreparedInput prepare(const InputSet& in) {
+PointMerge merge_points(std::span<const double> xy) {
+  const size_t n = xy.size() / 2;
+  std::vector<Occurrence> occ(n);
+  for (size_t i = 0; i < n; ++i) occ[i] = {xy[2 * i], xy[2 * i + 1], uint32_t(i)};
+  std::sort(std::execution::par, occ.begin(), occ.end(), xy_less);
+  PointMerge m;
+  m.vertex_of.resize(n);
+  for (size_t i = 0; i < n;) {
+    const Occurrence& first = occ[i];
+    const uint32_t v = uint32_t(m.first.size());
+    m.first.push_back(first.occ);
+    size_t j = i;
+    for (; j < n && occ[j].x == first.x && occ[j].y == first.y; ++j) m.vertex_of[occ[j].occ] = v;
+    i = j;
+  }
+  return m;
+}
+
+PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
   PreparedInput out;
   uint64_t total = in.points.size();
   for (const Polyline& l : in.lines) total += l.points.size();
@@ -42,41 +61,44 @@ PreparedInput prepare(const InputSet& in) {
                             " input vertices exceed the 32-bit index range");
   out.input_points = total;
 
-  std::vector<Occurrence> occ;
-  occ.reserve(total);
+  std::vector<double> xy, z;
+  xy.reserve(2 * total);
+  z.reserve(total);
   auto push = [&](const Point3& p) {
     // NaN would break the sort's strict weak order; readers reject it, this guards direct callers.
     if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      throw std::invalid_argument("prepare: vertex " + std::to_string(occ.size()) + " is not finite");
-    occ.push_back({p.x, p.y, p.z, uint32_t(occ.size())});
+      throw std::invalid_argument("prepare: vertex " + std::to_string(z.size()) + " is not finite");
+    xy.push_back(p.x);
+    xy.push_back(p.y);
+    z.push_back(p.z);
   };
   for (const Point3& p : in.points) push(p);
   for (const Polyline& l : in.lines)
     for (const Point3& p : l.points) push(p);
 
-  std::sort(std::execution::par, occ.begin(), occ.end(), xy_less);
-
-  // Vertex of each occurrence, and the merged vertices.
-  std::vector<uint32_t> vertex_of(total);
-  out.vertices.reserve(total);  // an upper bound: no reallocation copies
-  for (size_t i = 0; i < occ.size();) {
-    const Occurrence& first = occ[i];
-    const uint32_t v = uint32_t(out.vertices.size());
-    out.vertices.push_back({first.x, first.y, first.z});
-    bool conflict = false;
-    size_t j = i;
-    for (; j < occ.size() && occ[j].x == first.x && occ[j].y == first.y; ++j) {
-      vertex_of[occ[j].occ] = v;
-      if (occ[j].z != first.z) {
-        conflict = true;
-        out.max_z_conflict = std::max(out.max_z_conflict, std::abs(occ[j].z - first.z));
-      }
-    }
-    if (conflict) ++out.z_conflicts;
-    i = j;
+  // The merged vertices: coordinates and z of their first occurrence; conflicts where a later z differs.
+  const PointMerge m = merge(xy);
+  if (m.vertex_of.size() != total || m.first.size() > total)
+    throw std::logic_error("prepare: the point merge returned " + std::to_string(m.vertex_of.size()) + " of " +
+                           std::to_string(total) + " points");
+  const std::vector<uint32_t>& vertex_of = m.vertex_of;
+  out.vertices.resize(m.first.size());
+  for (size_t v = 0; v < m.first.size(); ++v) {
+    const uint32_t i = m.first[v];
+    out.vertices[v] = {xy[2 * size_t(i)], xy[2 * size_t(i) + 1], z[i]};
   }
+  std::vector<uint8_t> conflict(out.vertices.size(), 0);
+  for (size_t i = 0; i < total; ++i) {
+    const double dz = std::abs(z[i] - out.vertices[vertex_of[i]].z);
+    if (dz != 0) {
+      conflict[vertex_of[i]] = 1;
+      out.max_z_conflict = std::max(out.max_z_conflict, dz);
+    }
+  }
+  out.z_conflicts = uint64_t(std::count(conflict.begin(), conflict.end(), uint8_t(1)));
   out.merged_duplicates = total - out.vertices.size();
-  occ = {};
+  xy = {};
+  z = {};
 
   // Segments of every polyline, the closing edge of every ring included.
   std::vector<SegmentKey> segs;

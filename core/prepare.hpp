@@ -1,5 +1,8 @@
 // From what was read to what is triangulated: unique vertices and constraint segments by index.
 #pragma once
+#include <functional>
+#include <span>
+
 #include "core/model.hpp"
 
 namespace cdtgpu {
@@ -25,6 +28,17 @@ struct PreparedInput {
   uint64_t zero_length_segments = 0;
 };
 
-PreparedInput prepare(const InputSet& in);
+// Exact duplicate merging of n points (xy = x0, y0, x1, y1, ...): vertices numbered in (x, y) order,
+// vertex_of[i] = the vertex of point i, first[v] = the smallest i on vertex v (-0.0 equals +0.0).
+struct PointMerge {
+  std::vector<uint32_t> vertex_of, first;
+};
+using PointMerger = std::function<PointMerge(std::span<const double> xy)>;
+
+// On the CPU: one parallel sort. gpu::merge_points (gpu/dedupe.hpp) gives the same on the GPU.
+PointMerge merge_points(std::span<const double> xy);
+
+// `merge` does the duplicate merging; everything else (z of merged vertices, conflicts, segments) is here.
+PreparedInput prepare(const InputSet& in, const PointMerger& merge = merge_points);
 
 }  // namespace cdtgpu

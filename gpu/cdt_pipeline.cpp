@@ -25,7 +25,16 @@ void add_gpu(GpuCdtStats& s, const std::string& prefix, const std::vector<std::p
 }  // namespace
 
 GpuCdt::GpuCdt(const Context& ctx)
-    : ctx_(ctx), prims_(ctx), delaunay_(ctx), inserter_(ctx, prims_), sorter_(ctx, prims_) {}
+    : ctx_(ctx),
+      prims_(ctx),
+      delaunay_(ctx),
+      inserter_(ctx, prims_),
+      sorter_(ctx, prims_),
+      deduper_(ctx, prims_) {}
+
+PointMerger GpuCdt::merger() const {
+  return [this](std::span<const double> xy) { return merge_points(deduper_, xy); };
+}
 
 CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats) const {
   GpuCdtStats local;

@@ -3,6 +3,7 @@
 //
 //   gpu::Context ctx = gpu::create_context();
 //   gpu::GpuCdt cdt(ctx);                       // builds every pipeline once
+//   PreparedInput prepared = prepare(input, cdt.merger());   // duplicates merged on the GPU
 //   gpu::GpuCdtStats stats;
 //   CdtResult r = cdt.triangulate(prepared, &stats);
 //
@@ -22,6 +23,7 @@
 #include "gpu/canonical.hpp"
 #include "gpu/constraints.hpp"
 #include "gpu/context.hpp"
+#include "gpu/dedupe.hpp"
 #include "gpu/delaunay.hpp"
 #include "gpu/primitives.hpp"
 
@@ -46,6 +48,9 @@ class GpuCdt {
 
   CdtResult triangulate(const PreparedInput& prepared, GpuCdtStats* stats = nullptr) const;
 
+  // Duplicate merging on the GPU for prepare(in, cdt.merger()); the same answer as the CPU's merge_points.
+  PointMerger merger() const;
+
   // The paper's ablation switches (docs/gpu-constraints.md); defaults are the full method.
   ConstraintOptions constraint_options;
   // Threads of the CPU resolve stage (0: all).
@@ -59,6 +64,7 @@ class GpuCdt {
   DelaunayBuilder delaunay_;
   ConstraintInserter inserter_;
   TriangleSorter sorter_;
+  PointDeduper deduper_;
 };
 
 }  // namespace cdtgpu::gpu

@@ -8,6 +8,7 @@
 #include <span>
 #include <vector>
 
+#include "core/prepare.hpp"
 #include "gpu/buffers.hpp"
 #include "gpu/context.hpp"
 #include "gpu/passes.hpp"
@@ -28,6 +29,7 @@ class PointDeduper {
   PointDeduper(const Context& ctx, const Primitives& prims);
   // `xy` holds n points as double pairs. Submits and waits (the vertex count sizes what follows).
   DedupedPoints run(const Buffer& xy, uint32_t n) const;
+  const Context& context() const { return ctx_; }
 
  private:
   const Context& ctx_;
@@ -41,5 +43,9 @@ struct DedupedHost {
   std::vector<uint32_t> map, first;
 };
 DedupedHost dedupe_points(const Context& ctx, std::span<const double> xy);
+
+// core's PointMerger on the GPU, for prepare(in, merger): the same answer as cdtgpu::merge_points (upload,
+// PointDeduper, download of the map and first occurrences). The GPU backend merges this way (GpuCdt::merger).
+PointMerge merge_points(const PointDeduper& deduper, std::span<const double> xy);
 
 }  // namespace cdtgpu::gpu

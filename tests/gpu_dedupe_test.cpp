@@ -12,6 +12,7 @@
 #include "core/prepare.hpp"
 #include "gpu/context.hpp"
 #include "gpu/dedupe.hpp"
+#include "gpu/primitives.hpp"
 
 using namespace cdtgpu;
 using namespace cdtgpu::gpu;
@@ -116,6 +117,44 @@ TEST(GpuDedupe, SameVerticesAsPrepare) {
     ASSERT_EQ(gpu.xy[2 * v + 1], prepared.vertices[v].y) << v;
     ASSERT_EQ(in.points[gpu.first[v]].z, prepared.vertices[v].z) << v;  // first occurrence's z, as prepare keeps
   }
+}
+
+// The GPU merger inside prepare (what the GPU backend runs) against the CPU merger: every field equal, on
+// points with duplicates and z conflicts, -0.0, and lines that share vertices with them and with each other.
+TEST(GpuDedupe, PrepareWithTheGpuMergerEqualsTheCpus) {
+  Primitives prims(ctx());
+  PointDeduper deduper(ctx(), prims);
+  const PointMerger gpu = [&](std::span<const double> xy) { return merge_points(deduper, xy); };
+  for (uint32_t seed : {1u, 2u, 3u}) {
+    InputSet in;
+    auto xy = integer_points(3000 * seed, 25, seed);
+    for (size_t i = 0; i < xy.size(); i += 2) in.points.push_back({xy[i], xy[i + 1], double(i % 5)});
+    in.points.push_back({-0.0, 0.0, 7});
+    in.points.push_back({0.0, -0.0, 8});
+    std::mt19937 rng(seed);
+    for (int l = 0; l < 200; ++l) {
+      Polyline line;
+      line.closed = l % 3 == 0;
+      for (int k = 0; k < 2 + l % 6; ++k)
+        line.points.push_back({double(int(rng() % 51) - 25), double(int(rng() % 51) - 25), double(l)});
+      in.lines.push_back(line);
+    }
+    const PreparedInput a = prepare(in), b = prepare(in, gpu);
+    ASSERT_EQ(a.vertices.size(), b.vertices.size());
+    for (size_t v = 0; v < a.vertices.size(); ++v) {
+      ASSERT_EQ(0, std::memcmp(&a.vertices[v], &b.vertices[v], sizeof(Point3))) << v;  // bits, -0.0 too
+    }
+    EXPECT_EQ(a.constraints, b.constraints);
+    EXPECT_EQ(a.constraint_line, b.constraint_line);
+    EXPECT_EQ(a.merged_duplicates, b.merged_duplicates);
+    EXPECT_GT(a.merged_duplicates, 0u);
+    EXPECT_EQ(a.z_conflicts, b.z_conflicts);
+    EXPECT_GT(a.z_conflicts, 0u);
+    EXPECT_EQ(a.max_z_conflict, b.max_z_conflict);
+    EXPECT_EQ(a.duplicate_segments, b.duplicate_segments);
+    EXPECT_EQ(a.zero_length_segments, b.zero_length_segments);
+  }
+  EXPECT_TRUE(ctx().messages().empty()) << ctx().messages().front();
 }
 
 TEST(GpuDedupe, LargeInputs) {
