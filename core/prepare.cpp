@@ -6,11 +6,16 @@
 #include "core/prepare.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <execution>
 #include <limits>
 #include <stdexcept>
 #include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 namespace cdtgpu {
 
@@ -82,19 +87,28 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
     throw std::logic_error("prepare: the point merge returned " + std::to_string(m.vertex_of.size()) + " of " +
                            std::to_string(total) + " points");
   const std::vector<uint32_t>& vertex_of = m.vertex_of;
+  // Both loops gather at random (cache misses): in parallel (TBB), each result independent of the split.
   out.vertices.resize(m.first.size());
-  for (size_t v = 0; v < m.first.size(); ++v) {
-    const uint32_t i = m.first[v];
-    out.vertices[v] = {xy[2 * size_t(i)], xy[2 * size_t(i) + 1], z[i]};
-  }
-  std::vector<uint8_t> conflict(out.vertices.size(), 0);
-  for (size_t i = 0; i < total; ++i) {
-    const double dz = std::abs(z[i] - out.vertices[vertex_of[i]].z);
-    if (dz != 0) {
-      conflict[vertex_of[i]] = 1;
-      out.max_z_conflict = std::max(out.max_z_conflict, dz);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, m.first.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t v = r.begin(); v < r.end(); ++v) {
+      const uint32_t i = m.first[v];
+      out.vertices[v] = {xy[2 * size_t(i)], xy[2 * size_t(i) + 1], z[i]};
     }
-  }
+  });
+  std::vector<uint8_t> conflict(out.vertices.size(), 0);
+  out.max_z_conflict = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, total), 0.0,
+      [&](const tbb::blocked_range<size_t>& r, double largest) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          const double dz = std::abs(z[i] - out.vertices[vertex_of[i]].z);
+          if (dz != 0) {
+            std::atomic_ref<uint8_t>(conflict[vertex_of[i]]).store(1, std::memory_order_relaxed);
+            largest = std::max(largest, dz);
+          }
+        }
+        return largest;
+      },
+      [](double a, double b) { return std::max(a, b); });
   out.z_conflicts = uint64_t(std::count(conflict.begin(), conflict.end(), uint8_t(1)));
   out.merged_duplicates = total - out.vertices.size();
   xy = {};
