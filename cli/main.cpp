@@ -9,6 +9,7 @@
 
 #include "cli/bench.hpp"
 #include "cli/run.hpp"
+#include "gpu/check.hpp"
 #include "gpu/context.hpp"
 #include "core/error.hpp"
 
@@ -115,6 +116,11 @@ int main(int argc, char** argv) {
   } catch (const UsageError& e) {
     spdlog::error("{}", e.what());
     return 2;
+  } catch (const gpu::DeviceError& e) {  // no usable device, a device limit, device memory, device lost
+    spdlog::error("{}", e.what());
+    if (*t) spdlog::error("--backend cgal computes the same triangulation on the CPU, without a GPU");
+    if (*b) spdlog::error("--cgal-only times CGAL without a GPU");
+    return 3;
   } catch (const std::bad_alloc&) {
     spdlog::error("out of memory");
     return 3;

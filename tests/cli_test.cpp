@@ -129,6 +129,7 @@ TEST_F(Cli, GpuBackendWritesTheSameBytesAsCgal) {
   Result nodev = run("triangulate " + in + " -q --device no-such-gpu -o " + path("y.ply"));
   EXPECT_EQ(nodev.code, 3) << nodev.err;
   EXPECT_NE(nodev.err.find("no-such-gpu"), std::string::npos) << nodev.err;
+  EXPECT_NE(nodev.err.find("--backend cgal"), std::string::npos) << nodev.err;  // the way out is named
   EXPECT_EQ(files_matching("y."), 0u);
 }
 
