@@ -1,9 +1,13 @@
 // prepare: merges exact duplicate (x, y) vertices and turns polylines into unique index segments.
 // Cost: two sorts (all occurrences by (x, y), all segments by index pair), O(n log n), no hashing, so the
-// result is the same on every run. The sorts run in parallel (std::execution::par, TBB underneath): both orders
-// are total, so any correct sort gives the same result. The merge of duplicates is a parameter: the GPU backend
-// passes gpu::merge_points, which gives the same answer (tests/gpu_dedupe_test.cpp).
+// result is the same on every run. The sorts run in parallel (std::execution::par, TBB underneath): both
+// orders are total, so any correct sort gives the same result. The merge of duplicates is a parameter: the
+// GPU backend passes gpu::merge_points, which gives the same answer (tests/gpu_dedupe_test.cpp).
 #include "core/prepare.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -12,10 +16,6 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 namespace cdtgpu {
 
@@ -84,8 +84,8 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
   // The merged vertices: coordinates and z of their first occurrence; conflicts where a later z differs.
   const PointMerge m = merge(xy);
   if (m.vertex_of.size() != total || m.first.size() > total)
-    throw std::logic_error("prepare: the point merge returned " + std::to_string(m.vertex_of.size()) + " of " +
-                           std::to_string(total) + " points");
+    throw std::logic_error("prepare: the point merge returned " + std::to_string(m.vertex_of.size()) +
+                           " of " + std::to_string(total) + " points");
   const std::vector<uint32_t>& vertex_of = m.vertex_of;
   // Both loops gather at random (cache misses): in parallel (TBB), each result independent of the split.
   out.vertices.resize(m.first.size());

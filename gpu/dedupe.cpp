@@ -42,7 +42,8 @@ DedupedPoints PointDeduper::run(const Buffer& xy, uint32_t n) const {
   prims_.radix_sort(rec, keys, idx, n, 64);
   rec.dispatch_groups(flags_, {xy, idx, flags}, DedupePush{n}, groups(n));
   prims_.exclusive_scan(rec, flags, offsets, n);
-  rec.dispatch_groups(scatter_, {xy, idx, flags, offsets, unique, out.map, first, count}, DedupePush{n}, groups(n));
+  rec.dispatch_groups(scatter_, {xy, idx, flags, offsets, unique, out.map, first, count}, DedupePush{n},
+                      groups(n));
   rec.submit();
   download(ctx_, count, &out.count, sizeof(uint32_t));
   out.xy = std::move(unique);
