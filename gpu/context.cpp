@@ -277,6 +277,7 @@ void release(Context& c) {
   if (c.device) {
     vkDeviceWaitIdle(c.device);
     c.staging.reset();
+    c.temp_pool.reset();
     if (c.pool) vkDestroyCommandPool(c.device, c.pool, nullptr);
     vkDestroyDevice(c.device, nullptr);
   }
@@ -313,6 +314,7 @@ Context& Context::operator=(Context&& o) noexcept {
   messages_ = std::move(o.messages_);
   o.messages_ = std::make_unique<std::vector<std::string>>();
   staging = std::move(o.staging);
+  temp_pool = std::move(o.temp_pool);
   return *this;
 }
 

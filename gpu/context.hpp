@@ -88,6 +88,9 @@ struct Context {
   // The host-visible staging buffer upload() and download() reuse (gpu/buffers.cpp; grown as needed, freed
   // before the device): allocating and pinning host memory for every copy cost more than the copy itself.
   mutable std::shared_ptr<void> staging;
+  // Small scratch buffers Recorder::temp() hands out and takes back at submit (gpu/recorder.cpp): the constraint
+  // rounds' scans made ~60 allocations per triangulation, each a driver call.
+  mutable std::shared_ptr<void> temp_pool;
 };
 
 // Creates the context; throws DeviceError (naming the device and the missing features) when the chosen device

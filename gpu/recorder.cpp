@@ -2,11 +2,30 @@
 #include "gpu/recorder.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <memory>
 #include <vector>
 
 #include "gpu/check.hpp"
 
 namespace cdtgpu::gpu {
+
+namespace {
+
+// Temps up to this size come from the context's pool (sized to powers of two); larger ones (sort scratch of n
+// keys) are allocated and freed per recording, so they do not stay on the device between calls.
+constexpr VkDeviceSize kPooledTempBytes = VkDeviceSize(1) << 20;
+
+struct TempPool {
+  std::vector<Buffer> free;
+};
+
+TempPool& pool_of(const Context& ctx) {
+  if (!ctx.temp_pool) ctx.temp_pool = std::make_shared<TempPool>();
+  return *static_cast<TempPool*>(ctx.temp_pool.get());
+}
+
+}  // namespace
 
 Recorder::Recorder(const Context& ctx) : ctx_(ctx) {
   VkCommandBufferAllocateInfo ai{};
@@ -129,7 +148,20 @@ void Recorder::copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, Vk
 }
 
 const Buffer& Recorder::temp(VkDeviceSize bytes, const std::string& name) {
-  temps_.push_back(create_buffer(ctx_, bytes, name));
+  if (bytes > kPooledTempBytes) {
+    temps_.push_back(create_buffer(ctx_, bytes, name));
+    return temps_.back();
+  }
+  std::vector<Buffer>& free = pool_of(ctx_).free;
+  auto best = free.end();
+  for (auto it = free.begin(); it != free.end(); ++it)
+    if (it->size >= bytes && (best == free.end() || it->size < best->size)) best = it;
+  if (best == free.end()) {
+    temps_.push_back(create_buffer(ctx_, std::bit_ceil(std::max<VkDeviceSize>(bytes, 4096)), "pooled temp"));
+  } else {
+    temps_.push_back(std::move(*best));
+    free.erase(best);
+  }
   return temps_.back();
 }
 
@@ -152,6 +184,9 @@ void Recorder::submit() {
   si.pCommandBuffers = &cmd_;
   VK_CHECK(vkQueueSubmit(ctx_.queue, 1, &si, fence_));
   VK_CHECK(vkWaitForFences(ctx_.device, 1, &fence_, VK_TRUE, UINT64_MAX));
+  // The work is done: small temps go back to the pool, large ones are freed.
+  for (Buffer& b : temps_)
+    if (b.size <= kPooledTempBytes) pool_of(ctx_).free.push_back(std::move(b));
   temps_.clear();
 }
 

@@ -1,6 +1,7 @@
 // Records a sequence of compute dispatches (and fills/copies) into ONE command buffer, with a full
 // compute/transfer -> compute/transfer/indirect memory barrier between consecutive commands, then submits and
-// waits. Scratch buffers made with temp() live until the next submit() returns.
+// waits. Scratch buffers made with temp() live until the next submit() returns (small ones then go back to the
+// context's pool for the next recording).
 #pragma once
 #include <vulkan/vulkan.h>
 
