@@ -335,8 +335,8 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_flag("--check", o.check, "compare with the reference CGAL backend at every size (default: up to 200K)");
   cmd->add_flag("!--cgal-only", o.gpu, "time CGAL only (no Vulkan device needed)");
   cmd->add_flag("--ablation", o.ablation,
-                "the paper's Table 3: table 1's workload at the first --sizes value (default 2M, 40K with --quick), "
-                "the full method and each part switched off");
+                "the paper's Table 3: the first --sizes value (default 2M points, 40K with --quick) with a tenth, a "
+                "quarter and half as many constraints; the full method and each part switched off");
 }
 
 namespace {
@@ -417,17 +417,10 @@ std::string bytes_per_point(const Timings& t, const PreparedInput& p) {
   return std::to_string(t.peak_device_bytes / p.vertices.size());
 }
 
-// The paper's Table 3: one workload, the full method, then each part switched off in turn.
+// The paper's Table 3: 2M points (the first --sizes value) with a tenth, a quarter and half as many constraints,
+// each workload timed with the full method and with each part switched off in turn.
 int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std::string& device) {
   const uint64_t n = o.sizes.empty() ? (o.quick ? 40000 : 2000000) : parse_size(o.sizes.front());
-  Workload w{"ablation", "uniform+dt-edges", n, n / 4, kFraction, 0};
-  InputSet in = generate(w, o.seed);
-  PreparedInput p = prepare(in);
-  Timings cgal = time_backend(run_cgal_fast, p, o.cgal_runs > 0 ? o.cgal_runs : o.runs);
-  std::printf("ablation (the paper's Table 3): %zu vertices, %zu constraints; CGAL %s ms\n\n", p.vertices.size(),
-              p.constraints.size(), fmt_ms(median(cgal.total)).c_str());
-  std::printf("%-50s %10s %10s %12s %8s %6s %5s %s\n", "variant", "GPU ms", "wall ms", "constraints", "rounds",
-              "B/pt", "host", "check");
   using Opt = gpu::ConstraintOptions;
   struct Variant {
     std::string name;
@@ -442,40 +435,71 @@ int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std
   variants[3].name = "no influence-domain index (slot claims alone)";
   variants[3].options.domain_index = false;
 
-  json rows = json::array();
+  std::printf("ablation (the paper's Table 3): %llu points; 'constraints ms' = device time of crossing detection + "
+              "prefix-sum layout + flip rounds; 'host' = constraints the host safety net inserted\n",
+              static_cast<unsigned long long>(n));
+  json workloads = json::array();
+  std::vector<std::vector<double>> device_ms(variants.size());  // [variant][workload], for the summary
+  std::vector<uint64_t> counts;
   int failures = 0;
-  for (const Variant& v : variants) {
-    Timings t = time_gpu(co, v.options, p, o.runs);
-    std::string diff = mesh_difference(t.mesh, cgal.mesh);
-    failures += !diff.empty();
-    if (!diff.empty()) spdlog::error("ablation '{}' differs from CGAL: {}", v.name, diff);
-    auto stage = [&](const char* name) {
-      for (const auto& [k, runs] : t.stages)
-        if (k == name) return median(runs);
-      return 0.0;
-    };
-    const double insert_ms = stage("cdt crossing detection") + stage("cdt prefix-sum layout") + stage("cdt flipping");
-    std::printf("%-50s %10s %10s %12s %8u %6s %5u %s\n", v.name.c_str(), fmt_ms(median(t.device)).c_str(),
-                fmt_ms(median(t.total)).c_str(), fmt_ms(insert_ms).c_str(), t.rounds, bytes_per_point(t, p).c_str(),
-                t.host_fallback, diff.empty() ? "ok" : "FAIL");
-    std::fflush(stdout);
-    json row = t.to_json();
-    row["variant"] = v.name;
-    row["constraint_insertion_ms"] = insert_ms;
-    row["cgal_equal"] = diff.empty();
-    rows.push_back(row);
+  for (const uint64_t m : {n / 10, n / 4, n / 2}) {
+    Workload w{"ablation", "uniform+dt-edges", n, m, kFraction, 0};
+    InputSet in = generate(w, o.seed);
+    PreparedInput p = prepare(in);
+    Timings cgal = time_backend(run_cgal_fast, p, o.cgal_runs > 0 ? o.cgal_runs : o.runs);
+    counts.push_back(p.constraints.size());
+    std::printf("\n%zu vertices, %zu constraints; CGAL %s ms\n", p.vertices.size(), p.constraints.size(),
+                fmt_ms(median(cgal.total)).c_str());
+    std::printf("%-50s %10s %10s %15s %8s %6s %5s %s\n", "variant", "GPU ms", "wall ms", "constraints ms",
+                "rounds", "B/pt", "host", "check");
+    json rows = json::array();
+    for (size_t vi = 0; vi < variants.size(); ++vi) {
+      const Variant& v = variants[vi];
+      Timings t = time_gpu(co, v.options, p, o.runs);
+      std::string diff = mesh_difference(t.mesh, cgal.mesh);
+      failures += !diff.empty();
+      if (!diff.empty()) spdlog::error("ablation '{}' differs from CGAL: {}", v.name, diff);
+      auto stage = [&](const char* name) {
+        for (const auto& [k, runs] : t.stages)
+          if (k == name) return median(runs);
+        return 0.0;
+      };
+      const double insert_ms =
+          stage("cdt crossing detection") + stage("cdt prefix-sum layout") + stage("cdt flipping");
+      device_ms[vi].push_back(median(t.device));
+      std::printf("%-50s %10s %10s %15s %8u %6s %5u %s\n", v.name.c_str(), fmt_ms(median(t.device)).c_str(),
+                  fmt_ms(median(t.total)).c_str(), fmt_ms(insert_ms).c_str(), t.rounds,
+                  bytes_per_point(t, p).c_str(), t.host_fallback, diff.empty() ? "ok" : "FAIL");
+      std::fflush(stdout);
+      json row = t.to_json();
+      row["variant"] = v.name;
+      row["constraint_insertion_ms"] = insert_ms;
+      row["cgal_equal"] = diff.empty();
+      rows.push_back(row);
+    }
+    workloads.push_back({{"vertices", p.vertices.size()},
+                         {"constraints", p.constraints.size()},
+                         {"cgal", cgal.to_json()},
+                         {"variants", rows}});
   }
-  std::printf("\n'constraints' = device time of crossing detection + prefix-sum layout + flip rounds (median); "
-              "'host' = constraints the host safety net inserted (stalled flipping)\n");
+  // The shape of the paper's Table 3: each variant's GPU time against the full method's, per constraint count.
+  std::printf("\n%-50s", "GPU ms (vs full method)");
+  for (uint64_t c : counts) std::printf(" %18s", (std::to_string(c) + " constraints").c_str());
+  std::printf("\n");
+  for (size_t vi = 0; vi < variants.size(); ++vi) {
+    std::printf("%-50s", variants[vi].name.c_str());
+    for (size_t k = 0; k < counts.size(); ++k)
+      std::printf(" %10s (%+4.0f%%)", fmt_ms(device_ms[vi][k]).c_str(),
+                  100.0 * (device_ms[vi][k] / device_ms[0][k] - 1.0));
+    std::printf("\n");
+  }
   if (!o.json_path.empty()) {
     json j;
     j["tool"] = "cdtgpu bench --ablation";
     j["date"] = utc_now();
     j["device"] = device;
-    j["vertices"] = p.vertices.size();
-    j["constraints"] = p.constraints.size();
-    j["cgal"] = cgal.to_json();
-    j["variants"] = rows;
+    j["points"] = n;
+    j["workloads"] = workloads;
     write_file_atomically(o.json_path, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
   }
   return failures ? 1 : 0;

@@ -8,8 +8,9 @@ grouped by their "table" ("1", "2", "long", "terrain", "dt", ...).
   stages_gpu_wall.png  stacked bars per row of the GPU wall time: resolve, upload, device total, download,
                        host overhead
   stages_cgal.png      stacked bars per row of the CGAL stages
-  ablation.png         only if a `cdtgpu bench --ablation` JSON (one with "variants") is given: device, wall
-                       and constraint-insertion ms per variant
+  ablation.png         only if a `cdtgpu bench --ablation` JSON is given: GPU device ms of each variant against
+                       the constraint count (the shape of the paper's Table 3)
+  ablation_<m>.png     per ablation workload (m constraints): device, wall and constraint-insertion ms per variant
 
 Where a table mixes workloads (the dt table: uniform rows plus one grid row), the lines follow the most common
 workload and the other rows are drawn as separate markers.
@@ -320,6 +321,27 @@ def plot_ablation(ab, out):
     return save(fig, out)
 
 
+def plot_ablation_sweep(ab, out):
+    """GPU device ms of every variant against the constraint count: the shape of the paper's Table 3."""
+    ws = ab["workloads"]
+    names = [v["variant"] for v in ws[0]["variants"]]
+    fig, ax = plt.subplots(figsize=(7.5, 4.4))
+    for i, name in enumerate(names):
+        xs = [w["constraints"] for w in ws]
+        ys = [w["variants"][i].get("device_median_ms") or 0.0 for w in ws]
+        ax.plot(xs, ys, "o-", label=name, color="C%d" % i)
+    ax.xaxis.set_major_formatter(FuncFormatter(count_fmt))
+    ax.set_xlabel("constraints", fontsize=8)
+    ax.set_ylabel("GPU ms (device timestamps, median)", fontsize=8)
+    ax.set_ylim(bottom=0)
+    ax.tick_params(labelsize=7)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title("Ablation, %s points\n(%s; %s)" % (count_fmt(ab.get("points", 0)), ab.get("device", "?"),
+                                                  ab.get("date", "?")), fontsize=9)
+    return save(fig, out)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("json", nargs="+", help="files written by cdtgpu bench --json (or bench --ablation)")
@@ -330,7 +352,7 @@ def main():
     for path in args.json:
         with open(path) as f:
             data = json.load(f)
-        if "variants" in data:
+        if "workloads" in data or "variants" in data:
             ablations.append(data)
             continue
         if not data.get("rows"):
@@ -353,8 +375,14 @@ def main():
             plot_stages_gpu_wall(meta, ordered, os.path.join(outdir, "stages_gpu_wall.png")),
         ]
     for i, ab in enumerate(ablations):
-        name = "ablation.png" if i == 0 else "ablation_%d.png" % (i + 1)
-        written.append(plot_ablation(ab, os.path.join(outdir, name)))
+        suffix = "" if i == 0 else "_%d" % (i + 1)
+        if "workloads" not in ab:  # an older file: one workload
+            written.append(plot_ablation(ab, os.path.join(outdir, "ablation%s.png" % suffix)))
+            continue
+        written.append(plot_ablation_sweep(ab, os.path.join(outdir, "ablation%s.png" % suffix)))
+        for w in ab["workloads"]:
+            one = dict(w, device=ab.get("device"), date=ab.get("date"))
+            written.append(plot_ablation(one, os.path.join(outdir, "ablation%s_%d.png" % (suffix, w["constraints"]))))
     for w in written:
         if w:
             print("wrote", w)

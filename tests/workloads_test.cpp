@@ -236,10 +236,15 @@ TEST(Bench, AblationVariantsAllGiveCgalsTriangles) {
   ASSERT_EQ(run_bench(o), 0);
   std::ifstream f(json_path);
   nlohmann::json j = nlohmann::json::parse(f);
-  EXPECT_EQ(j["constraints"], 1000);
-  ASSERT_EQ(j["variants"].size(), 4u);  // full, fixed slots, one flip per constraint, no influence-domain index
-  for (const auto& v : j["variants"]) EXPECT_TRUE(v["cgal_equal"].get<bool>()) << v["variant"];
-  EXPECT_EQ(j["variants"][3]["variant"], "no influence-domain index (slot claims alone)");
+  ASSERT_EQ(j["workloads"].size(), 3u);  // a tenth, a quarter and half as many constraints as points
+  EXPECT_EQ(j["workloads"][0]["constraints"], 400);
+  EXPECT_EQ(j["workloads"][1]["constraints"], 1000);
+  EXPECT_EQ(j["workloads"][2]["constraints"], 2000);
+  for (const auto& w : j["workloads"]) {
+    ASSERT_EQ(w["variants"].size(), 4u);  // full, fixed slots, one flip per constraint, no influence-domain index
+    for (const auto& v : w["variants"]) EXPECT_TRUE(v["cgal_equal"].get<bool>()) << v["variant"];
+    EXPECT_EQ(w["variants"][3]["variant"], "no influence-domain index (slot claims alone)");
+  }
   std::filesystem::remove(json_path);
 }
 
