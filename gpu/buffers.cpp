@@ -193,13 +193,23 @@ void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize by
   download_with(ctx, src, bytes, [&](const void* mapped) { std::memcpy(data, mapped, bytes); }, offset);
 }
 
-const Buffer& BufferCache::get(const Context& ctx, const std::string& name, VkDeviceSize bytes) {
-  Buffer& b = buffers_[name];
+const Buffer& BufferCache::get(const Context& ctx, const std::string& key, VkDeviceSize bytes,
+                               const std::string& label) {
+  Buffer& b = buffers_[key];
   if (!b.buffer || b.size < bytes) {
     b = Buffer();  // the old one goes first: a lower peak
-    b = create_buffer(ctx, bytes, name);
+    b = create_buffer(ctx, bytes, label.empty() ? key : label);
   }
   return b;
+}
+
+Buffer BufferCache::take(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label) {
+  get(ctx, key, bytes, label);
+  return std::move(buffers_[key]);
+}
+
+void BufferCache::give(const std::string& key, Buffer b) {
+  if (b.buffer) buffers_[key] = std::move(b);
 }
 
 void fill(const Context& ctx, const Buffer& dst, uint32_t value) {

@@ -48,13 +48,26 @@ void download_with(const Context& ctx, const Buffer& src, VkDeviceSize bytes,
                    const std::function<void(const void*)>& read, VkDeviceSize offset = 0);
 // Device buffers kept between calls by name, each grown when a call needs more: allocation costs more than the
 // work on a fast GPU (about 35 us per MiB on the lent H100 machine, docs/gpu.md).
+// Stages that run one after another can share one cache by asking for the same keys (GpuCdt does: the Delaunay
+// build's scratch becomes the constraint inserter's), so what stays allocated is the largest stage's need.
 class BufferCache {
  public:
-  const Buffer& get(const Context& ctx, const std::string& name, VkDeviceSize bytes);
+  // The buffer under `key`, at least `bytes` long (created or regrown as `label`, default the key).
+  const Buffer& get(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label = "");
+  // The same, taken out of the cache for a caller that holds buffers by value; give() puts it back.
+  Buffer take(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label = "");
+  void give(const std::string& key, Buffer b);
 
  private:
   std::map<std::string, Buffer> buffers_;
 };
+
+// Shared scratch keys by shape (n = points, slots = triangle slots): the stages of one triangulation ask for
+// these, so a later stage reuses an earlier one's buffers. Every user initialises what it reads.
+inline constexpr const char* kPoints4[] = {"points x4 a", "points x4 b", "points x4 c"};
+inline constexpr const char* kSlots4[] = {"slots x4 a", "slots x4 b", "slots x4 c", "slots x4 d", "slots x4 e"};
+inline constexpr const char* kSlots8[] = {"slots x8 a", "slots x8 b"};
+inline constexpr const char* kSlots12[] = {"slots x12 a", "slots x12 b"};
 
 // Fills the whole buffer with a 32-bit pattern, synchronously.
 void fill(const Context& ctx, const Buffer& dst, uint32_t value);

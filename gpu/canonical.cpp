@@ -18,9 +18,10 @@ std::vector<Triangle> TriangleSorter::download(const GpuTriangulation& tri, doub
   if (gpu_ms) *gpu_ms = 0;
   const uint32_t slots = tri.num_slots;
   if (slots == 0) return out;
-  const Buffer& keys = scratch_.get(ctx_, "canonical keys", uint64_t(slots) * 8);
-  const Buffer& payload = scratch_.get(ctx_, "canonical payload", uint64_t(slots) * 4);
-  const Buffer& count = scratch_.get(ctx_, "canonical count", 4);
+  BufferCache& buffers = cache ? *cache : scratch_;
+  const Buffer& keys = buffers.get(ctx_, kSlots8[0], uint64_t(slots) * 8, "canonical keys");
+  const Buffer& payload = buffers.get(ctx_, kSlots4[0], uint64_t(slots) * 4, "canonical payload");
+  const Buffer& count = buffers.get(ctx_, "canonical count", 4);
   {
     Recorder rec(ctx_);
     Profiler prof(ctx_, 1);

@@ -17,6 +17,8 @@ class TriangleSorter {
   // the key pass and the sort (timestamps), if given.
   std::vector<Triangle> download(const GpuTriangulation& tri, double* gpu_ms = nullptr) const;
 
+  BufferCache* cache = nullptr;  // where the keys live between calls (shared keys); null: a cache of its own
+
  private:
   const Context& ctx_;
   const Primitives& prims_;

@@ -30,7 +30,11 @@ GpuCdt::GpuCdt(const Context& ctx)
       delaunay_(ctx),
       inserter_(ctx, prims_),
       sorter_(ctx, prims_),
-      deduper_(ctx, prims_) {}
+      deduper_(ctx, prims_) {
+  delaunay_.cache = &cache_;
+  inserter_.cache = &cache_;
+  sorter_.cache = &cache_;
+}
 
 PointMerger GpuCdt::merger() const {
   return [this](std::span<const double> xy) { return merge_points(deduper_, xy); };

@@ -60,6 +60,9 @@ class GpuCdt {
 
  private:
   const Context& ctx_;
+  // One scratch cache for the stages, which run one after another: the Delaunay build's per-slot buffers are
+  // the inserter's and the canonical sort's (gpu/buffers.hpp, shared keys), allocated once and kept.
+  mutable BufferCache cache_;
   Primitives prims_;
   DelaunayBuilder delaunay_;
   ConstraintInserter inserter_;

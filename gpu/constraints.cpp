@@ -253,9 +253,10 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   if (!sc.readback.buffer) sc.readback = make_readback(ctx_, readback_words * 4, &sc.mapped);
   const uint32_t* rb = static_cast<const uint32_t*>(sc.mapped);
   uint64_t needed = 0, table_bytes = 0;  // what this call uses (the cache may hold more from earlier calls)
-  auto get = [&](const char* name, uint64_t bytes) -> const Buffer& {
+  BufferCache& buffers = cache ? *cache : sc.buffers;
+  auto get = [&](const char* key, uint64_t bytes, const char* label = "") -> const Buffer& {
     needed += bytes;
-    return sc.buffers.get(ctx_, name, bytes);
+    return buffers.get(ctx_, key, bytes, label);
   };
 
   ConstrainedEdges result;
@@ -275,18 +276,20 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   const Buffer& cache_base = get("cdt row cache base", uint64_t(m) * 4);
   const Buffer& cache_cap = get("cdt row cache room", uint64_t(m) * 4);
   const Buffer& first_row = get("cdt first candidate", uint64_t(m) * 8);
-  const Buffer& vmap = get("cdt vertex map", uint64_t(tri.num_points) * 4);
-  const Buffer& owner = get("cdt owners", uint64_t(slots) * 8);
-  const Buffer& claim = get("cdt claims", uint64_t(slots) * 8);
-  const Buffer& stamp = get("cdt flip stamps", uint64_t(slots) * 4);
-  const Buffer& partner = get("cdt flip partners", uint64_t(slots) * 4);
-  const Buffer& remap = get("cdt edge remap", uint64_t(slots) * 12);
-  const Buffer& qstamp = get("cdt queue stamps", uint64_t(slots) * 4);
+  // Per-point and per-slot scratch under the shared keys (the Delaunay build's, when the cache is shared).
+  const Buffer& vmap = get(kPoints4[0], uint64_t(tri.num_points) * 4, "cdt vertex map");
+  const Buffer& owner = get(kSlots8[0], uint64_t(slots) * 8, "cdt owners");
+  const Buffer& claim = get(kSlots8[1], uint64_t(slots) * 8, "cdt claims");
+  const Buffer& stamp = get(kSlots4[0], uint64_t(slots) * 4, "cdt flip stamps");
+  const Buffer& partner = get(kSlots4[1], uint64_t(slots) * 4, "cdt flip partners");
+  const Buffer& remap = get(kSlots12[0], uint64_t(slots) * 12, "cdt edge remap");
+  const Buffer& qstamp = get(kSlots4[2], uint64_t(slots) * 4, "cdt queue stamps");
   const Buffer& flips = get("cdt flip list", (uint64_t(slots) / 2 + 1) * 8);
   const Buffer& ctl = get("cdt control", CDT_CTL_WORDS * 4);
   const Buffer& stat = get("cdt round stats", uint64_t(kMaxBatch) * 8);
-  const Buffer& cand = get("cdt legalise candidates", uint64_t(slots) * 12);
-  const Buffer* queue[2] = {&get("cdt queue 0", uint64_t(slots) * 4), &get("cdt queue 1", uint64_t(slots) * 4)};
+  const Buffer& cand = get(kSlots12[1], uint64_t(slots) * 12, "cdt legalise candidates");
+  const Buffer* queue[2] = {&get(kSlots4[3], uint64_t(slots) * 4, "cdt queue 0"),
+                            &get(kSlots4[4], uint64_t(slots) * 4, "cdt queue 1")};
   const Buffer* table = nullptr;  // sized after the first count
 
   StageClock clock;
@@ -362,7 +365,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     capacity = fixed_slots ? uint64_t(m) * stride : uint64_t(crossed) + crossed / 2 + 1024;
     if (capacity >= CDT_NEVER) throw DeviceError("insert_constraints: intersected-edge table too large");
     table_bytes = std::max(table_bytes, capacity * sizeof(CdtCross));
-    table = &sc.buffers.get(ctx_, "cdt intersected-edge table", capacity * sizeof(CdtCross));
+    table = &buffers.get(ctx_, "cdt intersected-edge table", capacity * sizeof(CdtCross));
     fresh_table = true;
   };
   // The row cache: each constraint's first count plus CDT_CACHE_SLACK rows, so the second stage of the layout
@@ -370,7 +373,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   if (!fixed_slots && crossed > 0) {
     const uint64_t rows = uint64_t(crossed) + uint64_t(CDT_CACHE_SLACK) * m;
     needed += rows * 8;
-    row_cache = &sc.buffers.get(ctx_, "cdt row cache", rows * 8);
+    row_cache = &buffers.get(ctx_, "cdt row cache", rows * 8);
   }
   st.longest_crossing = stride;
 

@@ -105,6 +105,10 @@ class ConstraintInserter {
   // Frees the scratch buffers kept since the last call.
   void release() const;
 
+  // Where the scratch lives between calls; null: a cache of its own. Per-point and per-slot buffers use the
+  // shared keys of gpu/buffers.hpp, so a cache shared with the Delaunay build reuses its buffers.
+  BufferCache* cache = nullptr;
+
  private:
   struct Scratch;
   const Context& ctx_;

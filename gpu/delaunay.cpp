@@ -78,6 +78,10 @@ Buffer create_readback(const Context& ctx, VkDeviceSize bytes, void** mapped) {
 
 }  // namespace
 
+Buffer DelaunayBuilder::scratch(const char* key, uint64_t bytes, const char* name) const {
+  return cache ? cache->take(ctx_, key, bytes, name) : create_buffer(ctx_, bytes, name);
+}
+
 // Everything one build holds on the device, and the host's view of the counters.
 struct DelaunayBuilder::State {
   explicit State(const Context& ctx) : rec(ctx) {}
@@ -174,6 +178,16 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     throw DeviceError("delaunay: " + std::to_string(st.used) + " slots in use at the end, expected " +
                       std::to_string(slot_capacity(n)));
   st.tri.num_slots = st.used;
+  if (cache) {  // the scratch goes back for the next stage (the constraint inserter) or the next build
+    cache->give(kPoints4[0], std::move(st.loc));
+    cache->give(kPoints4[1], std::move(st.list));
+    cache->give(kPoints4[2], std::move(st.list2));
+    cache->give(kSlots8[0], std::move(st.pick));
+    cache->give(kSlots8[1], std::move(st.claim));
+    cache->give(kSlots4[0], std::move(st.partner));
+    cache->give(kSlots4[1], std::move(st.flip[0]));
+    cache->give(kSlots4[2], std::move(st.flip[1]));
+  }
   if (stats) {
     stats->rounds = st.round;
     stats->flips = st.c[DT_FLIPS];
@@ -239,9 +253,9 @@ void DelaunayBuilder::start(State& st) const {
   st.tri.capacity = slots;
   st.tri.verts = create_buffer(ctx_, uint64_t(slots) * 12, "tri_verts");
   st.tri.nbrs = create_buffer(ctx_, uint64_t(slots) * 12, "tri_nbrs");
-  st.loc = create_buffer(ctx_, uint64_t(n) * 4, "dt loc");
-  st.list = create_buffer(ctx_, uint64_t(n) * 4, "dt list");
-  st.flip[0] = create_buffer(ctx_, uint64_t(slots) * 4, "dt flip list 0");
+  st.loc = scratch(kPoints4[0], uint64_t(n) * 4, "dt loc");
+  st.list = scratch(kPoints4[1], uint64_t(n) * 4, "dt list");
+  st.flip[0] = scratch(kSlots4[1], uint64_t(slots) * 4, "dt flip list 0");
   st.begin("start");
   st.rec.dispatch_groups(init_,
                          {st.tri.points, st.reduce, st.tri.verts, st.tri.nbrs, st.loc, st.flip[0], st.list},
@@ -249,11 +263,11 @@ void DelaunayBuilder::start(State& st) const {
   prims_.radix_sort(st.rec, st.flip[0], st.list, n, 32);
   st.end();
   submit(st, false);
-  st.list2 = create_buffer(ctx_, uint64_t(n) * 4, "dt list2");
-  st.pick = create_buffer(ctx_, uint64_t(slots) * 8, "dt pick");
-  st.claim = create_buffer(ctx_, uint64_t(slots) * 8, "dt claim");
-  st.partner = create_buffer(ctx_, uint64_t(slots) * 4, "dt partner");
-  st.flip[1] = create_buffer(ctx_, uint64_t(slots) * 4, "dt flip list 1");
+  st.list2 = scratch(kPoints4[2], uint64_t(n) * 4, "dt list2");
+  st.pick = scratch(kSlots8[0], uint64_t(slots) * 8, "dt pick");
+  st.claim = scratch(kSlots8[1], uint64_t(slots) * 8, "dt claim");
+  st.partner = scratch(kSlots4[0], uint64_t(slots) * 4, "dt partner");
+  st.flip[1] = scratch(kSlots4[2], uint64_t(slots) * 4, "dt flip list 1");
   st.counters = create_buffer(ctx_, DT_COUNTERS * 4, "dt counters");
   st.args = create_buffer(ctx_, DT_ARGS_WORDS * 4, "dt args");
   st.scan_sums = create_buffer(ctx_, scan_scratch_bytes(slots), "dt scan sums");

@@ -67,6 +67,9 @@ class DelaunayBuilder {
   // kernel several times slower). See docs/gpu-delaunay.md.
   enum class ExactChecks { separate, inlined, adaptive };
   ExactChecks exact_checks;
+  // Where the per-point and per-slot scratch comes from and goes back to (keys in gpu/buffers.hpp's
+  // kPoints4 / kSlots4 / kSlots8); null: allocated and freed by each build.
+  BufferCache* cache = nullptr;
 
  private:
   struct State;
@@ -77,6 +80,7 @@ class DelaunayBuilder {
   void record_flip_batch(State& st, uint32_t passes) const;
   void scan(State& st, const Buffer& in, const Buffer& out, uint32_t n) const;
   void submit(State& st, bool counters) const;
+  Buffer scratch(const char* key, uint64_t bytes, const char* name) const;
 
   const Context& ctx_;
   Primitives prims_;
