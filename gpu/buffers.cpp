@@ -212,6 +212,12 @@ void BufferCache::give(const std::string& key, Buffer b) {
   if (b.buffer) buffers_[key] = std::move(b);
 }
 
+uint64_t BufferCache::bytes() const {
+  uint64_t total = 0;
+  for (const auto& [key, b] : buffers_) total += b.size;
+  return total;
+}
+
 void fill(const Context& ctx, const Buffer& dst, uint32_t value) {
   run_once(ctx, [&](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, dst.buffer, 0, VK_WHOLE_SIZE, value); });
 }

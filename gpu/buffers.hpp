@@ -57,6 +57,8 @@ class BufferCache {
   // The same, taken out of the cache for a caller that holds buffers by value; give() puts it back.
   Buffer take(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label = "");
   void give(const std::string& key, Buffer b);
+  // Device bytes the cache holds.
+  uint64_t bytes() const;
 
  private:
   std::map<std::string, Buffer> buffers_;

@@ -15,14 +15,15 @@ class TriangleSorter {
   TriangleSorter(const Context& ctx, const Primitives& prims);
   // Finite triangles, each starting at its smallest vertex, counter-clockwise, sorted. `gpu_ms`: device time of
   // the key pass and the sort (timestamps), if given.
-  std::vector<Triangle> download(const GpuTriangulation& tri, double* gpu_ms = nullptr) const;
+  // Overwrites tri.nbrs with the sorted triangles (the neighbours are not needed any more): no extra buffer.
+  std::vector<Triangle> download(GpuTriangulation& tri, double* gpu_ms = nullptr) const;
 
   BufferCache* cache = nullptr;  // where the keys live between calls (shared keys); null: a cache of its own
 
  private:
   const Context& ctx_;
   const Primitives& prims_;
-  Pass keys_;
+  Pass keys_, write_;
   mutable BufferCache scratch_;  // kept between calls, grown to the largest triangulation so far
 };
 

@@ -39,7 +39,9 @@ struct GpuCdtStats {
   DelaunayStats delaunay;
   ConstraintStats constraints;
   uint64_t split_at_vertices = 0;
-  uint64_t peak_device_bytes = 0;  // the larger of the two GPU stages' peaks
+  // The most device memory held at once: the larger of the two GPU stages' own peaks, or what the pipeline holds
+  // during the canonical sort (the triangulation, the shared scratch cache, the sort's transient buffers).
+  uint64_t peak_device_bytes = 0;
 };
 
 class GpuCdt {

@@ -54,7 +54,7 @@ void Primitives::compact(Recorder& rec, const Buffer& values, const Buffer& flag
 }
 
 void Primitives::radix_sort(Recorder& rec, const Buffer& keys, const Buffer& payload, uint32_t n, uint32_t key_bits,
-                            uint32_t sort_bits) const {
+                            uint32_t sort_bits, SortScratch scratch) const {
   if (key_bits != 32 && key_bits != 64)
     throw DeviceError("radix_sort: key_bits must be 32 or 64, got " + std::to_string(key_bits));
   if (sort_bits == 0) sort_bits = key_bits;
@@ -68,8 +68,8 @@ void Primitives::radix_sort(Recorder& rec, const Buffer& keys, const Buffer& pay
   uint32_t tiles_per_group = RADIX_WG / sg;
   uint64_t groups = div_up(num_tiles, tiles_per_group);
 
-  const Buffer& keys2 = rec.temp(uint64_t(n) * words * sizeof(uint32_t), "radix keys");
-  const Buffer& values2 = rec.temp(uint64_t(n) * sizeof(uint32_t), "radix payload");
+  const Buffer& keys2 = scratch.keys ? *scratch.keys : rec.temp(uint64_t(n) * words * sizeof(uint32_t), "radix keys");
+  const Buffer& values2 = scratch.payload ? *scratch.payload : rec.temp(uint64_t(n) * sizeof(uint32_t), "radix payload");
   const Buffer& hist = rec.temp(uint64_t(num_tiles) * RADIX_BINS * sizeof(uint32_t), "radix histogram");
   const Buffer* src_k = &keys;
   const Buffer* src_v = &payload;

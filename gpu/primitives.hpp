@@ -11,6 +11,12 @@
 
 namespace cdtgpu::gpu {
 
+// Caller-owned second arrays for Primitives::radix_sort (null: temporary buffers).
+struct SortScratch {
+  const Buffer* keys = nullptr;
+  const Buffer* payload = nullptr;
+};
+
 struct Primitives {
   explicit Primitives(const Context& ctx);
 
@@ -22,8 +28,10 @@ struct Primitives {
   // Stable sort of n (key, payload) pairs in place by key, 8 bits per pass (deterministic: no atomics decide
   // positions). key_bits = 32: keys are uint32; 64: keys are uint64 (little-endian words). When every key is
   // below 2^sort_bits, passing sort_bits saves the passes over the zero high digits (0 means key_bits).
+  // The second key and payload arrays come from rec.temp() unless the caller passes its own (`scratch`: n keys,
+  // n payloads at least).
   void radix_sort(Recorder& rec, const Buffer& keys, const Buffer& payload, uint32_t n, uint32_t key_bits,
-                  uint32_t sort_bits = 0) const;
+                  uint32_t sort_bits = 0, SortScratch scratch = SortScratch()) const;
 
   const Context& ctx;
   Pass scan_block, scan_add, compact_scatter, radix_histogram, radix_scatter;
