@@ -40,7 +40,7 @@ struct GpuCdtStats {
   ConstraintStats constraints;
   uint64_t split_at_vertices = 0;
   // The most device memory held at once: the larger of the two GPU stages' own peaks, or what the pipeline holds
-  // during the canonical sort (the triangulation, the shared scratch cache, the sort's transient buffers).
+  // during the canonical sort (the triangulation and the shared scratch cache, which the sort draws on too).
   uint64_t peak_device_bytes = 0;
 };
 
