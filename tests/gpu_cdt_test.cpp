@@ -30,8 +30,10 @@
 #include "core/prepare.hpp"
 #include "core/repair.hpp"
 #include "core/workloads.hpp"
+#include "gpu/canonical.hpp"
 #include "gpu/check.hpp"
 #include "gpu/constraints.hpp"
+#include "gpu/delaunay.hpp"
 #include "gpu/context.hpp"
 #include "gpu/primitives.hpp"
 #include "gpu/triangulation.hpp"
@@ -304,6 +306,37 @@ TEST(GpuCdt, AblationVariantsGiveTheSameTriangulation) {
   EXPECT_EQ(c.stats.fallback_constraints, 0u);
   EXPECT_EQ(a.stats.crossed_edges, full.stats.crossed_edges);
   EXPECT_GE(b.stats.flip_rounds, full.stats.flip_rounds);
+}
+
+// GpuCdt shares one scratch cache between the Delaunay build, the inserter and the canonical sort, so each
+// finds buffers the others filled. Here every shared buffer holds garbage before each stage: the result must be
+// CGAL's all the same (every stage initialises what it reads).
+TEST(GpuCdt, GarbageInTheSharedScratchChangesNothing) {
+  const PreparedInput p = prepare(random_with_dt_edges(20000, 2000, 0.05, 91));
+  const CdtResult ref = triangulate_cgal(p);
+  const std::vector<Edge> cons = split_at_vertices(p.vertices, p.constraints);
+  std::vector<double> xy;
+  for (const Point3& q : p.vertices) xy.insert(xy.end(), {q.x, q.y});
+  const uint64_t n = p.vertices.size(), slots = 2 * n + 64;  // more than a build uses
+  gpu::BufferCache cache;
+  auto garbage = [&](uint32_t pattern) {
+    for (const char* k : gpu::kPoints4) gpu::fill(ctx(), cache.get(ctx(), k, n * 4), pattern);
+    for (const char* k : gpu::kSlots4) gpu::fill(ctx(), cache.get(ctx(), k, slots * 4), pattern);
+    for (const char* k : gpu::kSlots8) gpu::fill(ctx(), cache.get(ctx(), k, slots * 8), pattern);
+    for (const char* k : gpu::kSlots12) gpu::fill(ctx(), cache.get(ctx(), k, slots * 12), pattern);
+  };
+  gpu::Primitives prims(ctx());
+  gpu::DelaunayBuilder dt(ctx());
+  gpu::ConstraintInserter ins(ctx(), prims);
+  gpu::TriangleSorter sorter(ctx(), prims);
+  dt.cache = ins.cache = sorter.cache = &cache;
+  garbage(0xA5A5A5A5u);
+  gpu::GpuTriangulation tri = dt.build(xy);
+  garbage(0x5A5A5A5Au);
+  ins.insert(tri, cons);
+  garbage(0xFFFFFFFFu);
+  EXPECT_EQ(sorter.download(tri), ref.mesh.triangles);
+  no_validation_messages();
 }
 
 TEST(GpuCdt, HostSafetyNetGivesTheSameTriangulation) {
