@@ -10,7 +10,6 @@
 #include <ctime>
 #include <fstream>
 #include <numeric>
-#include <optional>
 #include <thread>
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>

@@ -173,8 +173,7 @@ void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, cons
   });
 }
 
-void download_with(const Context& ctx, const Buffer& src, VkDeviceSize bytes,
-                   const std::function<void(const void*)>& read, VkDeviceSize offset) {
+void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset) {
   check_range(src, bytes, offset, "download");
   if (!bytes) return;
   Staging& staging = staging_of(ctx, bytes);
@@ -182,15 +181,11 @@ void download_with(const Context& ctx, const Buffer& src, VkDeviceSize bytes,
     VkBufferCopy region{offset, 0, bytes};
     vkCmdCopyBuffer(cmd, src.buffer, staging.buffer.buffer, 1, &region);
   });
-  read(staging.mapped);
+  std::memcpy(data, staging.mapped, bytes);
 }
 
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
   upload_with(ctx, dst, bytes, [&](void* mapped) { std::memcpy(mapped, data, bytes); }, offset);
-}
-
-void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset) {
-  download_with(ctx, src, bytes, [&](const void* mapped) { std::memcpy(data, mapped, bytes); }, offset);
 }
 
 const Buffer& BufferCache::get(const Context& ctx, const std::string& key, VkDeviceSize bytes,

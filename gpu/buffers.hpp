@@ -40,12 +40,10 @@ Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& 
 // Synchronous copies through a host-visible staging buffer (each waits for the queue to finish).
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
-// The same, with the caller writing (reading) the mapped staging memory itself: no host copy of the data in
-// between. Large fresh host vectors cost a page fault per 4 KiB (tens of ms per 100 MB), more than the copy.
+// upload() with the caller writing the mapped staging memory itself: no host copy of the data in between.
+// Large fresh host vectors cost a page fault per 4 KiB (tens of ms per 100 MB), more than the copy.
 void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, const std::function<void(void*)>& write,
                  VkDeviceSize offset = 0);
-void download_with(const Context& ctx, const Buffer& src, VkDeviceSize bytes,
-                   const std::function<void(const void*)>& read, VkDeviceSize offset = 0);
 // Device buffers kept between calls by name, each grown when a call needs more: allocation costs more than the
 // work on a fast GPU (about 35 us per MiB on the lent H100 machine, docs/gpu.md).
 // Stages that run one after another can share one cache by asking for the same keys (GpuCdt does: the Delaunay

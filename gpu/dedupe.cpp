@@ -67,8 +67,7 @@ DedupedHost dedupe_points(const Context& ctx, std::span<const double> xy) {
 PointMerge merge_points(const PointDeduper& deduper, std::span<const double> xy) {
   const Context& ctx = deduper.context();
   const uint32_t n = uint32_t(xy.size() / 2);
-  Buffer input = create_buffer(ctx, uint64_t(n) * 16, "points");
-  upload(ctx, input, xy.data(), uint64_t(n) * 16);
+  Buffer input = upload_new(ctx, xy.subspan(0, size_t(n) * 2), "points");
   DedupedPoints d = deduper.run(input, n);
   PointMerge m;
   m.vertex_of = download_vector<uint32_t>(ctx, d.map, n);
