@@ -94,10 +94,15 @@ struct DelaunayBuilder::State {
   Buffer pick, claim, partner, flip[2];
   Buffer counters, args, scan_sums;
   Buffer readback;
-  void* host = nullptr;   // readback, mapped
-  uint32_t list_len = 0;  // entries in `list` (some may have become vertices in the last round)
-  uint32_t left = 0;      // points not yet vertices
-  uint32_t used = 0;      // slots in use
+  void* host = nullptr;  // readback, mapped
+  Buffer pass_log;       // profile_kernels: each flip pass's list length, in recording order
+  void* pass_log_host = nullptr;
+  uint32_t logged_passes = 0;
+  uint32_t log_round = 0;     // the round the kernels being recorded belong to
+  uint32_t log_list_len = 0;  // the point list's length in that round
+  uint32_t list_len = 0;      // entries in `list` (some may have become vertices in the last round)
+  uint32_t left = 0;          // points not yet vertices
+  uint32_t used = 0;          // slots in use
   uint32_t round = 0;
   uint32_t epoch = 0;              // of the last claim step (a round's splits, a flip pass); 0 is never used
   uint32_t cur = 0;                // the flip list the next pass reads
@@ -130,6 +135,7 @@ struct DelaunayBuilder::State {
 
 DelaunayBuilder::DelaunayBuilder(const Context& ctx)
     : exact_checks(ctx.info.type == "cpu" ? ExactChecks::separate : ExactChecks::adaptive),
+      tail_passes(ctx.info.type != "cpu"),
       ctx_(ctx),
       prims_(ctx),
       points_(create_pass(ctx, {"dt_points", 2, sizeof(DtPointsPush)})),
@@ -143,7 +149,7 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       split_fix_(create_pass(ctx, {"dt_split_fix", 9, sizeof(DtRoundPush)})),
       flip_check_(create_pass(ctx, {"dt_flip_check", 9, sizeof(DtFlipPush)})),
       flip_check_exact_(create_pass(ctx, {"dt_flip_check_exact", 8, sizeof(DtFlipPush)})),
-      flip_(create_pass(ctx, {"dt_flip", 8, sizeof(DtFlipPush)})) {}
+      flip_(create_pass(ctx, {"dt_flip", 9, sizeof(DtFlipPush)})) {}
 
 GpuTriangulation DelaunayBuilder::build(std::span<const double> xy, DelaunayStats* stats) const {
   const uint32_t n = uint32_t(xy.size() / 2);
@@ -163,6 +169,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     *stats = DelaunayStats{};
     st.detail = profile_kernels;
     st.prof.emplace(ctx_, profile_kernels ? 512 : 16);
+    if (profile_kernels) st.pass_log = create_readback(ctx_, 4 * 512, &st.pass_log_host);
   }
   if (n < 3 || !first_triangle(st)) {  // nothing to triangulate: no slots
     st.tri.verts = create_buffer(ctx_, 0, "tri_verts");
@@ -194,6 +201,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     stats->exact_walks = st.c[DT_EXACT_WALKS];
     stats->exact_checks = st.c[DT_EXACT_CHECKS];
     stats->flip_passes = st.c[DT_FLIP_PASSES];
+    stats->tail_passes = st.c[DT_TAIL_DONE];
     stats->peak_device_bytes = peak_bytes(n);
   }
   return std::move(st.tri);
@@ -287,6 +295,8 @@ void DelaunayBuilder::start(State& st) const {
 void DelaunayBuilder::insert_round(State& st) const {
   const uint32_t cap = slot_capacity(st.n);
   const Buffer &flags = st.flip[0], &offsets = st.flip[1];
+  st.log_round = st.round;
+  st.log_list_len = st.list_len;
 
   st.begin("relocate");
   const DtRoundPush points{st.list_len, st.used, st.used + 16, cap, st.round, 0};
@@ -335,7 +345,7 @@ void DelaunayBuilder::insert_round(State& st) const {
   st.end();
   st.cur = 0;
 
-  const uint32_t passes_before = st.c[DT_FLIP_PASSES];
+  const uint32_t passes_before = st.c[DT_FLIP_PASSES] - st.c[DT_TAIL_DONE];
   st.exact_before = st.c[DT_EXACT_CHECKS];
   record_flip_batch(st, std::max(flip_passes_per_submit, st.passes_last_round + 1));
   submit(st, true);
@@ -344,16 +354,16 @@ void DelaunayBuilder::insert_round(State& st) const {
   if (winners == 0) throw DeviceError("delaunay: an insertion round inserted nothing");
   st.left -= winners;
   st.used += 2 * winners;
-  st.passes_last_round = st.c[DT_FLIP_PASSES] - passes_before;
+  st.passes_last_round = st.c[DT_FLIP_PASSES] - st.c[DT_TAIL_DONE] - passes_before;
 }
 
 // Further batches of flip passes until the list is empty: the triangulation is then Delaunay again.
 void DelaunayBuilder::flip_passes(State& st) const {
   while (st.c[DT_COUNT_LIST0 + st.cur] != 0) {
-    const uint32_t passes_before = st.c[DT_FLIP_PASSES];
+    const uint32_t passes_before = st.c[DT_FLIP_PASSES] - st.c[DT_TAIL_DONE];
     record_flip_batch(st, flip_passes_per_submit);
     submit(st, true);
-    st.passes_last_round += st.c[DT_FLIP_PASSES] - passes_before;
+    st.passes_last_round += st.c[DT_FLIP_PASSES] - st.c[DT_TAIL_DONE] - passes_before;
   }
   st.exact_last_round = st.c[DT_EXACT_CHECKS] - st.exact_before;
   if (st.stats) st.stats->round_flip_passes.push_back(st.passes_last_round);
@@ -369,13 +379,21 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
                        (exact_checks == ExactChecks::adaptive && st.exact_last_round < kInlineExactBelow);
   if (inlined && !flip_check_inline_)
     flip_check_inline_.emplace(create_pass(ctx_, {"dt_flip_check_inline", 9, sizeof(DtFlipPush)}));
+  // The tail's checks are exact inline, in one workgroup: worth it only while few checks need the exact
+  // stage.
+  const bool tail = tail_passes && (inlined || exact_checks == ExactChecks::separate);
+  if (tail && !flip_tail_) flip_tail_.emplace(create_pass(ctx_, {"dt_flip_tail", 9, sizeof(DtFlipPush)}));
   const Pass& check = inlined ? *flip_check_inline_ : flip_check_;
+  const Pass& flip = tail ? *flip_tail_ : flip_;
   st.begin("flip");
   for (uint32_t k = 0; k < passes; ++k) {
     const uint32_t src = st.cur;
     const DtFlipPush fp{src, cap, ++st.epoch};
+    if (tail) st.epoch += DT_TAIL_PASSES;  // the epochs of the last workgroup's passes
     const VkDeviceSize at = (src == 0 ? DT_ARGS_LIST0 : DT_ARGS_LIST1) * sizeof(uint32_t);
-    const Buffer &list = st.flip[src], &next = st.flip[1 - src];
+    const Buffer& list = st.flip[src];
+    if (st.detail)
+      st.rec.copy(st.counters, st.pass_log, 4, (DT_COUNT_LIST0 + src) * 4, 4 * st.logged_passes++);
     st.kernel("k:flip_check", [&] {
       st.rec.dispatch_indirect(check,
                                {st.tri.points, st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, st.pick,
@@ -390,9 +408,10 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
             st.args, DT_ARGS_FLIP * sizeof(uint32_t));
       });
     st.kernel("k:flip", [&] {
-      st.rec.dispatch_indirect(
-          flip_, {st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, next, st.counters, st.args}, &fp,
-          st.args, at);
+      st.rec.dispatch_indirect(flip,
+                               {st.tri.verts, st.tri.nbrs, st.claim, st.partner, st.flip[0], st.flip[1],
+                                st.counters, st.args, st.tri.points},
+                               &fp, st.args, at);
     });
     st.cur = 1 - src;
   }
@@ -438,7 +457,17 @@ void DelaunayBuilder::submit(State& st, bool counters) const {
   if (counters) st.rec.copy(st.counters, st.readback, DT_COUNTERS * sizeof(uint32_t));
   st.rec.submit();
   if (st.prof) {
+    const auto* lengths = static_cast<const uint32_t*>(st.pass_log_host);
+    uint32_t pass = 0;
     for (const StageTime& s : st.prof->results()) {
+      if (st.detail && s.name.rfind("k:", 0) == 0) {
+        const bool check = s.name == "k:flip_check";
+        const uint32_t items = check && pass < st.logged_passes ? lengths[pass]
+                               : s.name == "k:relocate"         ? st.log_list_len
+                                                                : 0u;
+        st.stats->kernel_log.push_back({st.log_round, s.name, s.ms, items});
+        pass += check ? 1 : 0;
+      }
       auto& stages = st.stats->stage_ms;
       auto it = std::find_if(stages.begin(), stages.end(), [&](const auto& e) { return e.first == s.name; });
       if (it == stages.end())
@@ -447,6 +476,7 @@ void DelaunayBuilder::submit(State& st, bool counters) const {
         it->second += s.ms;
     }
     st.prof->reset();
+    st.logged_passes = 0;
   }
   if (!counters) return;
   std::memcpy(st.c.data(), st.host, DT_COUNTERS * sizeof(uint32_t));

@@ -31,14 +31,24 @@ namespace cdtgpu::gpu {
 struct DelaunayStats {
   uint32_t rounds = 0;       // insertion rounds
   uint32_t flip_passes = 0;  // flip passes over a non-empty list
+  uint32_t tail_passes = 0;  // of which run by a pass's last workgroup (DelaunayBuilder::tail_passes)
   uint64_t flips = 0;
   uint64_t exact_walks = 0;                 // relocation walks the filters could not finish (exact pass)
   uint64_t exact_checks = 0;                // slot flip checks the filters could not decide (exact pass)
-  std::vector<uint32_t> round_flip_passes;  // non-empty flip passes after each round's insertions
+  std::vector<uint32_t> round_flip_passes;  // dispatched non-empty flip passes after each round's insertions
   // GPU time per stage (timestamps), summed over rounds, in order of first appearance: "start" (first
   // triangle, Morton order), "relocate" (walks + compaction), "insert" (pick, claim, split, fix), "flip".
   std::vector<std::pair<std::string, double>> stage_ms;
   uint64_t peak_device_bytes = 0;  // every buffer of the build alive at the peak, the result's included
+  // With DelaunayBuilder::profile_kernels: every kernel in order, with its round and, for a flip pass, the
+  // length of the list it read (else 0). Where the time goes, pass by pass.
+  struct Kernel {
+    uint32_t round;
+    std::string name;
+    double ms;
+    uint32_t items;
+  };
+  std::vector<Kernel> kernel_log;
 };
 
 class DelaunayBuilder {
@@ -67,6 +77,12 @@ class DelaunayBuilder {
   // kernel several times slower). See docs/gpu-delaunay.md.
   enum class ExactChecks { separate, inlined, adaptive };
   ExactChecks exact_checks;
+  // The last workgroup of each flip pass runs the following passes itself while the list is short
+  // (dt_flip_tail: no launch and barrier per pass for the tail of a round). Its checks inline the exact
+  // stage, so with ExactChecks::adaptive it is used in the rounds that inline them too (not on grids, where
+  // one workgroup would run many exact checks). Default: on GPUs; on CPU devices the inlined exact stage
+  // makes lavapipe's flip kernel slow.
+  bool tail_passes;
   // Where the per-point and per-slot scratch comes from and goes back to (keys in gpu/buffers.hpp's
   // kPoints4 / kSlots4 / kSlots8); null: allocated and freed by each build.
   BufferCache* cache = nullptr;
@@ -86,7 +102,7 @@ class DelaunayBuilder {
   Primitives prims_;
   Pass points_, init_, relocate_, relocate_exact_, compact_, claim_, grant_, split_, split_fix_, flip_check_,
       flip_check_exact_, flip_;
-  mutable std::optional<Pass> flip_check_inline_;  // built on first use
+  mutable std::optional<Pass> flip_check_inline_, flip_tail_;  // built on first use
 };
 
 GpuTriangulation build_delaunay(const Context& ctx, std::span<const double> xy,

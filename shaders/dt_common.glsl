@@ -3,7 +3,7 @@
 //
 // Always: corner arithmetic and order-preserving float keys. The rest is switched on by the including shader,
 // after it has declared the buffers the code names:
-//   DT_CLAIMS     dt_claim_key (push constant p.epoch): claims of one step.
+//   DT_CLAIMS     dt_claim_key (push constant p.epoch, or DT_EPOCH): claims of one step.
 //   DT_FIX_EDGES  dt_fix_edge (verts, nbrs, claim, offsets, info, p.epoch): the neighbour repair after a round
 //                 of splits.
 //   DT_WALK       dt_walk (xy, verts, nbrs, counters): the relocation walk.
@@ -266,6 +266,18 @@ void dt_write_args(uint at, uint n) {
   args[at + 1u] = (groups + x - 1u) / x;
   args[at + 2u] = 1u;
 }
+
+// The same for a flip list: no group at all when it is empty. A pass over an empty list has nothing to do,
+// not even bookkeeping (its count is 0 and the other list's args are 0 groups too), so the passes recorded
+// blind after a round's flips are done cost a barrier each, no launch.
+void dt_write_list_args(uint list, uint n) {
+  uint at = list == 0u ? DT_ARGS_LIST0 : DT_ARGS_LIST1;
+  uint groups = (n + DT_WG - 1u) / DT_WG;
+  uint x = min(groups, 65535u);
+  args[at] = x;
+  args[at + 1u] = x == 0u ? 1u : (groups + x - 1u) / x;
+  args[at + 2u] = 1u;
+}
 #endif
 
 #ifdef DT_CLAIMS
@@ -273,8 +285,11 @@ void dt_write_args(uint at, uint n) {
 // or NBR(slot, edge) (flips). Every step (a round's splits, each flip pass) has a new epoch, and a newer epoch's
 // key is below every older one, so claims never need resetting: a claim word is current iff its high word is
 // ~p.epoch, and a request won iff its key still stands on every slot it claimed.
-uint64_t dt_claim_key(uint prio) { return (uint64_t(~p.epoch) << 32) | uint64_t(prio); }
-bool dt_claim_current(uint64_t c) { return uint(c >> 32) == ~p.epoch; }
+#ifndef DT_EPOCH
+#define DT_EPOCH p.epoch
+#endif
+uint64_t dt_claim_key(uint prio) { return (uint64_t(~DT_EPOCH) << 32) | uint64_t(prio); }
+bool dt_claim_current(uint64_t c) { return uint(c >> 32) == ~DT_EPOCH; }
 #endif
 
 #ifdef DT_FIX_EDGES

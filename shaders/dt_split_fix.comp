@@ -54,7 +54,7 @@ void main() {
   if (t < p.n) fix(t);
   if (dt_last_group() && gl_LocalInvocationIndex == 0u) {
     uint n = dt_count(DT_COUNT_LIST0);
-    dt_write_args(DT_ARGS_LIST0, n);
+    dt_write_list_args(0u, n);
     counters[DT_COUNT_LIST1] = 0u;
     counters[DT_EXACT_RELOC] = 0u;
     counters[DT_EXACT_FLIP] = 0u;

@@ -49,12 +49,19 @@ namespace cdtgpu::gpu::layout {
 #define DT_EXACT_WALKS 11   // all walks so far that needed the exact pass
 #define DT_EXACT_CHECKS 12  // all slot checks so far that needed the exact pass
 #define DT_DONE 13          // workgroups of the current dispatch that have finished (dt_last_group)
+#define DT_TAIL_DONE 14     // flip passes run by dt_flip_tail's last workgroup so far (of DT_FLIP_PASSES)
 #define DT_ARGS_LIST0 0
 #define DT_ARGS_LIST1 3
 #define DT_ARGS_RELOC 6
 #define DT_ARGS_FLIP 9
 #define DT_ARGS_WORDS 12
 #define DT_COUNTERS 16
+
+// dt_flip_tail: the last workgroup of a flip pass runs up to DT_TAIL_PASSES further passes itself while the
+// list holds at most DT_TAIL_MAX entries. Each of its passes uses the claim epoch p.epoch + pass, so the host
+// steps the epoch by DT_TAIL_PASSES + 1 per pass.
+#define DT_TAIL_MAX 512u
+#define DT_TAIL_PASSES 64u
 
 // dt_points: the y range (orderable 64-bit keys) and the point farthest from the line v0-v1.
 struct DtPointsPush {
