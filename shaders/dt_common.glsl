@@ -101,12 +101,24 @@ int dt_sign(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
 // so it ends there. Returns NBR(slot, edge q lies on or DT_INSIDE); `undecided`: a filter could not decide
 // (DT_EXACT 0 only), and the code is NBR(slot reached so far, DT_INSIDE), where the exact walk resumes.
 uint dt_walk(uint t, dvec2 q, uint max_steps, out bool undecided) {
-  uint k = 0u, on_edge = DT_INSIDE, steps = 0u;
+  uint k = 0u, on_edge = DT_INSIDE, steps = 0u, inf = 3u;
   undecided = false;
+  uvec3 v, nb;
+  dvec2 c0, c1, c2;
+  bool enter = true;
   for (;;) {
-    uint inf = dt_inf_corner(verts[3u * t], verts[3u * t + 1u], verts[3u * t + 2u]);
+    if (enter) {  // a new slot: its corners and neighbours in one round trip, the coordinates in a second
+      v = uvec3(verts[3u * t], verts[3u * t + 1u], verts[3u * t + 2u]);
+      nb = uvec3(nbrs[3u * t], nbrs[3u * t + 1u], nbrs[3u * t + 2u]);
+      inf = dt_inf_corner(v.x, v.y, v.z);
+      c0 = v.x == INF_VERTEX ? q : xy[v.x];
+      c1 = v.y == INF_VERTEX ? q : xy[v.y];
+      c2 = v.z == INF_VERTEX ? q : xy[v.z];
+      enter = false;
+    }
     uint e = inf < 3u ? inf : k;  // an infinite slot is tested on its hull edge only
-    int s = dt_sign(0, xy[verts[3u * t + dt_next(e)]], xy[verts[3u * t + dt_prev(e)]], q, q);
+    dvec2 a = e == 0u ? c1 : (e == 1u ? c2 : c0), b = e == 0u ? c2 : (e == 1u ? c0 : c1);
+    int s = dt_sign(0, a, b, q, q);
     if (s == DT_UNDECIDED) {
       undecided = true;
       on_edge = DT_INSIDE;
@@ -125,9 +137,10 @@ uint dt_walk(uint t, dvec2 q, uint max_steps, out bool undecided) {
       step = false;
     }
     if (step) {
-      t = NBR_TRI(nbrs[3u * t + e]);
+      t = NBR_TRI(e == 0u ? nb.x : (e == 1u ? nb.y : nb.z));
       k = 0u;
       on_edge = DT_INSIDE;
+      enter = true;
       if (++steps > max_steps) {
         atomicAdd(counters[DT_WALK_FAIL], 1u);
         break;
