@@ -26,6 +26,9 @@ uint64_t groups(uint64_t n) { return (n + DT_WG - 1) / DT_WG; }
 
 uint32_t slot_capacity(uint32_t n) { return 2 * n - 2; }  // 2(n + 1) - 4: a sphere with n + 1 vertices
 
+// Words of the granted bits and their ranks: one per 32 slots, and one more for the total.
+uint64_t rank_words(uint32_t slots) { return slots / 32 + 2; }
+
 // ExactChecks::adaptive inlines the exact stage in a round's flip checks when the last round needed it for
 // fewer slots than this: uniform data never does; a grid DEM needs it for ~20% of its checks, where the
 // separate pass was faster (H100, 2M grid points: flips 23 ms separate, 34 ms inlined; 2M uniform: 10.6
@@ -92,6 +95,8 @@ struct DelaunayBuilder::State {
   Buffer reduce;                  // dt_points results
   Buffer loc, list, list2;
   Buffer pick, claim, partner, flip[2];
+  Buffer bids;            // the slots with a bid this round
+  Buffer granted, ranks;  // a bit per slot: granted splits; per word the granted slots before it
   Buffer counters, args, scan_sums;
   Buffer readback;
   void* host = nullptr;  // readback, mapped
@@ -140,13 +145,14 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       prims_(ctx),
       points_(create_pass(ctx, {"dt_points", 2, sizeof(DtPointsPush)})),
       init_(create_pass(ctx, {"dt_init", 7, sizeof(DtInitPush)})),
-      relocate_(create_pass(ctx, {"dt_relocate", 10, sizeof(DtRoundPush)})),
-      relocate_exact_(create_pass(ctx, {"dt_relocate_exact", 7, sizeof(DtRoundPush)})),
+      relocate_(create_pass(ctx, {"dt_relocate", 11, sizeof(DtRoundPush)})),
+      relocate_exact_(create_pass(ctx, {"dt_relocate_exact", 9, sizeof(DtRoundPush)})),
       compact_(create_pass(ctx, {"dt_compact", 4, sizeof(DtRoundPush)})),
-      claim_(create_pass(ctx, {"dt_claim", 4, sizeof(DtRoundPush)})),
-      grant_(create_pass(ctx, {"dt_grant", 3, sizeof(DtRoundPush)})),
-      split_(create_pass(ctx, {"dt_split", 8, sizeof(DtRoundPush)})),
-      split_fix_(create_pass(ctx, {"dt_split_fix", 9, sizeof(DtRoundPush)})),
+      claim_(create_pass(ctx, {"dt_claim", 6, sizeof(DtRoundPush)})),
+      grant_(create_pass(ctx, {"dt_grant", 5, sizeof(DtRoundPush)})),
+      rank_(create_pass(ctx, {"dt_rank", 2, sizeof(DtRoundPush)})),
+      split_(create_pass(ctx, {"dt_split", 10, sizeof(DtRoundPush)})),
+      split_fix_(create_pass(ctx, {"dt_split_fix", 11, sizeof(DtRoundPush)})),
       flip_check_(create_pass(ctx, {"dt_flip_check", 9, sizeof(DtFlipPush)})),
       flip_check_exact_(create_pass(ctx, {"dt_flip_check_exact", 8, sizeof(DtFlipPush)})),
       flip_(create_pass(ctx, {"dt_flip", 9, sizeof(DtFlipPush)})) {}
@@ -194,6 +200,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     cache->give(kSlots4[0], std::move(st.partner));
     cache->give(kSlots4[1], std::move(st.flip[0]));
     cache->give(kSlots4[2], std::move(st.flip[1]));
+    cache->give(kSlots4[3], std::move(st.bids));
   }
   if (stats) {
     stats->rounds = st.round;
@@ -245,11 +252,11 @@ bool DelaunayBuilder::first_triangle(State& st) const {
 uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
   if (n < 3) return uint64_t(n) * 16 + 64;
   const uint64_t slots = slot_capacity(n);
-  const uint64_t result = uint64_t(n) * 16 + slots * 24;  // points, verts, nbrs
-  const uint64_t per_point = uint64_t(n) * 4 * 3;         // loc, list, list2
-  const uint64_t per_slot = slots * (8 + 8 + 4 + 4 + 4);  // pick, claim, partner, 2 flip lists
+  const uint64_t result = uint64_t(n) * 16 + slots * 24;      // points, verts, nbrs
+  const uint64_t per_point = uint64_t(n) * 4 * 3;             // loc, list, list2
+  const uint64_t per_slot = slots * (8 + 8 + 4 + 4 + 4 + 4);  // pick, claim, partner, 2 flip lists, bids
   const uint64_t small = 32 + (DT_COUNTERS + DT_ARGS_WORDS) * 4 + std::max(DT_COUNTERS * 4, 64);
-  return result + per_point + per_slot + scan_scratch_bytes(slots) + small;
+  return result + per_point + per_slot + scan_scratch_bytes(slots) + 2 * rank_words(slots) * 4 + small;
 }
 
 // Slots 0..3 (the first triangle and its three infinite neighbours); every other point is located in slot 0
@@ -276,6 +283,9 @@ void DelaunayBuilder::start(State& st) const {
   st.claim = scratch(kSlots8[1], uint64_t(slots) * 8, "dt claim");
   st.partner = scratch(kSlots4[0], uint64_t(slots) * 4, "dt partner");
   st.flip[1] = scratch(kSlots4[2], uint64_t(slots) * 4, "dt flip list 1");
+  st.bids = scratch(kSlots4[3], uint64_t(slots) * 4, "dt bid list");
+  st.granted = create_buffer(ctx_, rank_words(slots) * 4, "dt granted");
+  st.ranks = create_buffer(ctx_, rank_words(slots) * 4, "dt ranks");
   st.counters = create_buffer(ctx_, DT_COUNTERS * 4, "dt counters");
   st.args = create_buffer(ctx_, DT_ARGS_WORDS * 4, "dt args");
   st.scan_sums = create_buffer(ctx_, scan_scratch_bytes(slots), "dt scan sums");
@@ -303,12 +313,13 @@ void DelaunayBuilder::insert_round(State& st) const {
   st.kernel("k:relocate", [&] {
     st.rec.dispatch_groups(relocate_,
                            {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.list, flags, st.pick,
-                            st.list2, st.counters, st.args},
+                            st.list2, st.counters, st.args, st.bids},
                            points, groups(points.n));
   });
   st.kernel("k:relocate_exact", [&] {
     st.rec.dispatch_indirect(
-        relocate_exact_, {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.list2, st.counters},
+        relocate_exact_,
+        {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.list2, st.counters, st.args, st.bids},
         &points, st.args, DT_ARGS_RELOC * sizeof(uint32_t));
   });
   if (uint64_t(st.list_len - st.left) * 4 >= st.list_len) {  // a quarter of the list are vertices: compact
@@ -322,25 +333,34 @@ void DelaunayBuilder::insert_round(State& st) const {
   st.end();
 
   st.begin("insert");
+  // Over the bid list (indirect, sized by dt_relocate_exact), not over every slot: late rounds have a few
+  // thousand bids and millions of slots.
   const DtRoundPush slots{st.used, st.used, 0, cap, st.round, ++st.epoch};
-  const uint64_t g = groups(slots.n);
+  const VkDeviceSize bid_args = DT_ARGS_BIDS * sizeof(uint32_t);
+  const uint32_t words = (st.used + 31) / 32;
+  const DtRoundPush rank{words, st.used, 0, cap, st.round, st.epoch};
   st.kernel("k:claim", [&] {
-    st.rec.dispatch_groups(claim_, {st.tri.nbrs, st.loc, st.pick, st.claim}, slots, g);
+    st.rec.dispatch_indirect(claim_, {st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters}, &slots,
+                             st.args, bid_args);
   });
   st.kernel("k:grant+scan", [&] {
-    st.rec.dispatch_groups(grant_, {st.pick, st.claim, offsets}, slots, groups(uint64_t(slots.n) + 1));
-    scan(st, offsets, offsets, slots.n + 1);
+    st.rec.fill(st.granted, 0);
+    st.rec.dispatch_indirect(grant_, {st.pick, st.claim, st.granted, st.bids, st.counters}, &slots, st.args,
+                             bid_args);
+    st.rec.dispatch_groups(rank_, {st.granted, st.ranks}, rank, groups(uint64_t(words) + 1));
+    scan(st, st.ranks, st.ranks, words + 1);
   });
   st.kernel("k:split", [&] {
-    st.rec.dispatch_groups(
-        split_, {st.tri.verts, st.tri.nbrs, st.loc, st.pick, offsets, st.partner, st.flip[0], st.counters},
-        slots, g);
+    st.rec.dispatch_indirect(split_,
+                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.granted, st.partner, st.flip[0],
+                              st.counters, st.ranks, st.bids},
+                             &slots, st.args, bid_args);
   });
   st.kernel("k:split_fix", [&] {
-    st.rec.dispatch_groups(
-        split_fix_,
-        {st.tri.verts, st.tri.nbrs, st.loc, st.pick, offsets, st.partner, st.claim, st.counters, st.args},
-        slots, g);
+    st.rec.dispatch_indirect(split_fix_,
+                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.granted, st.partner, st.claim,
+                              st.counters, st.args, st.ranks, st.bids},
+                             &slots, st.args, bid_args);
   });
   st.end();
   st.cur = 0;

@@ -4,8 +4,9 @@
 // Always: corner arithmetic and order-preserving float keys. The rest is switched on by the including shader,
 // after it has declared the buffers the code names:
 //   DT_CLAIMS     dt_claim_key (push constant p.epoch, or DT_EPOCH): claims of one step.
-//   DT_FIX_EDGES  dt_fix_edge (verts, nbrs, claim, offsets, info, p.epoch): the neighbour repair after a round
-//                 of splits.
+//   DT_RANKS      dt_granted, dt_rank (granted, ranks): which slots split this round and their numbers.
+//   DT_FIX_EDGES  dt_fix_edge (verts, nbrs, claim, info, p.epoch, DT_RANKS): the neighbour repair after a
+//                 round of splits.
 //   DT_WALK       dt_walk (xy, verts, nbrs, counters): the relocation walk.
 //   DT_CHECK      dt_check_slot (xy, verts, nbrs, counters): the flip test of a slot's edges.
 //   DT_APPEND     dt_append_base (counters): subgroup-aggregated list appends.
@@ -305,6 +306,14 @@ uint64_t dt_claim_key(uint prio) { return (uint64_t(~DT_EPOCH) << 32) | uint64_t
 bool dt_claim_current(uint64_t c) { return uint(c >> 32) == ~DT_EPOCH; }
 #endif
 
+#ifdef DT_RANKS
+// The granted splits of a round: one bit per slot (dt_grant), and per 32-slot word the exclusive prefix count
+// of set bits (dt_rank + scan). Split number = rank in slot order, so the new slots are numbered as a scan
+// over all slots would number them, at 1/32 of its cost.
+bool dt_granted(uint t) { return ((granted[t >> 5u] >> (t & 31u)) & 1u) != 0u; }
+uint dt_rank(uint t) { return ranks[t >> 5u] + bitCount(granted[t >> 5u] & ((1u << (t & 31u)) - 1u)); }
+#endif
+
 #ifdef DT_FIX_EDGES
 // After a round of splits: slot q's edge e faces the outside of its split. nbrs[3q+e] still holds the
 // neighbour code from before. The neighbour u was split this round iff its current claim belongs to a granted
@@ -315,7 +324,7 @@ bool dt_claim_current(uint64_t c) { return uint(c >> 32) == ~DT_EPOCH; }
 bool dt_split_this_round(uint u) {
   uint64_t c = claim[u];
   uint t = uint(c);
-  return dt_claim_current(c) && offsets[t + 1u] != offsets[t];
+  return dt_claim_current(c) && dt_granted(t);
 }
 
 void dt_fix_edge(uint q, uint e) {

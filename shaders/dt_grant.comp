@@ -1,6 +1,6 @@
-// Insertion round, step 3, over the slots and one more: flags[t] = 1 when slot t's point won every claim it
-// made (0 for t = n, so that the exclusive scan's last entry is the number of splits). The scan numbers the
-// splits in slot order, two new slots each.
+// Insertion round, step 3, over the bid list: slot t's split is granted when its point won every claim it made;
+// granted splits set their slot's bit (DT_RANKS). dt_rank and a scan then number the splits in slot order,
+// two new slots each.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -11,20 +11,19 @@
 layout(local_size_x = DT_WG) in;
 layout(std430, binding = 0) readonly buffer Pick { uint pickw[]; };
 layout(std430, binding = 1) readonly buffer Claim { uint64_t claim[]; };
-layout(std430, binding = 2) writeonly buffer Flags { uint flags[]; };
+layout(std430, binding = 2) buffer Granted { uint granted[]; };  // cleared before this step
+layout(std430, binding = 3) readonly buffer Bids { uint bid_list[]; };
+layout(std430, binding = 4) readonly buffer Counters { uint counters[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_CLAIMS
 #include "dt_common.glsl"
 
 void main() {
-  uint t = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (t > p.n) return;
-  bool won = false;
-  if (t < p.n && pickw[2u * t] != DT_NONE) {
-    uint sc = pickw[2u * t + 1u];
-    uint64_t key = dt_claim_key(t);
-    won = claim[t] == key && (sc == DT_NONE || claim[NBR_TRI(sc)] == key);
-  }
-  flags[t] = won ? 1u : 0u;
+  uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
+  if (i >= counters[DT_BIDS]) return;
+  uint t = bid_list[i];
+  uint sc = pickw[2u * t + 1u];
+  uint64_t key = dt_claim_key(t);
+  if (claim[t] == key && (sc == DT_NONE || claim[NBR_TRI(sc)] == key)) atomicOr(granted[t >> 5u], 1u << (t & 31u));
 }

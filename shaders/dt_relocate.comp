@@ -4,7 +4,8 @@
 // pick[slot]; the smallest key wins, ties the smallest id. Lanes of a subgroup that bid on one slot (common:
 // the list is in Morton order, and the first rounds have few slots) combine their bids first: one atomic per
 // subgroup. A walk a filter cannot finish goes to the exact list (dt_relocate_exact finishes it and bids).
-// flags[i] = 1 for a point still to insert (the compaction's input). The last workgroup sizes the exact pass.
+// flags[i] = 1 for a point still to insert (the compaction's input). A slot's first bid lists the slot (the bid
+// list). The last workgroup sizes the exact pass.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -26,6 +27,7 @@ layout(std430, binding = 6) buffer Pick { uint64_t pick[]; };
 layout(std430, binding = 7) writeonly buffer Exact { uint exact_list[]; };
 layout(std430, binding = 8) buffer Counters { uint counters[]; };
 layout(std430, binding = 9) writeonly buffer Args { uint args[]; };
+layout(std430, binding = 10) writeonly buffer Bids { uint bid_list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_EXACT 0
@@ -58,12 +60,20 @@ void main() {
   // One bid per subgroup when every bidding lane bids on the same slot.
   uint t0 = subgroupMin(t);
   bool shared_slot = subgroupMin(bids && t != t0 ? 0u : 1u) == 1u;
+  // The first bid on a slot (its pick word was free) lists the slot for this round's per-slot steps.
+  uint first = 0u, slot = DT_NONE;
   if (shared_slot) {
     uint kmin = subgroupMin(key);
     uint pmin = subgroupMin(key == kmin ? pt : DT_NONE);
-    if (subgroupElect() && t0 != DT_NONE) atomicMin(pick[t0], (uint64_t(kmin) << 32) | uint64_t(pmin));
+    if (subgroupElect() && t0 != DT_NONE) {
+      slot = t0;
+      first = atomicMin(pick[t0], (uint64_t(kmin) << 32) | uint64_t(pmin)) == ~uint64_t(0) ? 1u : 0u;
+    }
   } else if (bids) {
-    atomicMin(pick[t], (uint64_t(key) << 32) | uint64_t(pt));
+    slot = t;
+    first = atomicMin(pick[t], (uint64_t(key) << 32) | uint64_t(pt)) == ~uint64_t(0) ? 1u : 0u;
   }
+  uint listed = dt_append_base(DT_BIDS, first);
+  if (first == 1u) bid_list[listed] = slot;
   if (dt_last_group() && gl_LocalInvocationIndex == 0u) dt_write_args(DT_ARGS_RELOC, dt_count(DT_EXACT_RELOC));
 }

@@ -1,5 +1,6 @@
 // Insertion round, step 1b (indirect, over the exact list of step 1): the walks a floating-point filter could
-// not finish resume from where they stopped with exact predicates, then bid like step 1.
+// not finish resume from where they stopped with exact predicates, then bid like step 1. The last workgroup
+// sizes the per-slot steps over the bid list.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -15,20 +16,29 @@ layout(std430, binding = 3) buffer Loc { uint loc[]; };
 layout(std430, binding = 4) buffer Pick { uint64_t pick[]; };
 layout(std430, binding = 5) readonly buffer Exact { uint exact_list[]; };
 layout(std430, binding = 6) buffer Counters { uint counters[]; };
+layout(std430, binding = 7) writeonly buffer Args { uint args[]; };
+layout(std430, binding = 8) writeonly buffer Bids { uint bid_list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_EXACT 1
 #define DT_WALK
+#define DT_LAST_GROUP
 #include "dt_common.glsl"
 
-void main() {
-  uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (i >= counters[DT_EXACT_RELOC]) return;
+void relocate(uint i) {
   if (i == 0u) counters[DT_EXACT_WALKS] += counters[DT_EXACT_RELOC];
   uint pt = exact_list[i];
   dvec2 q = xy[pt];
   bool undecided;
   uint code = dt_walk(NBR_TRI(loc[pt]), q, p.max_steps, undecided);
   loc[pt] = code;
-  atomicMin(pick[NBR_TRI(code)], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(pt));
+  uint t = NBR_TRI(code);
+  if (atomicMin(pick[t], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(pt)) == ~uint64_t(0))
+    bid_list[atomicAdd(counters[DT_BIDS], 1u)] = t;
+}
+
+void main() {
+  uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
+  if (i < counters[DT_EXACT_RELOC]) relocate(i);
+  if (dt_last_group() && gl_LocalInvocationIndex == 0u) dt_write_args(DT_ARGS_BIDS, dt_count(DT_BIDS));
 }

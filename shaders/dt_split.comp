@@ -1,6 +1,6 @@
-// Insertion round, step 4, over the slots: every granted point splits its slot(s); new slots come from the
-// scan, two per split, X = base + 2 * offsets[t]. Edge indices are kept, so an edge that leaves a slot keeps its index and info[]
-// says where it went (dt_fix_edge reads it in the next step):
+// Insertion round, step 4, over the bid list: every granted point splits its slot(s); new slots come from the
+// split's rank in slot order, two per split, X = base + 2 * dt_rank(t). Edge indices are kept, so an edge that
+// leaves a slot keeps its index and info[] says where it went (dt_fix_edge reads it in the next step):
 //   1->3, p inside t = (v0, v1, v2): t = (p, v1, v2), X = (v0, p, v2), X+1 = (v0, v1, p); old edge k now lives
 //     in triangle k, index k (info[t] = NBR(X, 3)). Internal edges: triangle a's edge b meets triangle b's edge a.
 //   2->4, p on edge i of t = (c@i, a@i+1, b@i+2), whose neighbour s = (d@j, b@j+1, a@j+2) (possibly infinite):
@@ -22,25 +22,25 @@ layout(std430, binding = 0) buffer Verts { uint verts[]; };
 layout(std430, binding = 1) buffer Nbrs { uint nbrs[]; };
 layout(std430, binding = 2) readonly buffer Loc { uint loc[]; };
 layout(std430, binding = 3) readonly buffer Pick { uint pickw[]; };
-layout(std430, binding = 4) readonly buffer Offsets { uint offsets[]; };  // exclusive scan of dt_grant's flags
-layout(std430, binding = 5) writeonly buffer Info { uint info[]; };      // the partner buffer, idle now
+layout(std430, binding = 4) readonly buffer Granted { uint granted[]; };
+layout(std430, binding = 5) writeonly buffer Info { uint info[]; };  // the partner buffer, idle now
 layout(std430, binding = 6) writeonly buffer Flip { uint flip_list[]; };
 layout(std430, binding = 7) buffer Counters { uint counters[]; };
+layout(std430, binding = 8) readonly buffer Ranks { uint ranks[]; };
+layout(std430, binding = 9) readonly buffer Bids { uint bid_list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_APPEND
+#define DT_RANKS
 #include "dt_common.glsl"
 
 // Slot t's split, if granted; returns how many changed slots it lists (0, 3 or 4), in e.
 uint split(uint t, out uvec4 e) {
   e = uvec4(0u);
-  uint pt = pickw[2u * t];
-  if (pt == DT_NONE) return 0u;
-  uint sc = pickw[2u * t + 1u];
-  if (offsets[t + 1u] == offsets[t]) return 0u;  // not granted
-
+  if (!dt_granted(t)) return 0u;
+  uint pt = pickw[2u * t], sc = pickw[2u * t + 1u];
   uint k = NBR_EDGE(loc[pt]);
-  uint X = p.base + 2u * offsets[t], Y = X + 1u;
+  uint X = p.base + 2u * dt_rank(t), Y = X + 1u;
   if (k == DT_INSIDE) {
     uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
     uint n1 = nbrs[3u * t + 1u], n2 = nbrs[3u * t + 2u];
@@ -97,10 +97,10 @@ uint split(uint t, out uvec4 e) {
 }
 
 void main() {
-  uint t = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (t == 0u) counters[DT_WINNERS] = offsets[p.n];
+  uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
+  if (i == 0u) counters[DT_WINNERS] = ranks[(p.n + 31u) / 32u];
   uvec4 e;
-  uint count = t < p.n ? split(t, e) : 0u;
+  uint count = i < counters[DT_BIDS] ? split(bid_list[i], e) : 0u;
   uint at = dt_append_base(DT_COUNT_LIST0, count);
   if (count > 0u) {
     if (at + count > p.capacity) {

@@ -1,4 +1,4 @@
-// Insertion round, step 5, over the slots: each split repairs the outward edges of its new triangles
+// Insertion round, step 5, over the bid list: each split repairs the outward edges of its new triangles
 // (dt_fix_edge: through info[] when the neighbour was split too) and marks its point as a vertex; every slot
 // with a bid frees its pick word. The last workgroup sizes the first flip pass (over list 0) and empties list 1
 // and the exact lists for their next use.
@@ -14,28 +14,29 @@ layout(std430, binding = 0) readonly buffer Verts { uint verts[]; };
 layout(std430, binding = 1) buffer Nbrs { uint nbrs[]; };
 layout(std430, binding = 2) buffer Loc { uint loc[]; };
 layout(std430, binding = 3) buffer Pick { uint pickw[]; };
-layout(std430, binding = 4) readonly buffer Offsets { uint offsets[]; };
+layout(std430, binding = 4) readonly buffer Granted { uint granted[]; };
 layout(std430, binding = 5) readonly buffer Info { uint info[]; };
 layout(std430, binding = 6) readonly buffer Claim { uint64_t claim[]; };
 layout(std430, binding = 7) buffer Counters { uint counters[]; };
 layout(std430, binding = 8) writeonly buffer Args { uint args[]; };
+layout(std430, binding = 9) readonly buffer Ranks { uint ranks[]; };
+layout(std430, binding = 10) readonly buffer Bids { uint bid_list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_CLAIMS
 #define DT_FIX_EDGES
 #define DT_LAST_GROUP
+#define DT_RANKS
 #include "dt_common.glsl"
 
 void fix(uint t) {
-  uint pt = pickw[2u * t];
-  if (pt == DT_NONE) return;
-  uint sc = pickw[2u * t + 1u];
+  uint pt = pickw[2u * t], sc = pickw[2u * t + 1u];
   pickw[2u * t] = DT_NONE;
   pickw[2u * t + 1u] = DT_NONE;
-  if (offsets[t + 1u] == offsets[t]) return;  // not granted
+  if (!dt_granted(t)) return;
   uint k = NBR_EDGE(loc[pt]);
   loc[pt] = DT_INSERTED;
-  uint X = p.base + 2u * offsets[t];
+  uint X = p.base + 2u * dt_rank(t);
   if (k == DT_INSIDE) {
     dt_fix_edge(t, 0u);
     dt_fix_edge(X, 1u);
@@ -50,12 +51,13 @@ void fix(uint t) {
 }
 
 void main() {
-  uint t = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (t < p.n) fix(t);
+  uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
+  if (i < counters[DT_BIDS]) fix(bid_list[i]);
   if (dt_last_group() && gl_LocalInvocationIndex == 0u) {
     uint n = dt_count(DT_COUNT_LIST0);
     dt_write_list_args(0u, n);
     counters[DT_COUNT_LIST1] = 0u;
+    counters[DT_BIDS] = 0u;  // the bid list is done with
     counters[DT_EXACT_RELOC] = 0u;
     counters[DT_EXACT_FLIP] = 0u;
     if (n > 0u) counters[DT_FLIP_PASSES] += 1u;

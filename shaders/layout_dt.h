@@ -50,11 +50,13 @@ namespace cdtgpu::gpu::layout {
 #define DT_EXACT_CHECKS 12  // all slot checks so far that needed the exact pass
 #define DT_DONE 13          // workgroups of the current dispatch that have finished (dt_last_group)
 #define DT_TAIL_DONE 14     // flip passes run by dt_flip_tail's last workgroup so far (of DT_FLIP_PASSES)
+#define DT_BIDS 15          // slots with a bid this round (the bid list: claim, grant, split, fix run over it)
 #define DT_ARGS_LIST0 0
 #define DT_ARGS_LIST1 3
 #define DT_ARGS_RELOC 6
 #define DT_ARGS_FLIP 9
-#define DT_ARGS_WORDS 12
+#define DT_ARGS_BIDS 12
+#define DT_ARGS_WORDS 15
 #define DT_COUNTERS 16
 
 // dt_flip_tail: the last workgroup of a flip pass runs up to DT_TAIL_PASSES further passes itself while the
