@@ -163,8 +163,23 @@ uint dt_bid_key(uint code, dvec2 q) {
     dvec2 x = xy[verts[3u * t + dt_next(inf)]], y = xy[verts[3u * t + dt_prev(inf)]];
     return dt_orderable(-float((y.x - x.x) * (q.y - x.y) - (y.y - x.y) * (q.x - x.x)));
   }
-  dvec2 centre = k < 3u ? (xy[verts[3u * t + dt_next(k)]] + xy[verts[3u * t + dt_prev(k)]]) * 0.5lf
-                        : (xy[v0] + xy[v1] + xy[v2]) / 3.0lf;
+  dvec2 centre;
+  if (k < 3u) {
+    centre = (xy[verts[3u * t + dt_next(k)]] + xy[verts[3u * t + dt_prev(k)]]) * 0.5lf;
+  } else {
+    dvec2 a = xy[v0], b = xy[v1] - a, c = xy[v2] - a;
+    double dd = 2.0lf * (b.x * c.y - b.y * c.x);
+    double bb = dot(b, b), cc = dot(c, c);
+    dvec2 o = dvec2(c.y * bb - b.y * cc, b.x * cc - c.x * bb) / dd;  // circumcentre - a
+    // on an edge (a right triangle: every cell of a grid DEM) or far out (a sliver): the centroid, else the
+    // circumcentre
+    double s0 = (b.x - o.x) * (c.y - o.y) - (b.y - o.y) * (c.x - o.x);
+    double s1 = c.y * o.x - c.x * o.y, s2 = b.x * o.y - b.y * o.x;
+    double tiny = 1e-6lf * abs(dd);
+    bool on_edge = abs(s0) <= tiny || abs(s1) <= tiny || abs(s2) <= tiny;
+    bool far = dot(o, o) > 64.0lf * max(bb, max(cc, dot(c - b, c - b)));
+    centre = a + (on_edge || far ? (b + c) / 3.0lf : o);
+  }
   dvec2 d = q - centre;
   return dt_orderable(float(dot(d, d)));
 }
