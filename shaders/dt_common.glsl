@@ -152,9 +152,12 @@ uint dt_walk(uint t, dvec2 q, uint max_steps, out bool undecided) {
 }
 
 // The bid of a point at loc code `code` for its slot (smaller wins): in a finite slot the squared distance to
-// the centroid, or to the edge's midpoint for a point on an edge (points on lines and grid borders then split
-// their edge in halves, not one by one); in an infinite slot the farthest beyond the hull edge wins
-// (quickhull-like). Float estimates: the choice changes the work, never the result.
+// the circumcentre (the point deepest in the slot's circle goes first: slivers break up early instead of
+// keeping points, and their long relocation walks, for the last rounds), or to the centroid where the
+// circumcentre lies on an edge (right triangles: grid DEMs) or far out (near-collinear slivers); for a point on
+// an edge, to the edge's midpoint (points on lines and grid borders then split their edge in halves, not one by
+// one); in an infinite slot the farthest beyond the hull edge wins (quickhull-like). Double estimates: the
+// choice changes the work, never the result.
 uint dt_bid_key(uint code, dvec2 q) {
   uint t = NBR_TRI(code), k = NBR_EDGE(code);
   uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
@@ -171,13 +174,13 @@ uint dt_bid_key(uint code, dvec2 q) {
     double dd = 2.0lf * (b.x * c.y - b.y * c.x);
     double bb = dot(b, b), cc = dot(c, c);
     dvec2 o = dvec2(c.y * bb - b.y * cc, b.x * cc - c.x * bb) / dd;  // circumcentre - a
-    // on an edge (a right triangle: every cell of a grid DEM) or far out (a sliver): the centroid, else the
-    // circumcentre
+    // on an edge (a right triangle: every cell of a grid DEM) or far out (a sliver; also NaN, should the
+    // determinant round to 0): the centroid, else the circumcentre
     double s0 = (b.x - o.x) * (c.y - o.y) - (b.y - o.y) * (c.x - o.x);
     double s1 = c.y * o.x - c.x * o.y, s2 = b.x * o.y - b.y * o.x;
     double tiny = 1e-6lf * abs(dd);
     bool on_edge = abs(s0) <= tiny || abs(s1) <= tiny || abs(s2) <= tiny;
-    bool far = dot(o, o) > 64.0lf * max(bb, max(cc, dot(c - b, c - b)));
+    bool far = !(dot(o, o) <= 64.0lf * max(bb, max(cc, dot(c - b, c - b))));
     centre = a + (on_edge || far ? (b + c) / 3.0lf : o);
   }
   dvec2 d = q - centre;
