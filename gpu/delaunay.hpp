@@ -8,8 +8,8 @@
 //   std::vector<Triangle> tris = gpu::download_triangles(ctx, tri);
 //
 // Fewer than 3 points, or all points collinear: num_slots = 0 (no triangles), as CGAL has no finite faces
-// then. Cost: about 25-30 rounds for 2M uniform points, each one submit with a host read of a few counters,
-// plus a submit per further batch of flip passes. Device memory at the peak: 132 bytes per point (see
+// then. Cost: about 20 rounds for 2M uniform points, each one submit with a host read of a few counters,
+// plus a submit per further batch of flip passes. Device memory at the peak: 140.5 bytes per point (see
 // peak_bytes()).
 #pragma once
 #include <cstdint>
