@@ -322,6 +322,22 @@ void dt_write_list_args(uint list, uint n) {
 #endif
 uint64_t dt_claim_key(uint prio) { return (uint64_t(~DT_EPOCH) << 32) | uint64_t(prio); }
 bool dt_claim_current(uint64_t c) { return uint(c >> 32) == ~DT_EPOCH; }
+
+#if defined(DT_CHECK) && DT_EXACT
+// A flip list entry's check with the exact stage inline (partner, claim): the slot's first illegal edge k is
+// requested (partner[t] = the neighbour's code, both slots claimed with the priority NBR(t, k)); returns the
+// entry's new value, DT_ENTRY(t, DT_REQUEST, k) or DT_NONE (locally Delaunay).
+uint dt_request(uint entry) {
+  uint t = DT_ENTRY_SLOT(entry);
+  uint k, uc;
+  if (dt_check_slot(t, DT_ENTRY_MODE(entry), DT_ENTRY_EDGE(entry), k, uc) != 1) return DT_NONE;
+  partner[t] = uc;
+  uint64_t key = dt_claim_key(NBR(t, k));
+  atomicMin(claim[t], key);
+  atomicMin(claim[NBR_TRI(uc)], key);
+  return DT_ENTRY(t, DT_REQUEST, k);
+}
+#endif
 #endif
 
 #ifdef DT_RANKS

@@ -130,20 +130,9 @@ void append(uint dst, uint count, uint a, uint b) {
 #ifdef DT_TAIL
 shared uint tail_n;
 
-// Entry i of list src: check its slot (dt_check_slot, exact) and request the flip, as dt_flip_check_inline.
+// Entry i of list src: check its slot and request the flip, as dt_flip_check_inline.
 void request(uint src, uint i) {
-  uint entry = list_get(src, i);
-  uint t = DT_ENTRY_SLOT(entry);
-  uint k, uc;
-  if (dt_check_slot(t, DT_ENTRY_MODE(entry), DT_ENTRY_EDGE(entry), k, uc) == 1) {
-    list_set(src, i, DT_ENTRY(t, DT_REQUEST, k));
-    partner[t] = uc;
-    uint64_t key = dt_claim_key(NBR(t, k));
-    atomicMin(claim[t], key);
-    atomicMin(claim[NBR_TRI(uc)], key);
-  } else {
-    list_set(src, i, DT_NONE);
-  }
+  list_set(src, i, dt_request(list_get(src, i)));
   if (dt_used_exact) atomicAdd(counters[DT_EXACT_CHECKS], 1u);
 }
 

@@ -31,19 +31,7 @@ layout(push_constant) uniform Push { DtFlipPush p; };
 #include "dt_common.glsl"
 
 void check(uint i) {
-  uint entry = list[i];
-  uint t = DT_ENTRY_SLOT(entry);
-  uint k, uc;
-  int r = dt_check_slot(t, DT_ENTRY_MODE(entry), DT_ENTRY_EDGE(entry), k, uc);
-  if (r == 1) {
-    list[i] = DT_ENTRY(t, DT_REQUEST, k);
-    partner[t] = uc;
-    uint64_t key = dt_claim_key(NBR(t, k));
-    atomicMin(claim[t], key);
-    atomicMin(claim[NBR_TRI(uc)], key);
-  } else {
-    list[i] = DT_NONE;
-  }
+  list[i] = dt_request(list[i]);
   if (dt_used_exact) atomicAdd(counters[DT_EXACT_CHECKS], 1u);
 }
 
