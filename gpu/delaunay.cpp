@@ -26,6 +26,9 @@ uint64_t groups(uint64_t n) { return (n + DT_WG - 1) / DT_WG; }
 
 uint32_t slot_capacity(uint32_t n) { return 2 * n - 2; }  // 2(n + 1) - 4: a sphere with n + 1 vertices
 
+// Flip passes per submit whose list length profile_kernels logs (later ones are logged with length 0).
+constexpr uint32_t kPassLog = 512;
+
 // Words of the granted bits and their ranks: one per 32 slots, and one more for the total.
 uint64_t rank_words(uint32_t slots) { return slots / 32 + 2; }
 
@@ -123,6 +126,9 @@ struct DelaunayBuilder::State {
 
   bool detail = false;  // a stage per kernel as well (DelaunayBuilder::profile_kernels)
 
+  // Flip passes so far that were dispatched (not run by a pass's last workgroup): what a batch must cover.
+  uint32_t dispatched_passes() const { return c[DT_FLIP_PASSES] - c[DT_TAIL_DONE]; }
+
   void begin(const char* stage) {
     if (prof) prof->begin(rec, stage);
   }
@@ -175,7 +181,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     *stats = DelaunayStats{};
     st.detail = profile_kernels;
     st.prof.emplace(ctx_, profile_kernels ? 512 : 16);
-    if (profile_kernels) st.pass_log = create_readback(ctx_, 4 * 512, &st.pass_log_host);
+    if (profile_kernels) st.pass_log = create_readback(ctx_, 4 * kPassLog, &st.pass_log_host);
   }
   if (n < 3 || !first_triangle(st)) {  // nothing to triangulate: no slots
     st.tri.verts = create_buffer(ctx_, 0, "tri_verts");
@@ -299,7 +305,7 @@ void DelaunayBuilder::start(State& st) const {
 
 // One round, one submit: every point left walks to its slot and bids for it (relocate; walks the filters
 // cannot finish go to the exact pass); the list is compacted once a quarter of it are vertices; every slot
-// with a bid inserts its winner where the claims allow (claim, grant, scan, split, fix); then the first batch
+// with a bid inserts its winner where the claims allow (claim, grant, rank, split, fix); then the first batch
 // of flip passes, as many as the last round needed and one more. Flip list 0 holds the walk flags and flip
 // list 1 the scans: both lists are idle between rounds.
 void DelaunayBuilder::insert_round(State& st) const {
@@ -365,7 +371,7 @@ void DelaunayBuilder::insert_round(State& st) const {
   st.end();
   st.cur = 0;
 
-  const uint32_t passes_before = st.c[DT_FLIP_PASSES] - st.c[DT_TAIL_DONE];
+  const uint32_t passes_before = st.dispatched_passes();
   st.exact_before = st.c[DT_EXACT_CHECKS];
   record_flip_batch(st, std::max(flip_passes_per_submit, st.passes_last_round + 1));
   submit(st, true);
@@ -374,16 +380,16 @@ void DelaunayBuilder::insert_round(State& st) const {
   if (winners == 0) throw DeviceError("delaunay: an insertion round inserted nothing");
   st.left -= winners;
   st.used += 2 * winners;
-  st.passes_last_round = st.c[DT_FLIP_PASSES] - st.c[DT_TAIL_DONE] - passes_before;
+  st.passes_last_round = st.dispatched_passes() - passes_before;
 }
 
 // Further batches of flip passes until the list is empty: the triangulation is then Delaunay again.
 void DelaunayBuilder::flip_passes(State& st) const {
   while (st.c[DT_COUNT_LIST0 + st.cur] != 0) {
-    const uint32_t passes_before = st.c[DT_FLIP_PASSES] - st.c[DT_TAIL_DONE];
+    const uint32_t passes_before = st.dispatched_passes();
     record_flip_batch(st, flip_passes_per_submit);
     submit(st, true);
-    st.passes_last_round += st.c[DT_FLIP_PASSES] - st.c[DT_TAIL_DONE] - passes_before;
+    st.passes_last_round += st.dispatched_passes() - passes_before;
   }
   st.exact_last_round = st.c[DT_EXACT_CHECKS] - st.exact_before;
   if (st.stats) st.stats->round_flip_passes.push_back(st.passes_last_round);
@@ -412,7 +418,7 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
     if (tail) st.epoch += DT_TAIL_PASSES;  // the epochs of the last workgroup's passes
     const VkDeviceSize at = (src == 0 ? DT_ARGS_LIST0 : DT_ARGS_LIST1) * sizeof(uint32_t);
     const Buffer& list = st.flip[src];
-    if (st.detail)
+    if (st.detail && st.logged_passes < kPassLog)
       st.rec.copy(st.counters, st.pass_log, 4, (DT_COUNT_LIST0 + src) * 4, 4 * st.logged_passes++);
     st.kernel("k:flip_check", [&] {
       st.rec.dispatch_indirect(check,
