@@ -29,8 +29,8 @@ uint32_t slot_capacity(uint32_t n) { return 2 * n - 2; }  // 2(n + 1) - 4: a sph
 // Flip passes per submit whose list length profile_kernels logs (later ones are logged with length 0).
 constexpr uint32_t kPassLog = 512;
 
-// Words of the granted bits and their ranks: one per 32 slots, and one more for the total.
-uint64_t rank_words(uint32_t slots) { return slots / 32 + 2; }
+// Words of a bit set over n slots or list positions (and of the ranks: one more for the total).
+uint64_t rank_words(uint32_t n) { return n / 32 + 2; }
 
 // ExactChecks::adaptive inlines the exact stage in a round's flip checks when the last round needed it for
 // fewer slots than this: uniform data never does; a grid DEM needs it for ~20% of its checks, where the
@@ -98,8 +98,10 @@ struct DelaunayBuilder::State {
   Buffer reduce;                  // dt_points results
   Buffer loc, list, list2;
   Buffer pick, claim, partner, flip[2];
-  Buffer bids;            // the slots with a bid this round
-  Buffer granted, ranks;  // a bit per slot: granted splits; per word the granted slots before it
+  Buffer bids;     // the slots with a bid this round
+  Buffer granted;  // a bit per slot: its split was granted this round
+  Buffer granted_at,
+      ranks;  // a bit per list position: its point's split was granted; per word the bits before
   Buffer counters, args, scan_sums;
   Buffer readback;
   void* host = nullptr;  // readback, mapped
@@ -152,13 +154,13 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       points_(create_pass(ctx, {"dt_points", 2, sizeof(DtPointsPush)})),
       init_(create_pass(ctx, {"dt_init", 7, sizeof(DtInitPush)})),
       relocate_(create_pass(ctx, {"dt_relocate", 11, sizeof(DtRoundPush)})),
-      relocate_exact_(create_pass(ctx, {"dt_relocate_exact", 9, sizeof(DtRoundPush)})),
+      relocate_exact_(create_pass(ctx, {"dt_relocate_exact", 10, sizeof(DtRoundPush)})),
       compact_(create_pass(ctx, {"dt_compact", 4, sizeof(DtRoundPush)})),
-      claim_(create_pass(ctx, {"dt_claim", 6, sizeof(DtRoundPush)})),
-      grant_(create_pass(ctx, {"dt_grant", 5, sizeof(DtRoundPush)})),
+      claim_(create_pass(ctx, {"dt_claim", 7, sizeof(DtRoundPush)})),
+      grant_(create_pass(ctx, {"dt_grant", 6, sizeof(DtRoundPush)})),
       rank_(create_pass(ctx, {"dt_rank", 2, sizeof(DtRoundPush)})),
-      split_(create_pass(ctx, {"dt_split", 10, sizeof(DtRoundPush)})),
-      split_fix_(create_pass(ctx, {"dt_split_fix", 11, sizeof(DtRoundPush)})),
+      split_(create_pass(ctx, {"dt_split", 12, sizeof(DtRoundPush)})),
+      split_fix_(create_pass(ctx, {"dt_split_fix", 13, sizeof(DtRoundPush)})),
       flip_check_(create_pass(ctx, {"dt_flip_check", 9, sizeof(DtFlipPush)})),
       flip_check_exact_(create_pass(ctx, {"dt_flip_check_exact", 8, sizeof(DtFlipPush)})),
       flip_(create_pass(ctx, {"dt_flip", 9, sizeof(DtFlipPush)})) {}
@@ -262,7 +264,8 @@ uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
   const uint64_t per_point = uint64_t(n) * 4 * 3;             // loc, list, list2
   const uint64_t per_slot = slots * (8 + 8 + 4 + 4 + 4 + 4);  // pick, claim, partner, 2 flip lists, bids
   const uint64_t small = 32 + (DT_COUNTERS + DT_ARGS_WORDS) * 4 + std::max(DT_COUNTERS * 4, 64);
-  return result + per_point + per_slot + scan_scratch_bytes(slots) + 2 * rank_words(slots) * 4 + small;
+  const uint64_t bits = (rank_words(slots) + 2 * rank_words(n)) * 4;  // granted, granted_at, ranks
+  return result + per_point + per_slot + scan_scratch_bytes(slots) + bits + small;
 }
 
 // Slots 0..3 (the first triangle and its three infinite neighbours); every other point is located in slot 0
@@ -291,7 +294,8 @@ void DelaunayBuilder::start(State& st) const {
   st.flip[1] = scratch(kSlots4[2], uint64_t(slots) * 4, "dt flip list 1");
   st.bids = scratch(kSlots4[3], uint64_t(slots) * 4, "dt bid list");
   st.granted = create_buffer(ctx_, rank_words(slots) * 4, "dt granted");
-  st.ranks = create_buffer(ctx_, rank_words(slots) * 4, "dt ranks");
+  st.granted_at = create_buffer(ctx_, rank_words(n) * 4, "dt granted positions");
+  st.ranks = create_buffer(ctx_, rank_words(n) * 4, "dt ranks");
   st.counters = create_buffer(ctx_, DT_COUNTERS * 4, "dt counters");
   st.args = create_buffer(ctx_, DT_ARGS_WORDS * 4, "dt args");
   st.scan_sums = create_buffer(ctx_, scan_scratch_bytes(slots), "dt scan sums");
@@ -323,12 +327,13 @@ void DelaunayBuilder::insert_round(State& st) const {
                            points, groups(points.n));
   });
   st.kernel("k:relocate_exact", [&] {
-    st.rec.dispatch_indirect(
-        relocate_exact_,
-        {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.list2, st.counters, st.args, st.bids},
-        &points, st.args, DT_ARGS_RELOC * sizeof(uint32_t));
+    st.rec.dispatch_indirect(relocate_exact_,
+                             {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.list2,
+                              st.counters, st.args, st.bids, st.list},
+                             &points, st.args, DT_ARGS_RELOC * sizeof(uint32_t));
   });
-  if (uint64_t(st.list_len - st.left) * 4 >= st.list_len) {  // a quarter of the list are vertices: compact
+  const bool compact = uint64_t(st.list_len - st.left) * 4 >= st.list_len;  // a quarter are vertices
+  if (compact) {
     st.kernel("k:compact", [&] {
       scan(st, flags, offsets, points.n);
       st.rec.dispatch_groups(compact_, {st.list, flags, offsets, st.list2}, points, groups(points.n));
@@ -336,36 +341,39 @@ void DelaunayBuilder::insert_round(State& st) const {
     std::swap(st.list, st.list2);
     st.list_len = st.left;
   }
+  const Buffer& bid_points = compact ? st.list2 : st.list;  // the list the bids name positions of
   st.end();
 
   st.begin("insert");
   // Over the bid list (indirect, sized by dt_relocate_exact), not over every slot: late rounds have a few
   // thousand bids and millions of slots.
-  const DtRoundPush slots{st.used, st.used, 0, cap, st.round, ++st.epoch};
+  const DtRoundPush slots{points.n, st.used, 0, cap, st.round, ++st.epoch};
   const VkDeviceSize bid_args = DT_ARGS_BIDS * sizeof(uint32_t);
-  const uint32_t words = (st.used + 31) / 32;
+  const uint32_t words = (points.n + 31) / 32;
   const DtRoundPush rank{words, st.used, 0, cap, st.round, st.epoch};
   st.kernel("k:claim", [&] {
-    st.rec.dispatch_indirect(claim_, {st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters}, &slots,
-                             st.args, bid_args);
+    st.rec.dispatch_indirect(claim_,
+                             {st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters, bid_points},
+                             &slots, st.args, bid_args);
   });
   st.kernel("k:grant+scan", [&] {
     st.rec.fill(st.granted, 0);
-    st.rec.dispatch_indirect(grant_, {st.pick, st.claim, st.granted, st.bids, st.counters}, &slots, st.args,
-                             bid_args);
-    st.rec.dispatch_groups(rank_, {st.granted, st.ranks}, rank, groups(uint64_t(words) + 1));
+    st.rec.fill(st.granted_at, 0);
+    st.rec.dispatch_indirect(grant_, {st.pick, st.claim, st.granted, st.bids, st.counters, st.granted_at},
+                             &slots, st.args, bid_args);
+    st.rec.dispatch_groups(rank_, {st.granted_at, st.ranks}, rank, groups(uint64_t(words) + 1));
     scan(st, st.ranks, st.ranks, words + 1);
   });
   st.kernel("k:split", [&] {
     st.rec.dispatch_indirect(split_,
                              {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.granted, st.partner, st.flip[0],
-                              st.counters, st.ranks, st.bids},
+                              st.counters, st.ranks, st.bids, st.granted_at, bid_points},
                              &slots, st.args, bid_args);
   });
   st.kernel("k:split_fix", [&] {
     st.rec.dispatch_indirect(split_fix_,
                              {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.granted, st.partner, st.claim,
-                              st.counters, st.args, st.ranks, st.bids},
+                              st.counters, st.args, st.ranks, st.bids, st.granted_at, bid_points},
                              &slots, st.args, bid_args);
   });
   st.end();

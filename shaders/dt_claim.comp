@@ -1,7 +1,8 @@
 // Insertion round, step 2, over the bid list (the slots with a bid): the point that won slot t's bid claims what its split rewrites: t
 // alone (inside: 1->3), or t and the neighbour s across the edge it lies on (2->4; s may be infinite). A claim
 // is an atomicMin of dt_claim_key(t) on each slot: the smallest requester always wins all of its claims, so
-// every round inserts something. The code NBR(s, edge in s) goes to the high word of pick[t] for the later steps.
+// every round inserts something. The code NBR(s, edge in s) goes to the high word of pick[t] for the later steps
+// (the low word is the winner's list position).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -16,6 +17,7 @@ layout(std430, binding = 2) buffer Pick { uint pickw[]; };  // pick[t] as words:
 layout(std430, binding = 3) buffer Claim { uint64_t claim[]; };
 layout(std430, binding = 4) readonly buffer Bids { uint bid_list[]; };
 layout(std430, binding = 5) readonly buffer Counters { uint counters[]; };
+layout(std430, binding = 6) readonly buffer List { uint list[]; };  // the list the bids were made from
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_CLAIMS
@@ -25,7 +27,7 @@ void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   if (i >= counters[DT_BIDS]) return;
   uint t = bid_list[i];
-  uint pt = pickw[2u * t];
+  uint pt = list[pickw[2u * t]];
   uint k = NBR_EDGE(loc[pt]);
   uint sc = k < 3u ? nbrs[3u * t + k] : DT_NONE;
   pickw[2u * t + 1u] = sc;

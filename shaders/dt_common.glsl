@@ -4,7 +4,8 @@
 // Always: corner arithmetic and order-preserving float keys. The rest is switched on by the including shader,
 // after it has declared the buffers the code names:
 //   DT_CLAIMS     dt_claim_key (push constant p.epoch, or DT_EPOCH): claims of one step.
-//   DT_RANKS      dt_granted, dt_rank (granted, ranks): which slots split this round and their numbers.
+//   DT_RANKS      dt_granted, dt_rank (granted, granted_at, ranks): which slots split this round and their
+//                 numbers.
 //   DT_FIX_EDGES  dt_fix_edge (verts, nbrs, claim, info, p.epoch, DT_RANKS): the neighbour repair after a
 //                 round of splits.
 //   DT_WALK       dt_walk (xy, verts, nbrs, counters): the relocation walk.
@@ -341,11 +342,12 @@ uint dt_request(uint entry) {
 #endif
 
 #ifdef DT_RANKS
-// The granted splits of a round: one bit per slot (dt_grant), and per 32-slot word the exclusive prefix count
-// of set bits (dt_rank + scan). Split number = rank in slot order, so the new slots are numbered as a scan
-// over all slots would number them, at 1/32 of its cost.
+// The granted splits of a round (dt_grant): a bit per slot, and a bit per list position of the winning point,
+// with per 32-position word the exclusive prefix count of set bits (dt_rank + scan). A split's number is the
+// rank of its point's position: the list is in Morton order, so the new slots of points that lie together get
+// ids that lie together, and the flip passes' loads of neighbouring slots share cache lines.
 bool dt_granted(uint t) { return ((granted[t >> 5u] >> (t & 31u)) & 1u) != 0u; }
-uint dt_rank(uint t) { return ranks[t >> 5u] + bitCount(granted[t >> 5u] & ((1u << (t & 31u)) - 1u)); }
+uint dt_rank(uint at) { return ranks[at >> 5u] + bitCount(granted_at[at >> 5u] & ((1u << (at & 31u)) - 1u)); }
 #endif
 
 #ifdef DT_FIX_EDGES

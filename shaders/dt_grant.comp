@@ -1,6 +1,6 @@
 // Insertion round, step 3, over the bid list: slot t's split is granted when its point won every claim it made;
-// granted splits set their slot's bit (DT_RANKS). dt_rank and a scan then number the splits in slot order,
-// two new slots each.
+// granted splits set their slot's bit and their point's list-position bit (DT_RANKS). dt_rank and a scan then
+// number the splits in list (Morton) order, two new slots each.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -14,6 +14,7 @@ layout(std430, binding = 1) readonly buffer Claim { uint64_t claim[]; };
 layout(std430, binding = 2) buffer Granted { uint granted[]; };  // cleared before this step
 layout(std430, binding = 3) readonly buffer Bids { uint bid_list[]; };
 layout(std430, binding = 4) readonly buffer Counters { uint counters[]; };
+layout(std430, binding = 5) buffer GrantedAt { uint granted_at[]; };  // by the winner's list position
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_CLAIMS
@@ -25,5 +26,9 @@ void main() {
   uint t = bid_list[i];
   uint sc = pickw[2u * t + 1u];
   uint64_t key = dt_claim_key(t);
-  if (claim[t] == key && (sc == DT_NONE || claim[NBR_TRI(sc)] == key)) atomicOr(granted[t >> 5u], 1u << (t & 31u));
+  if (claim[t] == key && (sc == DT_NONE || claim[NBR_TRI(sc)] == key)) {
+    uint at = pickw[2u * t];
+    atomicOr(granted[t >> 5u], 1u << (t & 31u));
+    atomicOr(granted_at[at >> 5u], 1u << (at & 31u));
+  }
 }

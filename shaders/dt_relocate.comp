@@ -1,9 +1,10 @@
 // Insertion round, step 1, over the point list: every point that is not a vertex yet walks from its old slot
 // (slot ids stay valid through splits and flips) to the slot that contains it (dt_walk, floating-point filters
-// only), then bids to be that slot's next vertex: a 64-bit atomicMin of (dt_bid_key << 32 | point) on
-// pick[slot]; the smallest key wins, ties the smallest id. Lanes of a subgroup that bid on one slot (common:
+// only), then bids to be that slot's next vertex: a 64-bit atomicMin of (dt_bid_key << 32 | i) on pick[slot],
+// i the point's position in the list (Morton order: the round's splits are numbered in that order, so new
+// slots that lie together get ids that lie together); the smallest key wins, ties the smallest position. Lanes of a subgroup that bid on one slot (common:
 // the list is in Morton order, and the first rounds have few slots) combine their bids first: one atomic per
-// subgroup. A walk a filter cannot finish goes to the exact list (dt_relocate_exact finishes it and bids).
+// subgroup. A walk a filter cannot finish goes to the exact list (its position) (dt_relocate_exact finishes it and bids).
 // flags[i] = 1 for a point still to insert (the compaction's input). A slot's first bid lists the slot (the bid
 // list). The last workgroup sizes the exact pass.
 #version 460
@@ -56,7 +57,7 @@ void main() {
     flags[i] = code != DT_INSERTED ? 1u : 0u;
   }
   uint at = dt_append_base(DT_EXACT_RELOC, undecided ? 1u : 0u);
-  if (undecided) exact_list[at] = pt;
+  if (undecided) exact_list[at] = i;
   // One bid per subgroup when every bidding lane bids on the same slot.
   uint t0 = subgroupMin(t);
   bool shared_slot = subgroupMin(bids && t != t0 ? 0u : 1u) == 1u;
@@ -64,14 +65,14 @@ void main() {
   uint first = 0u, slot = DT_NONE;
   if (shared_slot) {
     uint kmin = subgroupMin(key);
-    uint pmin = subgroupMin(key == kmin ? pt : DT_NONE);
+    uint pmin = subgroupMin(key == kmin ? i : DT_NONE);
     if (subgroupElect() && t0 != DT_NONE) {
       slot = t0;
       first = atomicMin(pick[t0], (uint64_t(kmin) << 32) | uint64_t(pmin)) == ~uint64_t(0) ? 1u : 0u;
     }
   } else if (bids) {
     slot = t;
-    first = atomicMin(pick[t], (uint64_t(key) << 32) | uint64_t(pt)) == ~uint64_t(0) ? 1u : 0u;
+    first = atomicMin(pick[t], (uint64_t(key) << 32) | uint64_t(i)) == ~uint64_t(0) ? 1u : 0u;
   }
   uint listed = dt_append_base(DT_BIDS, first);
   if (first == 1u) bid_list[listed] = slot;

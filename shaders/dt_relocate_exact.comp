@@ -18,6 +18,7 @@ layout(std430, binding = 5) readonly buffer Exact { uint exact_list[]; };
 layout(std430, binding = 6) buffer Counters { uint counters[]; };
 layout(std430, binding = 7) writeonly buffer Args { uint args[]; };
 layout(std430, binding = 8) writeonly buffer Bids { uint bid_list[]; };
+layout(std430, binding = 9) readonly buffer List { uint list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_EXACT 1
@@ -27,13 +28,13 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 
 void relocate(uint i) {
   if (i == 0u) counters[DT_EXACT_WALKS] += counters[DT_EXACT_RELOC];
-  uint pt = exact_list[i];
+  uint at = exact_list[i], pt = list[at];
   dvec2 q = xy[pt];
   bool undecided;
   uint code = dt_walk(NBR_TRI(loc[pt]), q, p.max_steps, undecided);
   loc[pt] = code;
   uint t = NBR_TRI(code);
-  if (atomicMin(pick[t], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(pt)) == ~uint64_t(0))
+  if (atomicMin(pick[t], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(at)) == ~uint64_t(0))
     bid_list[atomicAdd(counters[DT_BIDS], 1u)] = t;
 }
 

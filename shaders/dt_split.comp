@@ -1,5 +1,5 @@
 // Insertion round, step 4, over the bid list: every granted point splits its slot(s); new slots come from the
-// split's rank in slot order, two per split, X = base + 2 * dt_rank(t). Edge indices are kept, so an edge that
+// rank of the split's point in the list (Morton order), two per split, X = base + 2 * dt_rank(position). Edge indices are kept, so an edge that
 // leaves a slot keeps its index and info[] says where it went (dt_fix_edge reads it in the next step):
 //   1->3, p inside t = (v0, v1, v2): t = (p, v1, v2), X = (v0, p, v2), X+1 = (v0, v1, p); old edge k now lives
 //     in triangle k, index k (info[t] = NBR(X, 3)). Internal edges: triangle a's edge b meets triangle b's edge a.
@@ -28,6 +28,8 @@ layout(std430, binding = 6) writeonly buffer Flip { uint flip_list[]; };
 layout(std430, binding = 7) buffer Counters { uint counters[]; };
 layout(std430, binding = 8) readonly buffer Ranks { uint ranks[]; };
 layout(std430, binding = 9) readonly buffer Bids { uint bid_list[]; };
+layout(std430, binding = 10) readonly buffer GrantedAt { uint granted_at[]; };
+layout(std430, binding = 11) readonly buffer List { uint list[]; };  // the list the bids were made from
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_APPEND
@@ -38,9 +40,9 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 uint split(uint t, out uvec4 e) {
   e = uvec4(0u);
   if (!dt_granted(t)) return 0u;
-  uint pt = pickw[2u * t], sc = pickw[2u * t + 1u];
+  uint at = pickw[2u * t], sc = pickw[2u * t + 1u], pt = list[at];
   uint k = NBR_EDGE(loc[pt]);
-  uint X = p.base + 2u * dt_rank(t), Y = X + 1u;
+  uint X = p.base + 2u * dt_rank(at), Y = X + 1u;
   if (k == DT_INSIDE) {
     uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
     uint n1 = nbrs[3u * t + 1u], n2 = nbrs[3u * t + 2u];
