@@ -96,7 +96,7 @@ struct DelaunayBuilder::State {
   uint32_t n = 0;
   uint32_t first[3] = {0, 0, 0};  // the first triangle, counter-clockwise
   Buffer reduce;                  // dt_points results
-  Buffer loc, list, list2;
+  Buffer loc, list, loc2, list2;  // per list position: a point's slot code, its id; compaction targets
   Buffer pick, claim, partner, flip[2];
   Buffer bids;     // the slots with a bid this round
   Buffer granted;  // a bit per slot: its split was granted this round
@@ -152,15 +152,17 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       ctx_(ctx),
       prims_(ctx),
       points_(create_pass(ctx, {"dt_points", 2, sizeof(DtPointsPush)})),
-      init_(create_pass(ctx, {"dt_init", 7, sizeof(DtInitPush)})),
-      relocate_(create_pass(ctx, {"dt_relocate", 11, sizeof(DtRoundPush)})),
+      init_(create_pass(ctx, {"dt_init", 6, sizeof(DtInitPush)})),
+      loc_init_(create_pass(ctx, {"dt_loc_init", 2, sizeof(DtInitPush)})),
+      flags_(create_pass(ctx, {"dt_flags", 2, sizeof(DtRoundPush)})),
+      relocate_(create_pass(ctx, {"dt_relocate", 10, sizeof(DtRoundPush)})),
       relocate_exact_(create_pass(ctx, {"dt_relocate_exact", 10, sizeof(DtRoundPush)})),
-      compact_(create_pass(ctx, {"dt_compact", 4, sizeof(DtRoundPush)})),
-      claim_(create_pass(ctx, {"dt_claim", 7, sizeof(DtRoundPush)})),
+      compact_(create_pass(ctx, {"dt_compact", 6, sizeof(DtRoundPush)})),
+      claim_(create_pass(ctx, {"dt_claim", 6, sizeof(DtRoundPush)})),
       grant_(create_pass(ctx, {"dt_grant", 6, sizeof(DtRoundPush)})),
       rank_(create_pass(ctx, {"dt_rank", 2, sizeof(DtRoundPush)})),
       split_(create_pass(ctx, {"dt_split", 12, sizeof(DtRoundPush)})),
-      split_fix_(create_pass(ctx, {"dt_split_fix", 13, sizeof(DtRoundPush)})),
+      split_fix_(create_pass(ctx, {"dt_split_fix", 12, sizeof(DtRoundPush)})),
       flip_check_(create_pass(ctx, {"dt_flip_check", 9, sizeof(DtFlipPush)})),
       flip_check_exact_(create_pass(ctx, {"dt_flip_check_exact", 8, sizeof(DtFlipPush)})),
       flip_(create_pass(ctx, {"dt_flip", 9, sizeof(DtFlipPush)})) {}
@@ -203,6 +205,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     cache->give(kPoints4[0], std::move(st.loc));
     cache->give(kPoints4[1], std::move(st.list));
     cache->give(kPoints4[2], std::move(st.list2));
+    cache->give(kPoints4[3], std::move(st.loc2));
     cache->give(kSlots8[0], std::move(st.pick));
     cache->give(kSlots8[1], std::move(st.claim));
     cache->give(kSlots4[0], std::move(st.partner));
@@ -261,7 +264,7 @@ uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
   if (n < 3) return uint64_t(n) * 16 + 64;
   const uint64_t slots = slot_capacity(n);
   const uint64_t result = uint64_t(n) * 16 + slots * 24;      // points, verts, nbrs
-  const uint64_t per_point = uint64_t(n) * 4 * 3;             // loc, list, list2
+  const uint64_t per_point = uint64_t(n) * 4 * 4;             // loc, list, loc2, list2
   const uint64_t per_slot = slots * (8 + 8 + 4 + 4 + 4 + 4);  // pick, claim, partner, 2 flip lists, bids
   const uint64_t small = 32 + (DT_COUNTERS + DT_ARGS_WORDS) * 4 + std::max(DT_COUNTERS * 4, 64);
   const uint64_t bits = (rank_words(slots) + 2 * rank_words(n)) * 4;  // granted, granted_at, ranks
@@ -281,13 +284,15 @@ void DelaunayBuilder::start(State& st) const {
   st.list = scratch(kPoints4[1], uint64_t(n) * 4, "dt list");
   st.flip[0] = scratch(kSlots4[1], uint64_t(slots) * 4, "dt flip list 0");
   st.begin("start");
-  st.rec.dispatch_groups(init_,
-                         {st.tri.points, st.reduce, st.tri.verts, st.tri.nbrs, st.loc, st.flip[0], st.list},
-                         DtInitPush{n, st.first[0], st.first[1], st.first[2]}, groups(n));
+  const DtInitPush init{n, st.first[0], st.first[1], st.first[2]};
+  st.rec.dispatch_groups(init_, {st.tri.points, st.reduce, st.tri.verts, st.tri.nbrs, st.flip[0], st.list},
+                         init, groups(n));
   prims_.radix_sort(st.rec, st.flip[0], st.list, n, 32);
+  st.rec.dispatch_groups(loc_init_, {st.list, st.loc}, init, groups(n));
   st.end();
   submit(st, false);
   st.list2 = scratch(kPoints4[2], uint64_t(n) * 4, "dt list2");
+  st.loc2 = scratch(kPoints4[3], uint64_t(n) * 4, "dt loc2");
   st.pick = scratch(kSlots8[0], uint64_t(slots) * 8, "dt pick");
   st.claim = scratch(kSlots8[1], uint64_t(slots) * 8, "dt claim");
   st.partner = scratch(kSlots4[0], uint64_t(slots) * 4, "dt partner");
@@ -316,14 +321,28 @@ void DelaunayBuilder::insert_round(State& st) const {
   const uint32_t cap = slot_capacity(st.n);
   const Buffer &flags = st.flip[0], &offsets = st.flip[1];
   st.log_round = st.round;
-  st.log_list_len = st.list_len;
 
   st.begin("relocate");
+  // Compaction first, when a quarter of the list are vertices: the points still to insert keep their order,
+  // their loc codes move with them, and the round's bids name positions in the compacted list.
+  if (uint64_t(st.list_len - st.left) * 4 >= st.list_len) {
+    const DtRoundPush all{st.list_len, st.used, 0, cap, st.round, 0};
+    st.kernel("k:compact", [&] {
+      st.rec.dispatch_groups(flags_, {st.loc, flags}, all, groups(all.n));
+      scan(st, flags, offsets, all.n);
+      st.rec.dispatch_groups(compact_, {st.list, flags, offsets, st.list2, st.loc, st.loc2}, all,
+                             groups(all.n));
+    });
+    std::swap(st.list, st.list2);
+    std::swap(st.loc, st.loc2);
+    st.list_len = st.left;
+  }
+  st.log_list_len = st.list_len;
   const DtRoundPush points{st.list_len, st.used, st.used + 16, cap, st.round, 0};
   st.kernel("k:relocate", [&] {
     st.rec.dispatch_groups(relocate_,
-                           {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.list, flags, st.pick,
-                            st.list2, st.counters, st.args, st.bids},
+                           {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.list, st.pick, st.list2,
+                            st.counters, st.args, st.bids},
                            points, groups(points.n));
   });
   st.kernel("k:relocate_exact", [&] {
@@ -332,16 +351,6 @@ void DelaunayBuilder::insert_round(State& st) const {
                               st.counters, st.args, st.bids, st.list},
                              &points, st.args, DT_ARGS_RELOC * sizeof(uint32_t));
   });
-  const bool compact = uint64_t(st.list_len - st.left) * 4 >= st.list_len;  // a quarter are vertices
-  if (compact) {
-    st.kernel("k:compact", [&] {
-      scan(st, flags, offsets, points.n);
-      st.rec.dispatch_groups(compact_, {st.list, flags, offsets, st.list2}, points, groups(points.n));
-    });
-    std::swap(st.list, st.list2);
-    st.list_len = st.left;
-  }
-  const Buffer& bid_points = compact ? st.list2 : st.list;  // the list the bids name positions of
   st.end();
 
   st.begin("insert");
@@ -352,9 +361,8 @@ void DelaunayBuilder::insert_round(State& st) const {
   const uint32_t words = (points.n + 31) / 32;
   const DtRoundPush rank{words, st.used, 0, cap, st.round, st.epoch};
   st.kernel("k:claim", [&] {
-    st.rec.dispatch_indirect(claim_,
-                             {st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters, bid_points},
-                             &slots, st.args, bid_args);
+    st.rec.dispatch_indirect(claim_, {st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters}, &slots,
+                             st.args, bid_args);
   });
   st.kernel("k:grant+scan", [&] {
     st.rec.fill(st.granted, 0);
@@ -367,13 +375,13 @@ void DelaunayBuilder::insert_round(State& st) const {
   st.kernel("k:split", [&] {
     st.rec.dispatch_indirect(split_,
                              {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.granted, st.partner, st.flip[0],
-                              st.counters, st.ranks, st.bids, st.granted_at, bid_points},
+                              st.counters, st.ranks, st.bids, st.granted_at, st.list},
                              &slots, st.args, bid_args);
   });
   st.kernel("k:split_fix", [&] {
     st.rec.dispatch_indirect(split_fix_,
                              {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.granted, st.partner, st.claim,
-                              st.counters, st.args, st.ranks, st.bids, st.granted_at, bid_points},
+                              st.counters, st.args, st.ranks, st.bids, st.granted_at},
                              &slots, st.args, bid_args);
   });
   st.end();

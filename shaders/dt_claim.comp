@@ -17,7 +17,6 @@ layout(std430, binding = 2) buffer Pick { uint pickw[]; };  // pick[t] as words:
 layout(std430, binding = 3) buffer Claim { uint64_t claim[]; };
 layout(std430, binding = 4) readonly buffer Bids { uint bid_list[]; };
 layout(std430, binding = 5) readonly buffer Counters { uint counters[]; };
-layout(std430, binding = 6) readonly buffer List { uint list[]; };  // the list the bids were made from
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_CLAIMS
@@ -27,8 +26,7 @@ void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   if (i >= counters[DT_BIDS]) return;
   uint t = bid_list[i];
-  uint pt = list[pickw[2u * t]];
-  uint k = NBR_EDGE(loc[pt]);
+  uint k = NBR_EDGE(loc[pickw[2u * t]]);  // the winner's list position
   uint sc = k < 3u ? nbrs[3u * t + k] : DT_NONE;
   pickw[2u * t + 1u] = sc;
   atomicMin(claim[t], dt_claim_key(t));

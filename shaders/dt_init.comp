@@ -1,6 +1,6 @@
 // Delaunay start, step 2: the first triangle (a, b, c) (counter-clockwise) in slot 0 and the infinite triangle
-// across each of its edges in slots 1..3; every other point is "somewhere in slot 0" (the first relocation walk
-// places it) and gets a 32-bit Morton key of its position in the bounding box, with its id as sort payload.
+// across each of its edges in slots 1..3; every point gets a 32-bit Morton key of its position in the bounding
+// box, with its id as sort payload (dt_loc_init then places the points in slot 0).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -13,9 +13,8 @@ layout(std430, binding = 0) readonly buffer Points { dvec2 xy[]; };
 layout(std430, binding = 1) readonly buffer Reduce { uint64_t red[]; };
 layout(std430, binding = 2) writeonly buffer Verts { uint verts[]; };
 layout(std430, binding = 3) writeonly buffer Nbrs { uint nbrs[]; };
-layout(std430, binding = 4) writeonly buffer Loc { uint loc[]; };
-layout(std430, binding = 5) writeonly buffer Keys { uint keys[]; };
-layout(std430, binding = 6) writeonly buffer Ids { uint ids[]; };
+layout(std430, binding = 4) writeonly buffer Keys { uint keys[]; };
+layout(std430, binding = 5) writeonly buffer Ids { uint ids[]; };
 layout(push_constant) uniform Push { DtInitPush p; };
 
 double from_orderable64(uint64_t k) {
@@ -53,8 +52,6 @@ void main() {
       nbrs[k] = n[k];
     }
   }
-  bool vertex = i == p.a || i == p.b || i == p.c;
-  loc[i] = vertex ? DT_INSERTED : NBR(0u, DT_INSIDE);
   dvec2 q = xy[i];
   double y0 = from_orderable64(red[0]), y1 = from_orderable64(~red[1]);
   uint qx = quantize(q.x, xy[0].x, xy[p.n - 1u].x), qy = quantize(q.y, y0, y1);

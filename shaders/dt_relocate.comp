@@ -5,8 +5,8 @@
 // slots that lie together get ids that lie together); the smallest key wins, ties the smallest position. Lanes of a subgroup that bid on one slot (common:
 // the list is in Morton order, and the first rounds have few slots) combine their bids first: one atomic per
 // subgroup. A walk a filter cannot finish goes to the exact list (its position) (dt_relocate_exact finishes it and bids).
-// flags[i] = 1 for a point still to insert (the compaction's input). A slot's first bid lists the slot (the bid
-// list). The last workgroup sizes the exact pass.
+// loc is kept per list position (coalesced here). A slot's first bid lists the slot (the bid list). The last
+// workgroup sizes the exact pass.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -23,12 +23,11 @@ layout(std430, binding = 1) readonly buffer Verts { uint verts[]; };
 layout(std430, binding = 2) readonly buffer Nbrs { uint nbrs[]; };
 layout(std430, binding = 3) buffer Loc { uint loc[]; };
 layout(std430, binding = 4) readonly buffer List { uint list[]; };
-layout(std430, binding = 5) writeonly buffer Flags { uint flags[]; };
-layout(std430, binding = 6) buffer Pick { uint64_t pick[]; };
-layout(std430, binding = 7) writeonly buffer Exact { uint exact_list[]; };
-layout(std430, binding = 8) buffer Counters { uint counters[]; };
-layout(std430, binding = 9) writeonly buffer Args { uint args[]; };
-layout(std430, binding = 10) writeonly buffer Bids { uint bid_list[]; };
+layout(std430, binding = 5) buffer Pick { uint64_t pick[]; };
+layout(std430, binding = 6) writeonly buffer Exact { uint exact_list[]; };
+layout(std430, binding = 7) buffer Counters { uint counters[]; };
+layout(std430, binding = 8) writeonly buffer Args { uint args[]; };
+layout(std430, binding = 9) writeonly buffer Bids { uint bid_list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_EXACT 0
@@ -42,19 +41,18 @@ void main() {
   bool bids = false, undecided = false;
   uint t = DT_NONE, key = DT_NONE, pt = DT_NONE;
   if (i < p.n) {
-    pt = list[i];
-    uint code = loc[pt];
+    uint code = loc[i];
     if (code != DT_INSERTED) {
+      pt = list[i];
       dvec2 q = xy[pt];
       code = dt_walk(NBR_TRI(code), q, p.max_steps, undecided);
-      loc[pt] = code;
+      loc[i] = code;
       if (!undecided) {
         t = NBR_TRI(code);
         key = dt_bid_key(code, q);
         bids = true;
       }
     }
-    flags[i] = code != DT_INSERTED ? 1u : 0u;
   }
   uint at = dt_append_base(DT_EXACT_RELOC, undecided ? 1u : 0u);
   if (undecided) exact_list[at] = i;

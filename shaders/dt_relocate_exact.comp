@@ -31,8 +31,8 @@ void relocate(uint i) {
   uint at = exact_list[i], pt = list[at];
   dvec2 q = xy[pt];
   bool undecided;
-  uint code = dt_walk(NBR_TRI(loc[pt]), q, p.max_steps, undecided);
-  loc[pt] = code;
+  uint code = dt_walk(NBR_TRI(loc[at]), q, p.max_steps, undecided);
+  loc[at] = code;
   uint t = NBR_TRI(code);
   if (atomicMin(pick[t], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(at)) == ~uint64_t(0))
     bid_list[atomicAdd(counters[DT_BIDS], 1u)] = t;

@@ -29,7 +29,7 @@ layout(std430, binding = 7) buffer Counters { uint counters[]; };
 layout(std430, binding = 8) readonly buffer Ranks { uint ranks[]; };
 layout(std430, binding = 9) readonly buffer Bids { uint bid_list[]; };
 layout(std430, binding = 10) readonly buffer GrantedAt { uint granted_at[]; };
-layout(std430, binding = 11) readonly buffer List { uint list[]; };  // the list the bids were made from
+layout(std430, binding = 11) readonly buffer List { uint list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_APPEND
@@ -41,7 +41,7 @@ uint split(uint t, out uvec4 e) {
   e = uvec4(0u);
   if (!dt_granted(t)) return 0u;
   uint at = pickw[2u * t], sc = pickw[2u * t + 1u], pt = list[at];
-  uint k = NBR_EDGE(loc[pt]);
+  uint k = NBR_EDGE(loc[at]);
   uint X = p.base + 2u * dt_rank(at), Y = X + 1u;
   if (k == DT_INSIDE) {
     uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];

@@ -22,7 +22,6 @@ layout(std430, binding = 8) writeonly buffer Args { uint args[]; };
 layout(std430, binding = 9) readonly buffer Ranks { uint ranks[]; };
 layout(std430, binding = 10) readonly buffer Bids { uint bid_list[]; };
 layout(std430, binding = 11) readonly buffer GrantedAt { uint granted_at[]; };
-layout(std430, binding = 12) readonly buffer List { uint list[]; };  // the list the bids were made from
 layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_CLAIMS
@@ -36,8 +35,8 @@ void fix(uint t) {
   pickw[2u * t] = DT_NONE;
   pickw[2u * t + 1u] = DT_NONE;
   if (!dt_granted(t)) return;
-  uint pt = list[at], k = NBR_EDGE(loc[pt]);
-  loc[pt] = DT_INSERTED;
+  uint k = NBR_EDGE(loc[at]);
+  loc[at] = DT_INSERTED;
   uint X = p.base + 2u * dt_rank(at);
   if (k == DT_INSIDE) {
     dt_fix_edge(t, 0u);
