@@ -9,7 +9,7 @@
 //
 // Fewer than 3 points, or all points collinear: num_slots = 0 (no triangles), as CGAL has no finite faces
 // then. Cost: about 20 rounds for 2M uniform points, each one submit with a host read of a few counters,
-// plus a submit per further batch of flip passes. Device memory at the peak: 140.5 bytes per point (see
+// plus a submit per further batch of flip passes. Device memory at the peak: 144.5 bytes per point (see
 // peak_bytes()).
 #pragma once
 #include <cstdint>
