@@ -100,8 +100,8 @@ struct DelaunayBuilder::State {
   Buffer pick, claim, partner, flip[2];
   Buffer bids;     // the slots with a bid this round
   Buffer granted;  // a bit per slot: its split was granted this round
-  Buffer granted_at,
-      ranks;  // a bit per list position: its point's split was granted; per word the bits before
+  // A bit per list position (its point's split was granted), and per word of it the set bits before.
+  Buffer granted_at, ranks;
   Buffer counters, args, scan_sums;
   Buffer readback;
   void* host = nullptr;  // readback, mapped
