@@ -348,6 +348,28 @@ TEST(GpuDelaunay, TailPassesMatchCgal) {
   no_validation_messages();
 }
 
+// profile_kernels: the same triangles, and a log of every kernel with its round; the flip checks carry the
+// length of the list they read, and together they read every flip-list entry the build produced.
+TEST(GpuDelaunay, KernelLogCoversEveryPass) {
+  DelaunayBuilder dt(ctx());
+  dt.profile_kernels = true;
+  DelaunayStats stats = expect_cgal("profiled: uniform 5k", uniform(5000, 31), dt);
+  ASSERT_FALSE(stats.kernel_log.empty());
+  uint32_t checks = 0, nonempty = 0, last_round = 0;
+  for (const auto& k : stats.kernel_log) {
+    EXPECT_GE(k.ms, 0.0) << k.name;
+    EXPECT_GE(k.round, last_round) << k.name;  // in recording order
+    last_round = k.round;
+    if (k.name == "k:flip_check") {
+      ++checks;
+      nonempty += k.items > 0 ? 1 : 0;
+    }
+  }
+  EXPECT_EQ(last_round + 1, stats.rounds);
+  EXPECT_GE(checks, stats.flip_passes - stats.tail_passes);  // blind passes over empty lists included
+  EXPECT_EQ(nonempty, stats.flip_passes - stats.tail_passes);
+}
+
 TEST(GpuDelaunay, Large) {
   if (!large()) GTEST_SKIP() << "set CDTGPU_LARGE=1 (GPU machine) for 1M, 4M and a 2000 x 1000 grid";
   expect_cgal("uniform 1M", uniform(1000000, 11));
