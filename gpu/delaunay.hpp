@@ -100,8 +100,8 @@ class DelaunayBuilder {
 
   const Context& ctx_;
   Primitives prims_;
-  Pass points_, init_, loc_init_, flags_, relocate_, relocate_exact_, compact_, claim_, grant_, rank_, split_, split_fix_,
-      flip_check_, flip_check_exact_, flip_;
+  Pass points_, init_, loc_init_, flags_, relocate_, relocate_exact_, compact_, claim_, grant_, rank_, split_,
+      split_fix_, flip_check_, flip_check_exact_, flip_;
   mutable std::optional<Pass> flip_check_inline_, flip_tail_;  // built on first use
 };
 

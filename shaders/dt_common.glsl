@@ -290,26 +290,22 @@ bool dt_last_group() {
 
 uint dt_count(uint word) { return atomicAdd(counters[word], 0u); }
 
-// Indirect-dispatch arguments for n entries: groups of DT_WG split over x and y like Recorder::dispatch_groups,
-// at least one group, so that the dispatch's own last workgroup always runs.
-void dt_write_args(uint at, uint n) {
-  uint groups = max((n + DT_WG - 1u) / DT_WG, 1u);
-  uint x = min(groups, 65535u);
-  args[at] = x;
-  args[at + 1u] = (groups + x - 1u) / x;
-  args[at + 2u] = 1u;
-}
-
-// The same for a flip list: no group at all when it is empty. A pass over an empty list has nothing to do,
-// not even bookkeeping (its count is 0 and the other list's args are 0 groups too), so the passes recorded
-// blind after a round's flips are done cost a barrier each, no launch.
-void dt_write_list_args(uint list, uint n) {
-  uint at = list == 0u ? DT_ARGS_LIST0 : DT_ARGS_LIST1;
-  uint groups = (n + DT_WG - 1u) / DT_WG;
+// Indirect-dispatch arguments for `groups` workgroups, split over x and y like Recorder::dispatch_groups.
+void dt_write_groups(uint at, uint groups) {
   uint x = min(groups, 65535u);
   args[at] = x;
   args[at + 1u] = x == 0u ? 1u : (groups + x - 1u) / x;
   args[at + 2u] = 1u;
+}
+
+// For n entries: at least one group, so that the dispatch's own last workgroup always runs.
+void dt_write_args(uint at, uint n) { dt_write_groups(at, max((n + DT_WG - 1u) / DT_WG, 1u)); }
+
+// For a flip list: no group at all when it is empty. A pass over an empty list has nothing to do, not even
+// bookkeeping (its count is 0 and the other list's args are 0 groups too), so the passes recorded blind after a
+// round's flips are done cost a barrier each, no launch.
+void dt_write_list_args(uint list, uint n) {
+  dt_write_groups(list == 0u ? DT_ARGS_LIST0 : DT_ARGS_LIST1, (n + DT_WG - 1u) / DT_WG);
 }
 #endif
 

@@ -6,11 +6,12 @@
 //   CDTGPU_LARGE=1             adds 1M and 4M uniform points and a 2000 x 1000 grid (for the GPU machine)
 //   CDTGPU_DT_BENCH=N          times N builds of CDTGPU_DT_BENCH_POINTS (default 2M) uniform points
 //                              (CDTGPU_DT_BENCH_GRID=1: a grid 2000 wide) and prints median GPU ms per stage
-//   CDTGPU_DT_PROFILE_KERNELS=1  per kernel too; CDTGPU_DT_FLIP_BATCH=K:
-//   DelaunayBuilder::flip_passes_per_submit (CDTGPU_DT_TAIL=0|1: DelaunayBuilder::tail_passes)
-//   CDTGPU_DT_EXACT=separate|inline|adaptive DelaunayBuilder::exact_checks CDTGPU_DT_SMALL_CASES=N    small
-//   degenerate cases (default 300) CDTGPU_VALIDATION=0        validation off (it is on by default, and a
-//   missing layer is then an error)
+//   CDTGPU_DT_PROFILE_KERNELS=1  per kernel too, per round and per flip-list length
+//   CDTGPU_DT_FLIP_BATCH=K     DelaunayBuilder::flip_passes_per_submit
+//   CDTGPU_DT_TAIL=0|1         DelaunayBuilder::tail_passes
+//   CDTGPU_DT_EXACT=separate|inline|adaptive  DelaunayBuilder::exact_checks
+//   CDTGPU_DT_SMALL_CASES=N    small degenerate cases (default 300)
+//   CDTGPU_VALIDATION=0        validation off (it is on by default, and a missing layer is then an error)
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
@@ -311,14 +312,16 @@ TEST(GpuDelaunay, ManySmallDegenerateInputs) {
   no_validation_messages();
 }
 
-TEST(GpuDelaunay, SameSlotsOnEveryRun) {
-  std::vector<double> xy = uniform(15000, 8);
-  HostTriangulation a = download_host(ctx(), builder().build(xy));
-  HostTriangulation b = download_host(ctx(), builder().build(xy));
+// Two builds of the same points give the same slots, neighbours included.
+void expect_same_slots_twice(const DelaunayBuilder& dt, const std::vector<double>& xy) {
+  HostTriangulation a = download_host(ctx(), dt.build(xy));
+  HostTriangulation b = download_host(ctx(), dt.build(xy));
   EXPECT_EQ(a.verts, b.verts);
   EXPECT_EQ(a.nbrs, b.nbrs);
   no_validation_messages();
 }
+
+TEST(GpuDelaunay, SameSlotsOnEveryRun) { expect_same_slots_twice(builder(), uniform(15000, 8)); }
 
 // The flip kernel whose last workgroup runs the short passes itself (the GPU default; forced here so that
 // lavapipe runs it too): the same triangles, the tail must have run, and the same slots on every run.
@@ -340,12 +343,7 @@ TEST(GpuDelaunay, TailPassesMatchCgal) {
               dt)
               .tail_passes;
   EXPECT_GT(tail, 0u);
-  std::vector<double> xy = uniform(15000, 23);
-  HostTriangulation a = download_host(ctx(), dt.build(xy));
-  HostTriangulation b = download_host(ctx(), dt.build(xy));
-  EXPECT_EQ(a.verts, b.verts);
-  EXPECT_EQ(a.nbrs, b.nbrs);
-  no_validation_messages();
+  expect_same_slots_twice(dt, uniform(15000, 23));
 }
 
 // profile_kernels: the same triangles, and a log of every kernel with its round; the flip checks carry the
