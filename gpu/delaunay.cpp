@@ -95,7 +95,11 @@ struct DelaunayBuilder::State {
   GpuTriangulation tri;
   uint32_t n = 0;
   uint32_t first[3] = {0, 0, 0};  // the first triangle, counter-clockwise
+  double corners[6] = {};         // its points' coordinates (walks outside the hull use their centroid)
   Buffer reduce;                  // dt_points results
+  // The points in build numbering (Morton order, dt_renumber), and the canonical id of each; tri.points is
+  // released while the build runs and rewritten at the end (dt_number_back).
+  Buffer pts, perm;
   Buffer loc, list, loc2, list2;  // per list position: a point's slot code, its id; compaction targets
   Buffer pick, claim, partner, flip[2];
   Buffer bids;     // the slots with a bid this round
@@ -114,6 +118,9 @@ struct DelaunayBuilder::State {
   uint32_t left = 0;          // points not yet vertices
   uint32_t used = 0;          // slots in use
   uint32_t round = 0;
+  bool sampling = false;  // only every sample_stride-th listed point walks and bids (the first rounds)
+  uint32_t samples = 0;   // the listed points that do then
+  uint32_t sampled_rounds = 0;
   uint32_t epoch = 0;              // of the last claim step (a round's splits, a flip pass); 0 is never used
   uint32_t cur = 0;                // the flip list the next pass reads
   uint32_t passes_last_round = 0;  // non-empty flip passes the last round needed: the next first batch
@@ -153,7 +160,9 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       prims_(ctx),
       points_(create_pass(ctx, {"dt_points", 2, sizeof(DtPointsPush)})),
       init_(create_pass(ctx, {"dt_init", 6, sizeof(DtInitPush)})),
-      loc_init_(create_pass(ctx, {"dt_loc_init", 2, sizeof(DtInitPush)})),
+      renumber_(create_pass(ctx, {"dt_renumber", 6, sizeof(DtInitPush)})),
+      hint_(create_pass(ctx, {"dt_hint", 1, sizeof(DtRoundPush)})),
+      number_back_(create_pass(ctx, {"dt_number_back", 4, sizeof(DtRoundPush)})),
       flags_(create_pass(ctx, {"dt_flags", 2, sizeof(DtRoundPush)})),
       relocate_(create_pass(ctx, {"dt_relocate", 10, sizeof(DtRoundPush)})),
       relocate_exact_(create_pass(ctx, {"dt_relocate_exact", 10, sizeof(DtRoundPush)})),
@@ -201,18 +210,17 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     throw DeviceError("delaunay: " + std::to_string(st.used) + " slots in use at the end, expected " +
                       std::to_string(slot_capacity(n)));
   st.tri.num_slots = st.used;
-  if (cache) {  // the scratch goes back for the next stage (the constraint inserter) or the next build
-    cache->give(kPoints4[0], std::move(st.loc));
-    cache->give(kPoints4[1], std::move(st.list));
-    cache->give(kPoints4[2], std::move(st.list2));
-    cache->give(kPoints4[3], std::move(st.loc2));
-    cache->give(kSlots8[0], std::move(st.pick));
-    cache->give(kSlots8[1], std::move(st.claim));
-    cache->give(kSlots4[0], std::move(st.partner));
-    cache->give(kSlots4[1], std::move(st.flip[0]));
-    cache->give(kSlots4[2], std::move(st.flip[1]));
-    cache->give(kSlots4[3], std::move(st.bids));
-  }
+  release(st.loc, kPoints4[0]);  // the scratch goes back for the next stage (constraints) or build
+  release(st.list, kPoints4[1]);
+  release(st.list2, kPoints4[2]);
+  release(st.loc2, kPoints4[3]);
+  release(st.pick, kSlots8[0]);
+  release(st.claim, kSlots8[1]);
+  release(st.partner, kSlots4[0]);
+  release(st.flip[0], kSlots4[1]);
+  release(st.flip[1], kSlots4[2]);
+  release(st.bids, kSlots4[3]);
+  number_back(st);
   if (stats) {
     stats->rounds = st.round;
     stats->flips = st.c[DT_FLIPS];
@@ -220,6 +228,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     stats->exact_checks = st.c[DT_EXACT_CHECKS];
     stats->flip_passes = st.c[DT_FLIP_PASSES];
     stats->tail_passes = st.c[DT_TAIL_DONE];
+    stats->sampled_rounds = st.sampled_rounds;
     stats->peak_device_bytes = peak_bytes(n);
   }
   return std::move(st.tri);
@@ -249,10 +258,15 @@ bool DelaunayBuilder::first_triangle(State& st) const {
   if (o == 0) {
     std::vector<double> xy = download_vector<double>(ctx_, st.tri.points, size_t(n) * 2);
     for (c = 1; c + 1 < n; ++c) {
-      o = pred::orient2d(p[0], p[1], {xy[2 * c], xy[2 * c + 1]});
+      p[2] = {xy[2 * c], xy[2 * c + 1]};
+      o = pred::orient2d(p[0], p[1], p[2]);
       if (o != 0) break;
     }
     if (o == 0) return false;
+  }
+  for (int k = 0; k < 3; ++k) {
+    st.corners[2 * k] = p[k].x;
+    st.corners[2 * k + 1] = p[k].y;
   }
   st.first[0] = 0;
   st.first[1] = o > 0 ? n - 1 : c;
@@ -263,8 +277,8 @@ bool DelaunayBuilder::first_triangle(State& st) const {
 uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
   if (n < 3) return uint64_t(n) * 16 + 64;
   const uint64_t slots = slot_capacity(n);
-  const uint64_t result = uint64_t(n) * 16 + slots * 24;      // points, verts, nbrs
-  const uint64_t per_point = uint64_t(n) * 4 * 4;             // loc, list, loc2, list2
+  const uint64_t result = uint64_t(n) * 16 + slots * 24;      // points (build numbering), verts, nbrs
+  const uint64_t per_point = uint64_t(n) * 4 * 5;             // loc, list, loc2, list2, perm
   const uint64_t per_slot = slots * (8 + 8 + 4 + 4 + 4 + 4);  // pick, claim, partner, 2 flip lists, bids
   const uint64_t small = 32 + (DT_COUNTERS + DT_ARGS_WORDS) * 4 + std::max(DT_COUNTERS * 4, 64);
   const uint64_t bits = (rank_words(slots) + 2 * rank_words(n)) * 4;  // granted, granted_at, ranks
@@ -272,9 +286,11 @@ uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
 }
 
 // Slots 0..3 (the first triangle and its three infinite neighbours); every other point is located in slot 0
-// and listed in Morton order (a 32-bit key, 16 bits per axis over the bounding box), so that points listed
-// together lie together. The keys sit in flip list 0 (idle until the first round). The other per-slot arrays
-// are allocated after the sort has released its scratch: a lower peak.
+// and numbered in Morton order (a 32-bit key, 16 bits per axis over the bounding box), so that points with
+// near numbers lie together: every coordinate read of the build is then local. The keys sit in flip list 0
+// (idle until the first round). The canonical points are released (the build's copy replaces them until
+// number_back), and the other per-slot arrays are allocated after the sort has released its scratch: a lower
+// peak.
 void DelaunayBuilder::start(State& st) const {
   const uint32_t n = st.n, slots = slot_capacity(n);
   st.tri.capacity = slots;
@@ -288,9 +304,13 @@ void DelaunayBuilder::start(State& st) const {
   st.rec.dispatch_groups(init_, {st.tri.points, st.reduce, st.tri.verts, st.tri.nbrs, st.flip[0], st.list},
                          init, groups(n));
   prims_.radix_sort(st.rec, st.flip[0], st.list, n, 32);
-  st.rec.dispatch_groups(loc_init_, {st.list, st.loc}, init, groups(n));
+  st.pts = scratch(kPoints16[1], uint64_t(n) * 16, "dt points (build numbering)");
+  st.perm = scratch(kPoints4[4], uint64_t(n) * 4, "dt canonical ids");
+  st.rec.dispatch_groups(renumber_, {st.tri.points, st.list, st.loc, st.pts, st.perm, st.tri.verts}, init,
+                         groups(n));
   st.end();
   submit(st, false);
+  release(st.tri.points, kPoints16[0]);
   st.list2 = scratch(kPoints4[2], uint64_t(n) * 4, "dt list2");
   st.loc2 = scratch(kPoints4[3], uint64_t(n) * 4, "dt loc2");
   st.pick = scratch(kSlots8[0], uint64_t(slots) * 8, "dt pick");
@@ -304,12 +324,11 @@ void DelaunayBuilder::start(State& st) const {
   st.counters = create_buffer(ctx_, DT_COUNTERS * 4, "dt counters");
   st.args = create_buffer(ctx_, DT_ARGS_WORDS * 4, "dt args");
   st.scan_sums = create_buffer(ctx_, scan_scratch_bytes(slots), "dt scan sums");
-  st.rec.fill(st.pick, DT_NONE);
-  st.rec.fill(st.claim, DT_NONE);
-  st.rec.fill(st.counters, 0);
   st.list_len = n;
   st.left = n - 3;
   st.used = 4;
+  st.sampling = sample_stride > 1 && n >= sample_min_points;
+  st.samples = (n + sample_stride - 1) / sample_stride;
 }
 
 // One round, one submit: every point left walks to its slot and bids for it (relocate; walks the filters
@@ -323,9 +342,23 @@ void DelaunayBuilder::insert_round(State& st) const {
   st.log_round = st.round;
 
   st.begin("relocate");
+  if (st.round == 0) {  // recorded here, not in start(): a build of 3 points has no round and no submit
+    st.rec.fill(st.pick, DT_NONE);
+    st.rec.fill(st.claim, DT_NONE);
+    st.rec.fill(st.counters, 0);
+  }
+  // The sample is used up (fewer than two of its points per slot are left: a round would insert fewer points
+  // than there are slots): from now on every point walks, the others from a sample point's slot (dt_hint).
+  // Every point inserted so far was a sample point.
+  if (st.sampling && uint64_t(st.samples) < uint64_t(st.n - 3 - st.left) + uint64_t(sample_until) * st.used) {
+    st.sampling = false;
+    const DtRoundPush all{st.list_len, st.used, 0, cap, st.round, 0, sample_stride};
+    st.kernel("k:hint", [&] { st.rec.dispatch_groups(hint_, {st.loc}, all, groups(all.n)); });
+  }
   // Compaction first, when a quarter of the list are vertices: the points still to insert keep their order,
-  // their loc codes move with them, and the round's bids name positions in the compacted list.
-  if (uint64_t(st.list_len - st.left) * 4 >= st.list_len) {
+  // their loc codes move with them, and the round's bids name positions in the compacted list. Not while
+  // sampling: the sample is a set of positions.
+  if (!st.sampling && uint64_t(st.list_len - st.left) * 4 >= st.list_len) {
     const DtRoundPush all{st.list_len, st.used, 0, cap, st.round, 0};
     st.kernel("k:compact", [&] {
       st.rec.dispatch_groups(flags_, {st.loc, flags}, all, groups(all.n));
@@ -338,17 +371,20 @@ void DelaunayBuilder::insert_round(State& st) const {
     st.list_len = st.left;
   }
   st.log_list_len = st.list_len;
-  const DtRoundPush points{st.list_len, st.used, st.used + 16, cap, st.round, 0};
+  const uint32_t stride = st.sampling ? sample_stride : 1;
+  st.sampled_rounds += st.sampling ? 1 : 0;
+  DtRoundPush points{st.list_len, st.used, st.used + 16, cap, st.round, 0, stride};
+  std::copy(std::begin(st.corners), std::end(st.corners), points.corners);
   st.kernel("k:relocate", [&] {
     st.rec.dispatch_groups(relocate_,
-                           {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.list, st.pick, st.list2,
+                           {st.pts, st.tri.verts, st.tri.nbrs, st.loc, st.list, st.pick, st.list2,
                             st.counters, st.args, st.bids},
-                           points, groups(points.n));
+                           points, groups((uint64_t(points.n) + stride - 1) / stride));
   });
   st.kernel("k:relocate_exact", [&] {
     st.rec.dispatch_indirect(relocate_exact_,
-                             {st.tri.points, st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.list2,
-                              st.counters, st.args, st.bids, st.list},
+                             {st.pts, st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.list2, st.counters,
+                              st.args, st.bids, st.list},
                              &points, st.args, DT_ARGS_RELOC * sizeof(uint32_t));
   });
   st.end();
@@ -437,27 +473,50 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
     if (st.detail && st.logged_passes < kPassLog)
       st.rec.copy(st.counters, st.pass_log, 4, (DT_COUNT_LIST0 + src) * 4, 4 * st.logged_passes++);
     st.kernel("k:flip_check", [&] {
-      st.rec.dispatch_indirect(check,
-                               {st.tri.points, st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, st.pick,
-                                st.counters, st.args},
-                               &fp, st.args, at);
+      st.rec.dispatch_indirect(
+          check,
+          {st.pts, st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, st.pick, st.counters, st.args}, &fp,
+          st.args, at);
     });
     if (!inlined)
       st.kernel("k:flip_check_exact", [&] {
         st.rec.dispatch_indirect(
             flip_check_exact_,
-            {st.tri.points, st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, st.pick, st.counters}, &fp,
+            {st.pts, st.tri.verts, st.tri.nbrs, st.claim, st.partner, list, st.pick, st.counters}, &fp,
             st.args, DT_ARGS_FLIP * sizeof(uint32_t));
       });
     st.kernel("k:flip", [&] {
       st.rec.dispatch_indirect(flip,
                                {st.tri.verts, st.tri.nbrs, st.claim, st.partner, st.flip[0], st.flip[1],
-                                st.counters, st.args, st.tri.points},
+                                st.counters, st.args, st.pts},
                                &fp, st.args, at);
     });
     st.cur = 1 - src;
   }
   st.end();
+}
+
+// The slots' corners back to canonical ids and the coordinates to canonical order, into a fresh points
+// buffer (the canonical one was released at the start); the build's copies go back to the cache.
+void DelaunayBuilder::number_back(State& st) const {
+  const uint32_t n = st.n;
+  st.tri.points = scratch(kPoints16[0], uint64_t(n) * 16, "points");
+  st.begin("number back");
+  const DtRoundPush push{n, st.used, 0, 0, 0, 0};
+  st.rec.dispatch_groups(number_back_, {st.pts, st.perm, st.tri.verts, st.tri.points}, push,
+                         groups(std::max<uint64_t>(n, uint64_t(st.used) * 3)));
+  st.end();
+  submit(st, false);
+  release(st.pts, kPoints16[1]);
+  release(st.perm, kPoints4[4]);
+}
+
+// A scratch buffer back to the cache under `key`, or freed.
+void DelaunayBuilder::release(Buffer& b, const char* key) const {
+  if (cache)
+    cache->give(key, std::move(b));
+  else
+    b = Buffer{};
 }
 
 // Exclusive scan with the build's own block sums (the primitives' passes, levels as in Primitives).

@@ -9,7 +9,7 @@
 //
 // Fewer than 3 points, or all points collinear: num_slots = 0 (no triangles), as CGAL has no finite faces
 // then. Cost: about 20 rounds for 2M uniform points, each one submit with a host read of a few counters,
-// plus a submit per further batch of flip passes. Device memory at the peak: 144.5 bytes per point (see
+// plus a submit per further batch of flip passes. Device memory at the peak: 148.5 bytes per point (see
 // peak_bytes()).
 #pragma once
 #include <cstdint>
@@ -29,9 +29,10 @@
 namespace cdtgpu::gpu {
 
 struct DelaunayStats {
-  uint32_t rounds = 0;       // insertion rounds
-  uint32_t flip_passes = 0;  // flip passes over a non-empty list
-  uint32_t tail_passes = 0;  // of which run by a pass's last workgroup (DelaunayBuilder::tail_passes)
+  uint32_t rounds = 0;          // insertion rounds
+  uint32_t flip_passes = 0;     // flip passes over a non-empty list
+  uint32_t tail_passes = 0;     // of which run by a pass's last workgroup (DelaunayBuilder::tail_passes)
+  uint32_t sampled_rounds = 0;  // rounds in which only the sample walked (DelaunayBuilder::sample_stride)
   uint64_t flips = 0;
   uint64_t exact_walks = 0;                 // relocation walks the filters could not finish (exact pass)
   uint64_t exact_checks = 0;                // slot flip checks the filters could not decide (exact pass)
@@ -83,8 +84,17 @@ class DelaunayBuilder {
   // one workgroup would run many exact checks). Default: on GPUs; on CPU devices the inlined exact stage
   // makes lavapipe's flip kernel slow.
   bool tail_passes;
+  // The first rounds, while there are few slots, let only every sample_stride-th point (in Morton order) walk
+  // and bid, instead of relocating every point every round; then dt_hint starts the others' walks from a
+  // sample point's slot. Builds of fewer than sample_min_points points (and a stride of 1) do not sample.
+  uint32_t sample_stride = 32;
+  uint32_t sample_min_points = 1u << 16;
+  // Sample points left per slot in use below which the sampled rounds end. H100, stride x until, DT ms for 1M
+  // / 2M / 4M uniform points: none 8.18 / 12.87 / 22.07; 32 x 2: 8.68 / 12.99 / 20.59; 32 x 8: 8.27 / 12.18 /
+  // 19.78; 64 x 8: 8.59 / 12.01 / 20.30 (docs/gpu-delaunay.md).
+  uint32_t sample_until = 8;
   // Where the per-point and per-slot scratch comes from and goes back to (keys in gpu/buffers.hpp's
-  // kPoints4 / kSlots4 / kSlots8); null: allocated and freed by each build.
+  // kPoints4 / kPoints16 / kSlots4 / kSlots8); null: allocated and freed by each build.
   BufferCache* cache = nullptr;
 
  private:
@@ -95,13 +105,15 @@ class DelaunayBuilder {
   void flip_passes(State& st) const;
   void record_flip_batch(State& st, uint32_t passes) const;
   void scan(State& st, const Buffer& in, const Buffer& out, uint32_t n) const;
+  void number_back(State& st) const;
   void submit(State& st, bool counters) const;
   Buffer scratch(const char* key, uint64_t bytes, const char* name) const;
+  void release(Buffer& b, const char* key) const;
 
   const Context& ctx_;
   Primitives prims_;
-  Pass points_, init_, loc_init_, flags_, relocate_, relocate_exact_, compact_, claim_, grant_, rank_, split_,
-      split_fix_, flip_check_, flip_check_exact_, flip_;
+  Pass points_, init_, renumber_, hint_, number_back_, flags_, relocate_, relocate_exact_, compact_, claim_,
+      grant_, rank_, split_, split_fix_, flip_check_, flip_check_exact_, flip_;
   mutable std::optional<Pass> flip_check_inline_, flip_tail_;  // built on first use
 };
 

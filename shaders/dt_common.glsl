@@ -36,15 +36,19 @@ uint dt_inf_corner(uint v0, uint v1, uint v2) {
 }
 
 #if defined(DT_WALK) || defined(DT_CHECK)
+#ifdef DT_WALK
+// Kind 2's points straight from the push constants: read where the filter needs them, not held in registers.
+#define PRED_CORNER(k) dvec2(p.corners[2 * (k)], p.corners[2 * (k) + 1])
+#endif
 #include "predicates.glsl"
 #define DT_UNDECIDED PRED_UNDECIDED
 
 #if DT_EXACT
 // The single exact-predicate site of a shader (lavapipe compiles every inlined site of pred_sign_of for
-// seconds): kind 0 returns orient2d(p0, p1, p2), kind 1 CGAL's side_of_oriented_circle(p0, p1, p2, p,
+// seconds): kind 0 returns orient2d(p0, p1, p2), kind 2 orient2d(O, p0, p1) (dt_sign), kind 1 CGAL's side_of_oriented_circle(p0, p1, p2, p,
 // perturb = true), i.e. pred_incircle_perturbed, whose steps this repeats exactly.
 int dt_exact(int kind, dvec2 p0, dvec2 p1, dvec2 p2, dvec2 p) {
-  if (kind == 0) return pred_sign_of(0, p0, p1, p2, p2);
+  if (kind != 1) return pred_sign_of(kind, p0, p1, p2, p2);
   dvec2 pts[4] = dvec2[4](p0, p1, p2, p);
   int order[4] = int[4](0, 1, 2, 3);
   for (int i = 1; i < 4; ++i) {
@@ -77,12 +81,19 @@ int dt_exact(int kind, dvec2 p0, dvec2 p1, dvec2 p2, dvec2 p) {
 }
 #endif
 
-// kind 0: orient2d(a, b, c); kind 1: the perturbed incircle of (a, b, c) and d. The filter first (a non-zero
-// incircle is also the perturbed answer: the perturbation only breaks ties); DT_UNDECIDED without DT_EXACT.
+// kind 0: orient2d(a, b, c); kind 1: the perturbed incircle of (a, b, c) and d; kind 2: orient2d(O, a, b), O
+// the centroid of the first triangle (DT_WALK shaders only; see pred_orient_sum_filter). The filter first (a non-zero incircle is also the
+// perturbed answer: the perturbation only breaks ties); DT_UNDECIDED without DT_EXACT.
 bool dt_used_exact = false;  // set when the exact stage ran (the inlined flip check counts its slots)
 
 int dt_sign(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
+#ifdef DT_WALK
+  int s = kind == 0 ? pred_orient2d_filter(a, b, c)
+          : kind == 1 ? pred_incircle_filter(a, b, c, d)
+                      : pred_orient_sum_filter(a, b);
+#else
   int s = kind == 0 ? pred_orient2d_filter(a, b, c) : pred_incircle_filter(a, b, c, d);
+#endif
   if (kind == 1 && s == 0) s = DT_UNDECIDED;
 #if DT_EXACT
   if (s == DT_UNDECIDED) {
@@ -97,11 +108,16 @@ int dt_sign(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
 #ifdef DT_WALK
 // Visibility walk from slot t to the slot holding q, edges tried in order 0, 1, 2: it steps across the first
 // edge that has q strictly on its far side. In a Delaunay triangulation such walks never cycle; the cap only
-// guards against bugs. An infinite slot (x, y, INF) holds the points strictly beyond its hull edge x->y
-// (orient2d(x, y, q) > 0); from any other infinite slot the walk steps back into the finite triangle across
-// that edge, and it steps from a finite slot into an infinite one only with q strictly beyond the hull edge,
-// so it ends there. Returns NBR(slot, edge q lies on or DT_INSIDE); `undecided`: a filter could not decide
-// (DT_EXACT 0 only), and the code is NBR(slot reached so far, DT_INSIDE), where the exact walk resumes.
+// guards against bugs. Outside the hull (convex whenever walks run: after a round's flips), the centroid O of
+// the first triangle (strictly inside every later hull) splits the plane into one cone per hull edge x->y,
+// between the rays from O through x (closed) and through y (open); the infinite slot (x, y, INF) holds the
+// points of its cone strictly beyond x->y (orient2d(x, y, q) > 0). In an infinite slot the walk first moves
+// along the hull to the cone of q (the neighbour sharing x while q is past the ray through x, the one sharing
+// y while q is past the ray through y: both tests are exact, so it never turns back), then stops there if q is
+// beyond the edge, else steps into the finite slot across it. The cones keep the triangles of one round's
+// insertions outside the hull apart: a point merely beyond some hull edge could be split into one whose
+// triangle overlaps another's. Returns NBR(slot, edge q lies on or DT_INSIDE); `undecided`: a filter could not
+// decide (DT_EXACT 0 only), and the code is NBR(slot reached so far, DT_INSIDE), where the exact walk resumes.
 uint dt_walk(uint t, dvec2 q, uint max_steps, out bool undecided) {
   uint k = 0u, on_edge = DT_INSIDE, steps = 0u, inf = 3u;
   undecided = false;
@@ -118,16 +134,22 @@ uint dt_walk(uint t, dvec2 q, uint max_steps, out bool undecided) {
       c2 = v.z == INF_VERTEX ? q : xy[v.z];
       enter = false;
     }
-    uint e = inf < 3u ? inf : k;  // an infinite slot is tested on its hull edge only
+    // In an infinite slot, k counts its three tests: the ray through x, through y, then the hull edge x->y.
+    uint e = inf < 3u ? inf : k;
     dvec2 a = e == 0u ? c1 : (e == 1u ? c2 : c0), b = e == 0u ? c2 : (e == 1u ? c0 : c1);
-    int s = dt_sign(0, a, b, q, q);
+    bool ray = inf < 3u && k < 2u;
+    int s = dt_sign(ray ? 2 : 0, ray && k == 1u ? b : a, ray ? q : b, q, q);  // one call site: less code
     if (s == DT_UNDECIDED) {
       undecided = true;
       on_edge = DT_INSIDE;
       break;
     }
     bool step;
-    if (inf < 3u) {
+    if (ray) {
+      step = k == 0u ? s > 0 : s <= 0;  // past the ray through x: to the slot sharing x (across edge prev(inf))
+      if (step) e = k == 0u ? dt_prev(inf) : dt_next(inf);
+      ++k;
+    } else if (inf < 3u) {
       if (s > 0) break;
       step = true;
     } else if (s < 0) {

@@ -12,5 +12,5 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (i < p.n) flags[i] = loc[i] != DT_INSERTED ? 1u : 0u;
+  if (i < p.n) flags[i] = (loc[i] & DT_INSERTED) == 0u ? 1u : 0u;
 }

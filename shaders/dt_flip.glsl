@@ -146,6 +146,7 @@ void tail() {
     barrier();
     n = tail_n;
     if (n == 0u || n > DT_TAIL_MAX) break;
+    if (lid == 0u) atomicAdd(counters[DT_TAIL_DONE], 1u);  // a pass run here (DT_FLIP_PASSES counted its list)
     dt_epoch_now = p.epoch + pass;
     for (uint base = 0u; base < n; base += DT_WG)
       if (base + lid < n) request(cur, base + lid);
@@ -160,10 +161,7 @@ void tail() {
     barrier();
     if (lid == 0u) {
       atomicExchange(counters[DT_COUNT_LIST0 + cur], 0u);
-      if (dt_count(DT_COUNT_LIST0 + 1u - cur) > 0u) {
-        atomicAdd(counters[DT_FLIP_PASSES], 1u);
-        atomicAdd(counters[DT_TAIL_DONE], 1u);
-      }
+      if (dt_count(DT_COUNT_LIST0 + 1u - cur) > 0u) atomicAdd(counters[DT_FLIP_PASSES], 1u);
     }
     cur = 1u - cur;
   }

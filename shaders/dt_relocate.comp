@@ -2,11 +2,12 @@
 // (slot ids stay valid through splits and flips) to the slot that contains it (dt_walk, floating-point filters
 // only), then bids to be that slot's next vertex: a 64-bit atomicMin of (dt_bid_key << 32 | i) on pick[slot],
 // i the point's position in the list (Morton order: the round's splits are numbered in that order, so new
-// slots that lie together get ids that lie together); the smallest key wins, ties the smallest position. Lanes of a subgroup that bid on one slot (common:
-// the list is in Morton order, and the first rounds have few slots) combine their bids first: one atomic per
-// subgroup. A walk a filter cannot finish goes to the exact list (its position) (dt_relocate_exact finishes it and bids).
-// loc is kept per list position (coalesced here). A slot's first bid lists the slot (the bid list). The last
-// workgroup sizes the exact pass.
+// slots that lie together get ids that lie together); the smallest key wins, ties the smallest position.
+// Lanes of a subgroup that bid on one slot (common: the list is in Morton order, and the first rounds have few
+// slots) combine their bids first: one atomic per subgroup. A walk a filter cannot finish goes to the exact
+// list (its position; dt_relocate_exact finishes it and bids). loc is kept per list position (coalesced here).
+// A slot's first bid lists the slot (the bid list). The last workgroup sizes the exact pass. In the first
+// rounds only every p.stride-th position walks (a sample; DelaunayBuilder::sample_stride).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -37,12 +38,12 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 #include "dt_common.glsl"
 
 void main() {
-  uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
+  uint i = (linear_group_id() * DT_WG + gl_LocalInvocationIndex) * max(p.stride, 1u);
   bool bids = false, undecided = false;
   uint t = DT_NONE, key = DT_NONE, pt = DT_NONE;
   if (i < p.n) {
     uint code = loc[i];
-    if (code != DT_INSERTED) {
+    if ((code & DT_INSERTED) == 0u) {
       pt = list[i];
       dvec2 q = xy[pt];
       code = dt_walk(NBR_TRI(code), q, p.max_steps, undecided);

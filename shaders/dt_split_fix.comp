@@ -36,7 +36,7 @@ void fix(uint t) {
   pickw[2u * t + 1u] = DT_NONE;
   if (!dt_granted(t)) return;
   uint k = NBR_EDGE(loc[at]);
-  loc[at] = DT_INSERTED;
+  loc[at] = DT_INSERTED | NBR(t, DT_INSIDE);  // t has the new vertex as a corner
   uint X = p.base + 2u * dt_rank(at);
   if (k == DT_INSIDE) {
     dt_fix_edge(t, 0u);

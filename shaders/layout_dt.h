@@ -10,9 +10,10 @@ namespace cdtgpu::gpu::layout {
 
 #define DT_WG 128
 
-// A point that is a vertex already (loc[p]); an empty flip-list entry; a slot not changed by the current
-// step; a free pick or claim word.
-#define DT_INSERTED 0xFFFFFFFFu
+// loc[p] with this bit: the point is a vertex already (the rest names a slot it is a corner of, or was when
+// it was inserted: a place to start walks from for the points listed after it; see dt_hint).
+#define DT_INSERTED 0x80000000u
+// An empty flip-list entry; a slot not changed by the current step; a free pick or claim word.
 #define DT_NONE 0xFFFFFFFFu
 // loc[p] = NBR(slot, k): the uninserted point p lies in slot, strictly inside (k = DT_INSIDE) or on the
 // relative interior of edge k.
@@ -89,6 +90,10 @@ struct DtRoundPush {
   uint capacity;   // flip-list capacity (slots)
   uint round;      // insertion round, from 0
   uint epoch;      // this round's claim epoch (dt_claim_key)
+  uint stride;     // dt_relocate, dt_hint: list positions from one walking point to the next (0 or 1: all)
+  // dt_relocate(_exact): the first triangle's corners (x0, y0, x1, y1, x2, y2), whose centroid splits the
+  // outside of the hull into one cone per hull edge (dt_walk)
+  double corners[6];
 };
 
 // Flip passes: read list `src`, append to list 1 - src.

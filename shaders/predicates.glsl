@@ -156,14 +156,16 @@ int pred_scale_expansion(int e, int elen, double b, int h) {
 }
 
 #define PRED_REGISTERS 20
+// (register 12 also holds kind 2's sum of three orientations: 36 terms at most)
 const int PRED_OFFSET[PRED_REGISTERS] =
     int[PRED_REGISTERS](0, 4, 8, 12, 16, 20, 24, 32, 44, 56, 68, 80, 104, 152, 176, 224, 320, 416, 608, 0);
 
 // Steps {opcode, a, b, dst}: 0 cross: dst = cross(point a, point b); 1 sum: dst = reg a + reg b; 2 scale:
 // dst = reg a * coordinate b, b = point * 4 + (y ? 2 : 0) + (negated ? 1 : 0); 3 neg: reg a = -reg a.
 // [0, 5): orient2d = cross(a,b) + cross(b,c) + cross(c,a). [5, 44): incircle, the 4x4 determinant
-// | x y x^2+y^2 1 | along the lift column.
-const ivec4 PRED_PROGRAM[44] = ivec4[44](
+// | x y x^2+y^2 1 | along the lift column. [44, 61): orient2d(c0, x, q) + orient2d(c1, x, q) + orient2d(c2, x, q)
+// for points c0, c1, c2, x, q = the sum of cross(c_k, x), of cross(q, c_k) and three times cross(x, q).
+const ivec4 PRED_PROGRAM[61] = ivec4[61](
     ivec4(0, 0, 1, 0), ivec4(0, 1, 2, 1), ivec4(0, 2, 0, 2), ivec4(1, 0, 1, 6), ivec4(1, 6, 2, 7),
     ivec4(0, 0, 1, 0), ivec4(0, 1, 2, 1), ivec4(0, 2, 3, 2), ivec4(0, 3, 0, 3), ivec4(0, 0, 2, 4), ivec4(0, 1, 3, 5),
     ivec4(1, 2, 3, 6), ivec4(1, 6, 4, 9),
@@ -177,9 +179,13 @@ const ivec4 PRED_PROGRAM[44] = ivec4[44](
     ivec4(2, 10, 8, 11), ivec4(2, 11, 8, 12), ivec4(2, 10, 10, 13), ivec4(2, 13, 10, 14), ivec4(1, 12, 14, 15),
     ivec4(2, 7, 12, 11), ivec4(2, 11, 13, 12), ivec4(2, 7, 14, 13), ivec4(2, 13, 15, 14), ivec4(1, 12, 14, 16),
     ivec4(1, 15, 16, 18),
-    ivec4(1, 17, 18, 19));
+    ivec4(1, 17, 18, 19),
+    ivec4(0, 0, 3, 0), ivec4(0, 1, 3, 1), ivec4(0, 2, 3, 2), ivec4(1, 0, 1, 6), ivec4(1, 6, 2, 7),
+    ivec4(0, 4, 0, 0), ivec4(0, 4, 1, 1), ivec4(0, 4, 2, 2), ivec4(1, 0, 1, 6), ivec4(1, 6, 2, 8),
+    ivec4(0, 3, 4, 0), ivec4(0, 3, 4, 1), ivec4(0, 3, 4, 2), ivec4(1, 0, 1, 6), ivec4(1, 6, 2, 9),
+    ivec4(1, 7, 8, 11), ivec4(1, 11, 9, 12));
 
-dvec2 pred_pt[4];
+dvec2 pred_pt[5];
 int pred_len[PRED_REGISTERS];
 
 // Runs PRED_PROGRAM[begin, end) on pred_pt and returns the sign of the last register written.
@@ -247,12 +253,48 @@ int pred_incircle_filter(dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
   return PRED_UNDECIDED;
 }
 
-// The one function that holds an exact stage: kind 0 is orient2d(a, b, c), kind 1 incircle(a, b, c, d).
+#ifdef PRED_CORNER
+// Kind 2, for shaders that define PRED_CORNER(k) (k = 0, 1, 2) before including this file: the sign of
+// orient2d(c0, x, q) + orient2d(c1, x, q) + orient2d(c2, x, q), c_k = PRED_CORNER(k), which is that of
+// orient2d(centroid, x, q), exactly, with no rounded centroid; here when the rounding bound decides it: each determinant as in pred_orient2d_filter (error below 3.0000001 eps times its
+// |left| + |right|), plus two additions (2 eps of the same sum, loosely): 8 eps is safe.
+int pred_orient_sum_filter(dvec2 x, dvec2 q) {
+  precise double det = 0.0lf, sum = 0.0lf;
+  for (int k = 0; k < 3; ++k) {
+    dvec2 c = PRED_CORNER(k);
+    precise double l = (c.x - q.x) * (x.y - q.y);
+    precise double r = (c.y - q.y) * (x.x - q.x);
+    det += l - r;
+    sum += abs(l) + abs(r);
+  }
+  if (abs(det) > 8.0lf * PRED_EPS * sum) return pred_sign(det);
+  return PRED_UNDECIDED;
+}
+#endif
+
+// The one function that holds an exact stage: kind 0 is orient2d(a, b, c), kind 1 incircle(a, b, c, d),
+// kind 2 the orientation sum of pred_orient_sum_filter with x = a, q = b.
 // Each call site of it costs lavapipe 1-4 s of LLVM time (measured; once per machine, Mesa caches compiled
 // shaders), so shaders should reach it, directly or through the wrappers below, from as few places as they can.
 int pred_sign_of(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
+#ifdef PRED_CORNER
+  int s = kind == 0 ? pred_orient2d_filter(a, b, c)
+          : kind == 1 ? pred_incircle_filter(a, b, c, d)
+                      : pred_orient_sum_filter(a, b);
+#else
   int s = kind == 0 ? pred_orient2d_filter(a, b, c) : pred_incircle_filter(a, b, c, d);
+#endif
   if (s != PRED_UNDECIDED) return s;
+#ifdef PRED_CORNER
+  if (kind == 2) {
+    pred_pt[0] = PRED_CORNER(0);
+    pred_pt[1] = PRED_CORNER(1);
+    pred_pt[2] = PRED_CORNER(2);
+    pred_pt[3] = a;
+    pred_pt[4] = b;
+    return pred_run_exact(44, 61);
+  }
+#endif
   pred_pt[0] = a;
   pred_pt[1] = b;
   pred_pt[2] = c;

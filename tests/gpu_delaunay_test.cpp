@@ -10,6 +10,7 @@
 //   CDTGPU_DT_FLIP_BATCH=K     DelaunayBuilder::flip_passes_per_submit
 //   CDTGPU_DT_TAIL=0|1         DelaunayBuilder::tail_passes
 //   CDTGPU_DT_EXACT=separate|inline|adaptive  DelaunayBuilder::exact_checks
+//   CDTGPU_DT_SAMPLE=S         DelaunayBuilder::sample_stride (1: no sampled rounds)
 //   CDTGPU_DT_SMALL_CASES=N    small degenerate cases (default 300)
 //   CDTGPU_VALIDATION=0        validation off (it is on by default, and a missing layer is then an error)
 #include <CGAL/Delaunay_triangulation_2.h>
@@ -61,6 +62,8 @@ DelaunayBuilder& builder() {
       d.flip_passes_per_submit = uint32_t(std::atoi(k));
     d.profile_kernels = env_is("CDTGPU_DT_PROFILE_KERNELS", "1");
     if (const char* t = std::getenv("CDTGPU_DT_TAIL")) d.tail_passes = std::strcmp(t, "1") == 0;
+    if (const char* k = std::getenv("CDTGPU_DT_SAMPLE")) d.sample_stride = uint32_t(std::atoi(k));
+    if (const char* k = std::getenv("CDTGPU_DT_SAMPLE_UNTIL")) d.sample_until = uint32_t(std::atoi(k));
     if (const char* e = std::getenv("CDTGPU_DT_EXACT")) {
       using E = DelaunayBuilder::ExactChecks;
       d.exact_checks = std::strcmp(e, "inline") == 0     ? E::inlined
@@ -346,12 +349,57 @@ TEST(GpuDelaunay, TailPassesMatchCgal) {
   expect_same_slots_twice(dt, uniform(15000, 23));
 }
 
-// profile_kernels: the same triangles, and a log of every kernel with its round; the flip checks carry the
-// length of the list they read, and together they read every flip-list entry the build produced.
-TEST(GpuDelaunay, KernelLogCoversEveryPass) {
-  DelaunayBuilder dt(ctx());
-  dt.profile_kernels = true;
-  DelaunayStats stats = expect_cgal("profiled: uniform 5k", uniform(5000, 31), dt);
+// The first rounds over a sample of the points (every 8th or 32nd listed), then every point from a sample
+// point's slot: the same triangles on uniform, clustered, grid and duplicate-heavy input, and the same slots
+// on every run.
+TEST(GpuDelaunay, SampledRoundsMatchCgal) {
+  Rng r(41);
+  std::vector<std::pair<double, double>> blobs;
+  for (int b = 0; b < 4; ++b) {
+    double cx = r.uniform(0.1, 0.9), cy = r.uniform(0.1, 0.9), s = r.uniform(0.005, 0.02);
+    for (int i = 0; i < 3000; ++i) blobs.push_back({cx + s * r.normal(), cy + s * r.normal()});
+  }
+  for (int i = 0; i < 3000; ++i) blobs.push_back({r.unit(), r.unit()});
+  std::vector<std::pair<double, double>> lattice;
+  for (int i = 0; i < 30000; ++i)
+    lattice.push_back({std::floor(r.uniform(0, 150)), std::floor(r.uniform(0, 120))});
+  for (uint32_t stride : {8u, 32u}) {
+    DelaunayBuilder dt(ctx());
+    dt.sample_stride = stride;
+    dt.sample_min_points = 0;
+    dt.sample_until = stride == 8 ? 8 : 2;  // the default, and longer sampling
+    const std::string s = " /" + std::to_string(stride);
+    uint32_t sampled = expect_cgal("sampled: uniform 20k" + s, uniform(20000, 42), dt).sampled_rounds;
+    EXPECT_GE(sampled, 3u) << stride;
+    sampled = expect_cgal("sampled: clustered" + s, canonical(blobs), dt).sampled_rounds;
+    EXPECT_GE(sampled, 3u) << stride;
+    sampled = expect_cgal("sampled: grid 150x100" + s, grid(150, 100, 500000, 6000000, 1), dt).sampled_rounds;
+    EXPECT_GE(sampled, 3u) << stride;
+    sampled = expect_cgal("sampled: integers+dups" + s, canonical(lattice), dt).sampled_rounds;
+    EXPECT_GE(sampled, 3u) << stride;
+    expect_same_slots_twice(dt, uniform(15000, 43));
+  }
+}
+
+// Most points outside the first triangle and many on the final hull: outside insertions every round.
+TEST(GpuDelaunay, RingAndAnnulus) {
+  for (int seed = 0; seed < 2; ++seed) {
+    Rng r(100 + seed);
+    std::vector<std::pair<double, double>> ring, annulus;
+    for (int i = 0; i < 3000; ++i) {
+      double a = r.uniform(0, 6.283185307179586), d = 1 + r.uniform(0, 1e-3);
+      ring.push_back({d * std::cos(a), d * std::sin(a)});
+      double d2 = 1 + r.uniform(0, 0.2);
+      annulus.push_back({d2 * std::cos(a) * 3, d2 * std::sin(a)});
+    }
+    expect_cgal("ring " + std::to_string(seed), canonical(ring));
+    expect_cgal("annulus " + std::to_string(seed), canonical(annulus));
+  }
+}
+
+// The kernel log of one profiled build: in recording order, and its flip checks' list lengths account for
+// every dispatched pass that had a list (flip_passes counts the lists, tail_passes those run in a tail).
+void expect_kernel_log(const DelaunayStats& stats) {
   ASSERT_FALSE(stats.kernel_log.empty());
   uint32_t checks = 0, nonempty = 0, last_round = 0;
   for (const auto& k : stats.kernel_log) {
@@ -366,6 +414,18 @@ TEST(GpuDelaunay, KernelLogCoversEveryPass) {
   EXPECT_EQ(last_round + 1, stats.rounds);
   EXPECT_GE(checks, stats.flip_passes - stats.tail_passes);  // blind passes over empty lists included
   EXPECT_EQ(nonempty, stats.flip_passes - stats.tail_passes);
+}
+
+// profile_kernels: the same triangles, and a log of every kernel with its round, with and without the tail
+// passes (on by default on GPUs only).
+TEST(GpuDelaunay, KernelLogCoversEveryPass) {
+  for (bool tail : {false, true}) {
+    DelaunayBuilder dt(ctx());
+    dt.profile_kernels = true;
+    dt.tail_passes = tail;
+    expect_kernel_log(
+        expect_cgal(tail ? "profiled, tail: uniform 5k" : "profiled: uniform 5k", uniform(5000, 31), dt));
+  }
 }
 
 TEST(GpuDelaunay, Large) {
@@ -393,8 +453,11 @@ TEST(GpuDelaunay, Bench) {
   std::string passes;
   for (uint32_t p : stats.round_flip_passes) passes.append(" ").append(std::to_string(p));
   std::printf(
-      "[ dt bench ] rounds %u, flips %llu, flip passes %u (%u in last workgroups), dispatched per round:%s\n",
-      stats.rounds, (unsigned long long)stats.flips, stats.flip_passes, stats.tail_passes, passes.c_str());
+      "[ dt bench ] rounds %u (%u sampled), flips %llu, flip passes %u (%u in last workgroups), dispatched "
+      "per "
+      "round:%s\n",
+      stats.rounds, stats.sampled_rounds, (unsigned long long)stats.flips, stats.flip_passes,
+      stats.tail_passes, passes.c_str());
   if (stats.kernel_log.empty()) return;
   // Where the time goes (CDTGPU_DT_PROFILE_KERNELS=1): per round, and flip passes by list length.
   std::map<uint32_t, std::map<std::string, double>> per_round;
