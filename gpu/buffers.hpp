@@ -64,9 +64,8 @@ class BufferCache {
 
 // Shared scratch keys by shape (n = points, slots = triangle slots): the stages of one triangulation ask for
 // these, so a later stage reuses an earlier one's buffers. Every user initialises what it reads.
-inline constexpr const char* kPoints4[] = {"points x4 a", "points x4 b", "points x4 c", "points x4 d",
-                                           "points x4 e"};
-inline constexpr const char* kPoints16[] = {"points x16 a", "points x16 b"};
+inline constexpr const char* kPoints4[] = {"points x4 a", "points x4 b", "points x4 c", "points x4 d"};
+inline constexpr const char* kPoints16[] = {"points x16"};
 inline constexpr const char* kSlots4[] = {"slots x4 a", "slots x4 b", "slots x4 c", "slots x4 d", "slots x4 e"};
 inline constexpr const char* kSlots8[] = {"slots x8 a", "slots x8 b"};
 inline constexpr const char* kSlots12[] = {"slots x12 a", "slots x12 b"};
