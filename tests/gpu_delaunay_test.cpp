@@ -191,16 +191,21 @@ TEST(GpuDelaunay, UniformMatchesCgal) {
   expect_cgal("uniform 1k", uniform(1000, 2));
 }
 
-TEST(GpuDelaunay, ClusteredMatchesCgal) {
-  // Gaussian blobs 100x denser than the uniform background.
-  Rng r(3);
+// Gaussian blobs (per_blob points each) far denser than a uniform background of 3000 points in the unit
+// square.
+std::vector<double> clustered(uint64_t seed, int count, int per_blob) {
+  Rng r(seed);
   std::vector<std::pair<double, double>> pts;
-  for (int b = 0; b < 6; ++b) {
+  for (int b = 0; b < count; ++b) {
     double cx = r.uniform(0.1, 0.9), cy = r.uniform(0.1, 0.9), s = r.uniform(0.005, 0.02);
-    for (int i = 0; i < 2000; ++i) pts.push_back({cx + s * r.normal(), cy + s * r.normal()});
+    for (int i = 0; i < per_blob; ++i) pts.push_back({cx + s * r.normal(), cy + s * r.normal()});
   }
   for (int i = 0; i < 3000; ++i) pts.push_back({r.unit(), r.unit()});
-  expect_cgal("clustered", canonical(pts));
+  return canonical(pts);
+}
+
+TEST(GpuDelaunay, ClusteredMatchesCgal) {
+  expect_cgal("clustered", clustered(3, 6, 2000));  // blobs 100x denser than the background
 }
 
 TEST(GpuDelaunay, GridDemAllCocircular) {
@@ -353,13 +358,8 @@ TEST(GpuDelaunay, TailPassesMatchCgal) {
 // point's slot: the same triangles on uniform, clustered, grid and duplicate-heavy input, and the same slots
 // on every run.
 TEST(GpuDelaunay, SampledRoundsMatchCgal) {
+  const std::vector<double> blobs = clustered(41, 4, 3000);
   Rng r(41);
-  std::vector<std::pair<double, double>> blobs;
-  for (int b = 0; b < 4; ++b) {
-    double cx = r.uniform(0.1, 0.9), cy = r.uniform(0.1, 0.9), s = r.uniform(0.005, 0.02);
-    for (int i = 0; i < 3000; ++i) blobs.push_back({cx + s * r.normal(), cy + s * r.normal()});
-  }
-  for (int i = 0; i < 3000; ++i) blobs.push_back({r.unit(), r.unit()});
   std::vector<std::pair<double, double>> lattice;
   for (int i = 0; i < 30000; ++i)
     lattice.push_back({std::floor(r.uniform(0, 150)), std::floor(r.uniform(0, 120))});
@@ -371,7 +371,7 @@ TEST(GpuDelaunay, SampledRoundsMatchCgal) {
     const std::string s = " /" + std::to_string(stride);
     uint32_t sampled = expect_cgal("sampled: uniform 20k" + s, uniform(20000, 42), dt).sampled_rounds;
     EXPECT_GE(sampled, 3u) << stride;
-    sampled = expect_cgal("sampled: clustered" + s, canonical(blobs), dt).sampled_rounds;
+    sampled = expect_cgal("sampled: clustered" + s, blobs, dt).sampled_rounds;
     EXPECT_GE(sampled, 3u) << stride;
     sampled = expect_cgal("sampled: grid 150x100" + s, grid(150, 100, 500000, 6000000, 1), dt).sampled_rounds;
     EXPECT_GE(sampled, 3u) << stride;
