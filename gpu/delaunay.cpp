@@ -119,7 +119,6 @@ struct DelaunayBuilder::State {
   uint32_t used = 0;          // slots in use
   uint32_t round = 0;
   bool sampling = false;  // only every sample_stride-th listed point walks and bids (the first rounds)
-  uint32_t samples = 0;   // the listed points that do then
   uint32_t sampled_rounds = 0;
   uint32_t epoch = 0;              // of the last claim step (a round's splits, a flip pass); 0 is never used
   uint32_t cur = 0;                // the flip list the next pass reads
@@ -330,7 +329,6 @@ void DelaunayBuilder::start(State& st) const {
   st.left = n - 3;
   st.used = 4;
   st.sampling = sample_stride > 1 && n >= sample_min_points;
-  st.samples = (n + sample_stride - 1) / sample_stride;
 }
 
 // One round, one submit: every point left walks to its slot and bids for it (relocate; walks the filters
@@ -349,10 +347,11 @@ void DelaunayBuilder::insert_round(State& st) const {
     st.rec.fill(st.claim, DT_NONE);
     st.rec.fill(st.counters, 0);
   }
-  // The sample is used up (fewer than two of its points per slot are left: a round would insert fewer points
-  // than there are slots): from now on every point walks, the others from a sample point's slot (dt_hint).
-  // Every point inserted so far was a sample point.
-  if (st.sampling && uint64_t(st.samples) < uint64_t(st.n - 3 - st.left) + uint64_t(sample_until) * st.used) {
+  // The sample runs low (fewer than sample_until of its points per slot in use are left; every point inserted
+  // so far was a sample point): from now on every point walks, the others from a sample point's slot
+  // (dt_hint).
+  const uint64_t samples = (uint64_t(st.n) + sample_stride - 1) / sample_stride;
+  if (st.sampling && samples < uint64_t(st.n - 3 - st.left) + uint64_t(sample_until) * st.used) {
     st.sampling = false;
     const DtRoundPush all{st.list_len, st.used, 0, cap, st.round, 0, sample_stride};
     st.kernel("k:hint", [&] { st.rec.dispatch_groups(hint_, {st.loc}, all, groups(all.n)); });

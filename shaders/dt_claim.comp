@@ -1,8 +1,8 @@
-// Insertion round, step 2, over the bid list (the slots with a bid): the point that won slot t's bid claims what its split rewrites: t
-// alone (inside: 1->3), or t and the neighbour s across the edge it lies on (2->4; s may be infinite). A claim
-// is an atomicMin of dt_claim_key(t) on each slot: the smallest requester always wins all of its claims, so
-// every round inserts something. The code NBR(s, edge in s) goes to the high word of pick[t] for the later steps
-// (the low word is the winner's list position).
+// Insertion round, step 2, over the bid list (the slots with a bid): the point that won slot t's bid claims
+// what its split rewrites: t alone (inside: 1->3), or t and the neighbour s across the edge it lies on (2->4;
+// s may be infinite). A claim is an atomicMin of dt_claim_key(t) on each slot: the smallest requester always
+// wins all of its claims, so every round inserts something. The code NBR(s, edge in s) goes to the high word
+// of pick[t] for the later steps (the low word is the winner's list position).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require

@@ -45,8 +45,9 @@ uint dt_inf_corner(uint v0, uint v1, uint v2) {
 
 #if DT_EXACT
 // The single exact-predicate site of a shader (lavapipe compiles every inlined site of pred_sign_of for
-// seconds): kind 0 returns orient2d(p0, p1, p2), kind 2 orient2d(O, p0, p1) (dt_sign), kind 1 CGAL's side_of_oriented_circle(p0, p1, p2, p,
-// perturb = true), i.e. pred_incircle_perturbed, whose steps this repeats exactly.
+// seconds): kind 0 returns orient2d(p0, p1, p2), kind 2 orient2d(O, p0, p1) (dt_sign), kind 1 CGAL's
+// side_of_oriented_circle(p0, p1, p2, p, perturb = true), i.e. pred_incircle_perturbed, whose steps this
+// repeats exactly.
 int dt_exact(int kind, dvec2 p0, dvec2 p1, dvec2 p2, dvec2 p) {
   if (kind != 1) return pred_sign_of(kind, p0, p1, p2, p2);
   dvec2 pts[4] = dvec2[4](p0, p1, p2, p);
@@ -82,18 +83,13 @@ int dt_exact(int kind, dvec2 p0, dvec2 p1, dvec2 p2, dvec2 p) {
 #endif
 
 // kind 0: orient2d(a, b, c); kind 1: the perturbed incircle of (a, b, c) and d; kind 2: orient2d(O, a, b), O
-// the centroid of the first triangle (DT_WALK shaders only; see pred_orient_sum_filter). The filter first (a non-zero incircle is also the
-// perturbed answer: the perturbation only breaks ties); DT_UNDECIDED without DT_EXACT.
+// the centroid of the first triangle (DT_WALK shaders only; see pred_orient_sum_filter). The filter first (a
+// non-zero incircle is also the perturbed answer: the perturbation only breaks ties); DT_UNDECIDED without
+// DT_EXACT.
 bool dt_used_exact = false;  // set when the exact stage ran (the inlined flip check counts its slots)
 
 int dt_sign(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
-#ifdef DT_WALK
-  int s = kind == 0 ? pred_orient2d_filter(a, b, c)
-          : kind == 1 ? pred_incircle_filter(a, b, c, d)
-                      : pred_orient_sum_filter(a, b);
-#else
-  int s = kind == 0 ? pred_orient2d_filter(a, b, c) : pred_incircle_filter(a, b, c, d);
-#endif
+  int s = pred_filter(kind, a, b, c, d);
   if (kind == 1 && s == 0) s = DT_UNDECIDED;
 #if DT_EXACT
   if (s == DT_UNDECIDED) {

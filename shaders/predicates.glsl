@@ -256,8 +256,9 @@ int pred_incircle_filter(dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
 #ifdef PRED_CORNER
 // Kind 2, for shaders that define PRED_CORNER(k) (k = 0, 1, 2) before including this file: the sign of
 // orient2d(c0, x, q) + orient2d(c1, x, q) + orient2d(c2, x, q), c_k = PRED_CORNER(k), which is that of
-// orient2d(centroid, x, q), exactly, with no rounded centroid; here when the rounding bound decides it: each determinant as in pred_orient2d_filter (error below 3.0000001 eps times its
-// |left| + |right|), plus two additions (2 eps of the same sum, loosely): 8 eps is safe.
+// orient2d(centroid, x, q), exactly, with no rounded centroid; here when the rounding bound decides it: each
+// determinant as in pred_orient2d_filter (error below 3.0000001 eps times its |left| + |right|), plus two
+// additions (2 eps of the same sum, loosely): 8 eps is safe.
 int pred_orient_sum_filter(dvec2 x, dvec2 q) {
   precise double det = 0.0lf, sum = 0.0lf;
   for (int k = 0; k < 3; ++k) {
@@ -276,14 +277,16 @@ int pred_orient_sum_filter(dvec2 x, dvec2 q) {
 // kind 2 the orientation sum of pred_orient_sum_filter with x = a, q = b.
 // Each call site of it costs lavapipe 1-4 s of LLVM time (measured; once per machine, Mesa caches compiled
 // shaders), so shaders should reach it, directly or through the wrappers below, from as few places as they can.
-int pred_sign_of(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
+// The filter of a kind (see pred_sign_of): the sign, or PRED_UNDECIDED.
+int pred_filter(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
 #ifdef PRED_CORNER
-  int s = kind == 0 ? pred_orient2d_filter(a, b, c)
-          : kind == 1 ? pred_incircle_filter(a, b, c, d)
-                      : pred_orient_sum_filter(a, b);
-#else
-  int s = kind == 0 ? pred_orient2d_filter(a, b, c) : pred_incircle_filter(a, b, c, d);
+  if (kind == 2) return pred_orient_sum_filter(a, b);
 #endif
+  return kind == 0 ? pred_orient2d_filter(a, b, c) : pred_incircle_filter(a, b, c, d);
+}
+
+int pred_sign_of(int kind, dvec2 a, dvec2 b, dvec2 c, dvec2 d) {
+  int s = pred_filter(kind, a, b, c, d);
   if (s != PRED_UNDECIDED) return s;
 #ifdef PRED_CORNER
   if (kind == 2) {

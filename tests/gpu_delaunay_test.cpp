@@ -227,13 +227,18 @@ TEST(GpuDelaunay, PointsOnLines) {
   expect_cgal("lines", canonical(pts));
 }
 
-TEST(GpuDelaunay, IntegerCoordinatesWithDuplicates) {
-  Rng r(5);
+// 30000 draws from the 150 x 120 integer lattice (about 14600 distinct points), merged.
+std::vector<double> integer_lattice(uint64_t seed) {
+  Rng r(seed);
   std::vector<std::pair<double, double>> pts;
   for (int i = 0; i < 30000; ++i)
     pts.push_back({std::floor(r.uniform(0, 150)), std::floor(r.uniform(0, 120))});
-  std::vector<double> xy = canonical(pts);
-  EXPECT_LT(xy.size() / 2, pts.size());
+  return canonical(pts);
+}
+
+TEST(GpuDelaunay, IntegerCoordinatesWithDuplicates) {
+  std::vector<double> xy = integer_lattice(5);
+  EXPECT_LT(xy.size() / 2, 30000u);
   expect_cgal("integers+duplicates", xy);
 }
 
@@ -358,25 +363,20 @@ TEST(GpuDelaunay, TailPassesMatchCgal) {
 // point's slot: the same triangles on uniform, clustered, grid and duplicate-heavy input, and the same slots
 // on every run.
 TEST(GpuDelaunay, SampledRoundsMatchCgal) {
-  const std::vector<double> blobs = clustered(41, 4, 3000);
-  Rng r(41);
-  std::vector<std::pair<double, double>> lattice;
-  for (int i = 0; i < 30000; ++i)
-    lattice.push_back({std::floor(r.uniform(0, 150)), std::floor(r.uniform(0, 120))});
+  const std::pair<std::string, std::vector<double>> inputs[] = {
+      {"uniform 20k", uniform(20000, 42)},
+      {"clustered", clustered(41, 4, 3000)},
+      {"grid 150x100", grid(150, 100, 500000, 6000000, 1)},
+      {"integers+dups", integer_lattice(41)}};
   for (uint32_t stride : {8u, 32u}) {
     DelaunayBuilder dt(ctx());
     dt.sample_stride = stride;
     dt.sample_min_points = 0;
     dt.sample_until = stride == 8 ? 8 : 2;  // the default, and longer sampling
-    const std::string s = " /" + std::to_string(stride);
-    uint32_t sampled = expect_cgal("sampled: uniform 20k" + s, uniform(20000, 42), dt).sampled_rounds;
-    EXPECT_GE(sampled, 3u) << stride;
-    sampled = expect_cgal("sampled: clustered" + s, blobs, dt).sampled_rounds;
-    EXPECT_GE(sampled, 3u) << stride;
-    sampled = expect_cgal("sampled: grid 150x100" + s, grid(150, 100, 500000, 6000000, 1), dt).sampled_rounds;
-    EXPECT_GE(sampled, 3u) << stride;
-    sampled = expect_cgal("sampled: integers+dups" + s, canonical(lattice), dt).sampled_rounds;
-    EXPECT_GE(sampled, 3u) << stride;
+    for (const auto& [name, xy] : inputs) {
+      const std::string label = "sampled: " + name + " /" + std::to_string(stride);
+      EXPECT_GE(expect_cgal(label, xy, dt).sampled_rounds, 3u) << label;
+    }
     expect_same_slots_twice(dt, uniform(15000, 43));
   }
 }
@@ -453,9 +453,8 @@ TEST(GpuDelaunay, Bench) {
   std::string passes;
   for (uint32_t p : stats.round_flip_passes) passes.append(" ").append(std::to_string(p));
   std::printf(
-      "[ dt bench ] rounds %u (%u sampled), flips %llu, flip passes %u (%u in last workgroups), dispatched "
-      "per "
-      "round:%s\n",
+      "[ dt bench ] rounds %u (%u sampled), flips %llu, flip passes %u (%u in last workgroups), "
+      "dispatched per round:%s\n",
       stats.rounds, stats.sampled_rounds, (unsigned long long)stats.flips, stats.flip_passes,
       stats.tail_passes, passes.c_str());
   if (stats.kernel_log.empty()) return;
