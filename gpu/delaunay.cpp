@@ -29,8 +29,11 @@ uint32_t slot_capacity(uint32_t n) { return 2 * n - 2; }  // 2(n + 1) - 4: a sph
 // Flip passes per submit whose list length profile_kernels logs (later ones are logged with length 0).
 constexpr uint32_t kPassLog = 512;
 
-// Words of a bit set over n slots or list positions (and of the ranks: one more for the total).
+// Words of a bit set over n slots or list positions.
 uint64_t rank_words(uint32_t n) { return n / 32 + 2; }
+// Words of the ranks over n list positions (shaders/dt_rank.comp): a prefix per bit-set word, the total, and a
+// prefix per tile of DT_WG words.
+uint64_t ranks_words(uint32_t n) { return rank_words(n) + 1 + (rank_words(n) + DT_WG - 1) / DT_WG; }
 
 // ExactChecks::adaptive inlines the exact stage in a round's flip checks when the last round needed it for
 // fewer slots than this: uniform data never does; a grid DEM needs it for ~20% of its checks, where the
@@ -43,6 +46,11 @@ constexpr uint32_t kInlineExactBelow = 1024;
 // offset alignment Vulkan allows.
 constexpr uint64_t kLevelAlign = 256;
 uint64_t align_up(uint64_t v) { return (v + kLevelAlign - 1) / kLevelAlign * kLevelAlign; }
+
+// The round's copy of a bit set of `words` words kept twice (dt_rank clears the other one for the next round).
+Binding bit_set(const Buffer& b, uint64_t words, uint32_t round) {
+  return Binding(b, (round & 1) * align_up(words * 4), words * 4);
+}
 uint64_t scan_scratch_bytes(uint64_t n) {
   uint64_t bytes = kLevelAlign;
   for (uint64_t m = n; m > 1; m = (m + SCAN_BLOCK - 1) / SCAN_BLOCK)
@@ -103,9 +111,9 @@ struct DelaunayBuilder::State {
   Buffer loc, list, loc2, list2;  // per list position: a point's slot code, its id; compaction targets
   Buffer pick, claim, partner, flip[2];
   Buffer bids;     // the slots with a bid this round
-  Buffer granted;  // a bit per slot: its split was granted this round
-  // A bit per list position (its point's split was granted), and per word of it the set bits before.
-  Buffer granted_at, ranks;
+  // Two copies each, one per round parity (bit_set): a bit per slot (its split was granted this round), a bit
+  // per list position (its point's split was granted); the ranks of the granted positions.
+  Buffer granted, granted_at, ranks;
   Buffer counters, args, scan_sums;
   Buffer readback;
   void* host = nullptr;  // readback, mapped
@@ -118,6 +126,7 @@ struct DelaunayBuilder::State {
   uint32_t left = 0;          // points not yet vertices
   uint32_t used = 0;          // slots in use
   uint32_t round = 0;
+  bool in_round = false;  // the submits belong to st.log_round (its time goes to stats->round_log)
   bool sampling = false;  // only every sample_stride-th listed point walks and bids (the first rounds)
   uint32_t sampled_rounds = 0;
   uint32_t epoch = 0;              // of the last claim step (a round's splits, a flip pass); 0 is never used
@@ -125,6 +134,7 @@ struct DelaunayBuilder::State {
   uint32_t passes_last_round = 0;  // non-empty flip passes the last round needed: the next first batch
   uint32_t exact_last_round = 0;   // flip checks the last round decided exactly (ExactChecks::adaptive)
   uint32_t exact_before = 0;
+  uint32_t flips_before = 0;
   std::array<uint32_t, DT_COUNTERS> c{};
   std::optional<Profiler> prof;
   DelaunayStats* stats = nullptr;
@@ -168,7 +178,7 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       compact_(create_pass(ctx, {"dt_compact", 6, sizeof(DtRoundPush)})),
       claim_(create_pass(ctx, {"dt_claim", 6, sizeof(DtRoundPush)})),
       grant_(create_pass(ctx, {"dt_grant", 6, sizeof(DtRoundPush)})),
-      rank_(create_pass(ctx, {"dt_rank", 2, sizeof(DtRoundPush)})),
+      rank_(create_pass(ctx, {"dt_rank", 5, sizeof(DtRoundPush)})),
       split_(create_pass(ctx, {"dt_split", 12, sizeof(DtRoundPush)})),
       split_fix_(create_pass(ctx, {"dt_split_fix", 12, sizeof(DtRoundPush)})),
       flip_check_(create_pass(ctx, {"dt_flip_check", 9, sizeof(DtFlipPush)})),
@@ -280,7 +290,8 @@ uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
   const uint64_t per_point = uint64_t(n) * 4 * 5;             // loc, list, loc2, list2, perm
   const uint64_t per_slot = slots * (8 + 8 + 4 + 4 + 4 + 4);  // pick, claim, partner, 2 flip lists, bids
   const uint64_t small = 32 + (DT_COUNTERS + DT_ARGS_WORDS) * 4 + std::max(DT_COUNTERS * 4, 64);
-  const uint64_t bits = (rank_words(slots) + 2 * rank_words(n)) * 4;  // granted, granted_at, ranks
+  const uint64_t bits = 2 * align_up(rank_words(slots) * 4) + 2 * align_up(rank_words(n) * 4) +
+                        ranks_words(n) * 4;  // granted, granted_at (twice each), ranks
   return result + per_point + per_slot + scan_scratch_bytes(slots) + bits + small;
 }
 
@@ -319,9 +330,9 @@ void DelaunayBuilder::start(State& st) const {
   st.partner = scratch(kSlots4[0], uint64_t(slots) * 4, "dt partner");
   st.flip[1] = scratch(kSlots4[2], uint64_t(slots) * 4, "dt flip list 1");
   st.bids = scratch(kSlots4[3], uint64_t(slots) * 4, "dt bid list");
-  st.granted = create_buffer(ctx_, rank_words(slots) * 4, "dt granted");
-  st.granted_at = create_buffer(ctx_, rank_words(n) * 4, "dt granted positions");
-  st.ranks = create_buffer(ctx_, rank_words(n) * 4, "dt ranks");
+  st.granted = create_buffer(ctx_, 2 * align_up(rank_words(slots) * 4), "dt granted");
+  st.granted_at = create_buffer(ctx_, 2 * align_up(rank_words(n) * 4), "dt granted positions");
+  st.ranks = create_buffer(ctx_, ranks_words(n) * 4, "dt ranks");
   st.counters = create_buffer(ctx_, DT_COUNTERS * 4, "dt counters");
   st.args = create_buffer(ctx_, DT_ARGS_WORDS * 4, "dt args");
   st.scan_sums = create_buffer(ctx_, scan_scratch_bytes(slots), "dt scan sums");
@@ -340,12 +351,16 @@ void DelaunayBuilder::insert_round(State& st) const {
   const uint32_t cap = slot_capacity(st.n);
   const Buffer &flags = st.flip[0], &offsets = st.flip[1];
   st.log_round = st.round;
+  st.in_round = true;
+  if (st.stats) st.stats->round_log.push_back({});
 
   st.begin("relocate");
   if (st.round == 0) {  // recorded here, not in start(): a build of 3 points has no round and no submit
     st.rec.fill(st.pick, DT_NONE);
     st.rec.fill(st.claim, DT_NONE);
     st.rec.fill(st.counters, 0);
+    st.rec.fill(st.granted, 0);
+    st.rec.fill(st.granted_at, 0);
   }
   // The sample runs low (fewer than sample_until of its points per slot in use are left; every point inserted
   // so far was a sample point): from now on every point walks, the others from a sample point's slot
@@ -396,29 +411,32 @@ void DelaunayBuilder::insert_round(State& st) const {
   const DtRoundPush slots{points.n, st.used, 0, cap, st.round, ++st.epoch};
   const VkDeviceSize bid_args = DT_ARGS_BIDS * sizeof(uint32_t);
   const uint32_t words = (points.n + 31) / 32;
-  const DtRoundPush rank{words, st.used, 0, cap, st.round, st.epoch};
+  const uint64_t slot_words = rank_words(cap), point_words = rank_words(st.n);
+  const DtRoundPush rank{words, st.used, uint32_t(point_words), uint32_t(slot_words), st.round, st.epoch};
+  const Binding granted = bit_set(st.granted, slot_words, st.round);
+  const Binding granted_at = bit_set(st.granted_at, point_words, st.round);
   st.kernel("k:claim", [&] {
     st.rec.dispatch_indirect(claim_, {st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters}, &slots,
                              st.args, bid_args);
   });
-  st.kernel("k:grant+scan", [&] {
-    st.rec.fill(st.granted, 0);
-    st.rec.fill(st.granted_at, 0);
-    st.rec.dispatch_indirect(grant_, {st.pick, st.claim, st.granted, st.bids, st.counters, st.granted_at},
-                             &slots, st.args, bid_args);
-    st.rec.dispatch_groups(rank_, {st.granted_at, st.ranks}, rank, groups(uint64_t(words) + 1));
-    scan(st, st.ranks, st.ranks, words + 1);
+  st.kernel("k:grant+rank", [&] {
+    st.rec.dispatch_indirect(grant_, {st.pick, st.claim, granted, st.bids, st.counters, granted_at}, &slots,
+                             st.args, bid_args);
+    st.rec.dispatch_groups(rank_,
+                           {granted_at, st.ranks, st.counters, bit_set(st.granted, slot_words, st.round + 1),
+                            bit_set(st.granted_at, point_words, st.round + 1)},
+                           rank, groups(std::max<uint64_t>({words, slot_words, point_words})));
   });
   st.kernel("k:split", [&] {
     st.rec.dispatch_indirect(split_,
-                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.granted, st.partner, st.flip[0],
-                              st.counters, st.ranks, st.bids, st.granted_at, st.list},
+                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.flip[0],
+                              st.counters, st.ranks, st.bids, granted_at, st.list},
                              &slots, st.args, bid_args);
   });
   st.kernel("k:split_fix", [&] {
     st.rec.dispatch_indirect(split_fix_,
-                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.granted, st.partner, st.claim,
-                              st.counters, st.args, st.ranks, st.bids, st.granted_at},
+                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.claim,
+                              st.counters, st.args, st.ranks, st.bids, granted_at},
                              &slots, st.args, bid_args);
   });
   st.end();
@@ -426,11 +444,13 @@ void DelaunayBuilder::insert_round(State& st) const {
 
   const uint32_t passes_before = st.dispatched_passes();
   st.exact_before = st.c[DT_EXACT_CHECKS];
-  record_flip_batch(st, std::max(flip_passes_per_submit, st.passes_last_round + 1));
+  st.flips_before = st.c[DT_FLIPS];
+  record_flip_batch(st, st.passes_last_round + 1);
   submit(st, true);
   ++st.round;
   const uint32_t winners = st.c[DT_WINNERS];
   if (winners == 0) throw DeviceError("delaunay: an insertion round inserted nothing");
+  if (st.stats) st.stats->round_log.back().inserted = winners;
   st.left -= winners;
   st.used += 2 * winners;
   st.passes_last_round = st.dispatched_passes() - passes_before;
@@ -445,7 +465,10 @@ void DelaunayBuilder::flip_passes(State& st) const {
     st.passes_last_round += st.dispatched_passes() - passes_before;
   }
   st.exact_last_round = st.c[DT_EXACT_CHECKS] - st.exact_before;
-  if (st.stats) st.stats->round_flip_passes.push_back(st.passes_last_round);
+  if (st.stats) {
+    st.stats->round_flip_passes.push_back(st.passes_last_round);
+    st.stats->round_log.back().flips = st.c[DT_FLIPS] - st.flips_before;
+  }
 }
 
 // `passes` flip passes, each: check (filters: requests and claims; the last workgroup sizes the exact pass),
@@ -502,6 +525,7 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
 void DelaunayBuilder::number_back(State& st) const {
   const uint32_t n = st.n;
   st.tri.points = scratch(kPoints16[0], uint64_t(n) * 16, "points");
+  st.in_round = false;
   st.begin("number back");
   const DtRoundPush push{n, st.used, 0, 0, 0, 0};
   st.rec.dispatch_groups(number_back_, {st.pts, st.perm, st.tri.verts, st.tri.points}, push,
@@ -562,6 +586,7 @@ void DelaunayBuilder::submit(State& st, bool counters) const {
     const auto* lengths = static_cast<const uint32_t*>(st.pass_log_host);
     uint32_t pass = 0;
     for (const StageTime& s : st.prof->results()) {
+      if (st.in_round && s.name.rfind("k:", 0) != 0) st.stats->round_log.back().ms += s.ms;
       if (st.detail && s.name.rfind("k:", 0) == 0) {
         const bool check = s.name == "k:flip_check";
         const uint32_t items = check && pass < st.logged_passes ? lengths[pass]

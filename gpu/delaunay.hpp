@@ -37,6 +37,13 @@ struct DelaunayStats {
   uint64_t exact_walks = 0;                 // relocation walks the filters could not finish (exact pass)
   uint64_t exact_checks = 0;                // slot flip checks the filters could not decide (exact pass)
   std::vector<uint32_t> round_flip_passes;  // dispatched non-empty flip passes after each round's insertions
+  // Per round: its GPU time (the relocate, insert and flip stages), the points it inserted, the flips after.
+  struct Round {
+    double ms = 0;
+    uint32_t inserted = 0;
+    uint64_t flips = 0;
+  };
+  std::vector<Round> round_log;
   // GPU time per stage (timestamps), summed over rounds, in order of first appearance: "start" (first
   // triangle, Morton order), "relocate" (walks + compaction), "insert" (pick, claim, split, fix), "flip".
   std::vector<std::pair<std::string, double>> stage_ms;
@@ -67,7 +74,8 @@ class DelaunayBuilder {
   const Context& context() const { return ctx_; }
 
   // Flip passes recorded blind (indirect dispatch over the current list): a round's first batch is as long as
-  // the last round needed plus one, at least this; each further batch (one submit each) is this long.
+  // the last round needed plus one (an empty pass still costs two dispatches, ~8 us on the H100); each
+  // further batch (one submit each) is this long.
   uint32_t flip_passes_per_submit = 4;
   // With stats: time every kernel too (stages named "k:..."; the extra timestamps and barriers cost time).
   bool profile_kernels = false;

@@ -13,7 +13,7 @@
 //   DT_APPEND     dt_append_base (counters): subgroup-aggregated list appends.
 //   DT_LAST_GROUP dt_last_group, dt_write_args (counters, args): the last workgroup of a dispatch to finish
 //                 sizes the next indirect dispatch, which saves a one-invocation dispatch (and its barrier) per
-//                 step.
+//                 step. DT_NO_ARGS: without the args writers (no args buffer).
 // Predicates come in two builds of the same code: DT_EXACT 0 uses the floating-point filters alone and reports
 // DT_UNDECIDED when a filter cannot decide; DT_EXACT 1 finishes those cases with the exact stage. The exact
 // stage is big (private scratch arrays, expansion loops): inlined into the hot loop it made lavapipe 5-8x
@@ -308,6 +308,7 @@ bool dt_last_group() {
 
 uint dt_count(uint word) { return atomicAdd(counters[word], 0u); }
 
+#ifndef DT_NO_ARGS
 // Indirect-dispatch arguments for `groups` workgroups, split over x and y like Recorder::dispatch_groups.
 void dt_write_groups(uint at, uint groups) {
   uint x = min(groups, 65535u);
@@ -325,6 +326,7 @@ void dt_write_args(uint at, uint n) { dt_write_groups(at, max((n + DT_WG - 1u) /
 void dt_write_list_args(uint list, uint n) {
   dt_write_groups(list == 0u ? DT_ARGS_LIST0 : DT_ARGS_LIST1, (n + DT_WG - 1u) / DT_WG);
 }
+#endif
 #endif
 
 #ifdef DT_CLAIMS
@@ -357,11 +359,16 @@ uint dt_request(uint entry) {
 
 #ifdef DT_RANKS
 // The granted splits of a round (dt_grant): a bit per slot, and a bit per list position of the winning point,
-// with per 32-position word the exclusive prefix count of set bits (dt_rank + scan). A split's number is the
-// rank of its point's position: the list is in Morton order, so the new slots of points that lie together get
-// ids that lie together, and the flip passes' loads of neighbouring slots share cache lines.
+// with the set bits before each 32-position word (shaders/dt_rank.comp: within its tile of DT_WG words, and
+// per tile, after the p.n list positions' words and the total). A split's number is the rank of its point's
+// position: the list is in Morton order, so the new slots of points that lie together get ids that lie
+// together, and the flip passes' loads of neighbouring slots share cache lines.
 bool dt_granted(uint t) { return ((granted[t >> 5u] >> (t & 31u)) & 1u) != 0u; }
-uint dt_rank(uint at) { return ranks[at >> 5u] + bitCount(granted_at[at >> 5u] & ((1u << (at & 31u)) - 1u)); }
+uint dt_split_count() { return ranks[(p.n + 31u) / 32u]; }
+uint dt_rank(uint at) {
+  uint w = at >> 5u, words = (p.n + 31u) / 32u;
+  return ranks[words + 1u + w / DT_WG] + ranks[w] + bitCount(granted_at[w] & ((1u << (at & 31u)) - 1u));
+}
 #endif
 
 #ifdef DT_FIX_EDGES

@@ -100,7 +100,7 @@ uint split(uint t, out uvec4 e) {
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (i == 0u) counters[DT_WINNERS] = ranks[(p.n + 31u) / 32u];
+  if (i == 0u) counters[DT_WINNERS] = dt_split_count();
   uvec4 e;
   uint count = i < counters[DT_BIDS] ? split(bid_list[i], e) : 0u;
   uint at = dt_append_base(DT_COUNT_LIST0, count);

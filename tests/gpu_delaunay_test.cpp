@@ -457,6 +457,10 @@ TEST(GpuDelaunay, Bench) {
       "dispatched per round:%s\n",
       stats.rounds, stats.sampled_rounds, (unsigned long long)stats.flips, stats.flip_passes,
       stats.tail_passes, passes.c_str());
+  for (size_t r = 0; r < stats.round_log.size(); ++r)
+    std::printf("[ dt bench ] round %2zu: %7.3f ms, %8u inserted, %8llu flips, %u passes\n", r,
+                stats.round_log[r].ms, stats.round_log[r].inserted,
+                (unsigned long long)stats.round_log[r].flips, stats.round_flip_passes[r]);
   if (stats.kernel_log.empty()) return;
   // Where the time goes (CDTGPU_DT_PROFILE_KERNELS=1): per round, and flip passes by list length.
   std::map<uint32_t, std::map<std::string, double>> per_round;

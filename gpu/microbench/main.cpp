@@ -4,7 +4,8 @@
 // then host costs (buffer allocation, submit round trip, staging transfers) on the host clock.
 // Sizes over the device's maxStorageBufferRange are skipped with a note.
 //
-//   cdtgpu_microbench [--device NAME|INDEX] [--runs N] [--scale F]   (--scale 0.05: small sizes for lavapipe)
+//   cdtgpu_microbench [--device NAME|INDEX] [--runs N] [--scale F] [--chain]
+//   (--scale 0.05: small sizes for lavapipe; --chain: only the chain of tiny commands)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -22,6 +23,7 @@
 #include "gpu/primitives.hpp"
 #include "gpu/profiler.hpp"
 #include "gpu/recorder.hpp"
+#include "shaders/layout.h"
 
 using namespace cdtgpu::gpu;
 
@@ -31,6 +33,7 @@ struct Options {
   std::string device;
   int runs = 11;
   double scale = 1.0;
+  bool chain_only = false;
 };
 
 // Median GPU time of `runs` recordings: `setup` records untimed work (e.g. restoring the input), `work` the
@@ -134,6 +137,29 @@ void bench_predicates(const Context& ctx, const Options& o, uint64_t n) {
   }
 }
 
+// What a chain of tiny dependent commands costs on the GPU clock (each with the recorder's full barrier
+// before it): the DT build's early rounds are such chains. 256 one-workgroup dispatches, 256 indirect
+// dispatches of zero workgroups, 256 fills of one word.
+void bench_chain(const Context& ctx, const Primitives& prims, const Options& o) {
+  const int k = 256;
+  Buffer data = create_buffer(ctx, 4096, "chain data");
+  Buffer sums = create_buffer(ctx, 256, "chain sums");
+  const uint32_t zero[3] = {0, 1, 1};
+  Buffer args = upload_new(ctx, std::vector<uint32_t>(zero, zero + 3), "chain args");
+  const layout::ScanAddPush push{128};
+  double one = median_ms(ctx, o.runs, [](Recorder&) {}, [&](Recorder& rec) {
+    for (int i = 0; i < k; ++i) rec.dispatch(prims.scan_add, {data, sums}, push, 1);
+  });
+  double none = median_ms(ctx, o.runs, [](Recorder&) {}, [&](Recorder& rec) {
+    for (int i = 0; i < k; ++i) rec.dispatch_indirect(prims.scan_add, {data, sums}, &push, args);
+  });
+  double fills = median_ms(ctx, o.runs, [](Recorder&) {}, [&](Recorder& rec) {
+    for (int i = 0; i < k; ++i) rec.fill(sums, 0);
+  });
+  std::printf("chain of %d: one-group dispatch %.2f us, empty indirect %.2f us, fill %.2f us each\n", k,
+              one * 1e3 / k, none * 1e3 / k, fills * 1e3 / k);
+}
+
 // Host costs the pipeline pays on every call, on the host clock: a device-local buffer allocated, filled once
 // and freed, against the same fill on a kept buffer (their difference is the allocation); one submit + wait of
 // a tiny command buffer (each host round trip between GPU stages costs this); an upload and a download of 64 MiB
@@ -188,8 +214,9 @@ int main(int argc, char** argv) {
     if (a == "--device" && i + 1 < argc) o.device = argv[++i];
     else if (a == "--runs" && i + 1 < argc) o.runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--scale" && i + 1 < argc) o.scale = std::atof(argv[++i]);
+    else if (a == "--chain") o.chain_only = true;
     else {
-      std::fprintf(stderr, "usage: cdtgpu_microbench [--device NAME|INDEX] [--runs N] [--scale F]\n");
+      std::fprintf(stderr, "usage: cdtgpu_microbench [--device NAME|INDEX] [--runs N] [--scale F] [--chain]\n");
       return 2;
     }
   }
@@ -202,6 +229,8 @@ int main(int argc, char** argv) {
                 ctx.info.subgroup_size, o.runs);
     Primitives prims(ctx);
     auto size = [&](uint64_t n) { return std::max<uint64_t>(1, static_cast<uint64_t>(n * o.scale)); };
+    bench_chain(ctx, prims, o);
+    if (o.chain_only) return 0;
     bench_scan(ctx, prims, o, size(16u << 20));
     bench_scan(ctx, prims, o, size(64u << 20));
     bench_sort(ctx, prims, o, size(16u << 20), 32);
