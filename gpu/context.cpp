@@ -311,6 +311,7 @@ Context& Context::operator=(Context&& o) noexcept {
   info = o.info;
   validation = o.validation;
   cmd_push_descriptor_set = o.cmd_push_descriptor_set;
+  shader_stats = o.shader_stats;
   messages_ = std::move(o.messages_);
   o.messages_ = std::make_unique<std::vector<std::string>>();
   staging = std::move(o.staging);
@@ -371,13 +372,20 @@ Context create_context(const ContextOptions& options) {
   f.features.shaderFloat64 = VK_TRUE;
   f.features.shaderInt64 = VK_TRUE;
 
-  const char* exts[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+  const char* exts[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME, VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME};
+  const char* stats_env = std::getenv("CDTGPU_SHADER_STATS");
+  ctx.shader_stats = stats_env && std::string(stats_env) == "1" &&
+                     has_extension(ctx.physical, VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);
+  VkPhysicalDevicePipelineExecutablePropertiesFeaturesKHR fx{};
+  fx.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PIPELINE_EXECUTABLE_PROPERTIES_FEATURES_KHR;
+  fx.pipelineExecutableInfo = VK_TRUE;
+  if (ctx.shader_stats) f12.pNext = &fx;
   VkDeviceCreateInfo di{};
   di.sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO;
   di.pNext = &f;
   di.queueCreateInfoCount = 1;
   di.pQueueCreateInfos = &qi;
-  di.enabledExtensionCount = 1;
+  di.enabledExtensionCount = ctx.shader_stats ? 2 : 1;
   di.ppEnabledExtensionNames = exts;
   VK_CHECK(vkCreateDevice(ctx.physical, &di, nullptr, &ctx.device));
   vkGetDeviceQueue(ctx.device, ctx.queue_family, 0, &ctx.queue);

@@ -72,6 +72,9 @@ struct Context {
   DeviceInfo info;
   bool validation = false;              // the validation layer is active
   PFN_vkCmdPushDescriptorSetKHR cmd_push_descriptor_set = nullptr;
+  // CDTGPU_SHADER_STATS=1 and VK_KHR_pipeline_executable_properties: create_pass prints each pipeline's
+  // statistics (registers, spills: what limits occupancy) to stderr.
+  bool shader_stats = false;
 
   // Every validation warning or error recorded since creation (or the last clear_messages()).
   const std::vector<std::string>& messages() const { return *messages_; }

@@ -2,6 +2,9 @@
 #include "gpu/passes.hpp"
 
 #include <algorithm>
+#include <cstdio>
+#include <string>
+#include <vector>
 #include <utility>
 
 #include "gpu/check.hpp"
@@ -57,6 +60,40 @@ void Pass::release() {
   set_layout = VK_NULL_HANDLE;
 }
 
+namespace {
+
+// One line per pipeline executable: its name and every statistic the driver reports.
+void print_statistics(const Context& ctx, const std::string& name, VkPipeline pipeline) {
+  auto props = reinterpret_cast<PFN_vkGetPipelineExecutablePropertiesKHR>(
+      vkGetDeviceProcAddr(ctx.device, "vkGetPipelineExecutablePropertiesKHR"));
+  auto stats = reinterpret_cast<PFN_vkGetPipelineExecutableStatisticsKHR>(
+      vkGetDeviceProcAddr(ctx.device, "vkGetPipelineExecutableStatisticsKHR"));
+  if (!props || !stats) return;
+  VkPipelineInfoKHR pi{VK_STRUCTURE_TYPE_PIPELINE_INFO_KHR, nullptr, pipeline};
+  uint32_t count = 0;
+  props(ctx.device, &pi, &count, nullptr);
+  for (uint32_t e = 0; e < count; ++e) {
+    VkPipelineExecutableInfoKHR ei{VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_INFO_KHR, nullptr, pipeline, e};
+    uint32_t n = 0;
+    stats(ctx.device, &ei, &n, nullptr);
+    std::vector<VkPipelineExecutableStatisticKHR> v(n, {VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_STATISTIC_KHR});
+    stats(ctx.device, &ei, &n, v.data());
+    std::string line = "shader stats: " + name + ":";
+    for (const auto& st : v) {
+      line += std::string(" ") + st.name + "=";
+      switch (st.format) {
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_BOOL32_KHR: line += st.value.b32 ? "1" : "0"; break;
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_INT64_KHR: line += std::to_string(st.value.i64); break;
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_UINT64_KHR: line += std::to_string(st.value.u64); break;
+        default: line += std::to_string(st.value.f64);
+      }
+    }
+    std::fprintf(stderr, "%s\n", line.c_str());
+  }
+}
+
+}  // namespace
+
 Pass create_pass(const Context& ctx, const PassDesc& desc) {
   std::span<const uint32_t> code = shader_spirv(desc.name);
   Pass pass;
@@ -98,9 +135,11 @@ Pass create_pass(const Context& ctx, const PassDesc& desc) {
   ci.stage.module = module;
   ci.stage.pName = "main";
   ci.layout = pass.layout;
+  if (ctx.shader_stats) ci.flags |= VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR;
   VkResult r = vkCreateComputePipelines(ctx.device, VK_NULL_HANDLE, 1, &ci, nullptr, &pass.pipeline);
   vkDestroyShaderModule(ctx.device, module, nullptr);
   if (r != VK_SUCCESS) vk_fail(r, ("vkCreateComputePipelines for pass '" + desc.name + "'").c_str(), __FILE__, __LINE__);
+  if (ctx.shader_stats) print_statistics(ctx, desc.name, pass.pipeline);
   return pass;
 }
 
