@@ -111,7 +111,7 @@ uint flip(uint src, uint i, out uint out_a, out uint out_b) {
   return 2u;
 }
 
-// Appends an invocation's 0..2 entries to list dst (every invocation of the subgroup calls it) and counts its
+// Appends an invocation's 0..2 entries to list dst (every invocation of the workgroup calls it) and counts its
 // flips.
 void append(uint dst, uint count, uint a, uint b) {
   uint at = dt_append_base(DT_COUNT_LIST0 + dst, count);
@@ -123,8 +123,7 @@ void append(uint dst, uint count, uint a, uint b) {
       if (count == 2u) list_set(dst, at + 1u, b);
     }
   }
-  uint flips = subgroupAdd(count == 2u ? 1u : 0u);
-  if (subgroupElect() && flips > 0u) atomicAdd(counters[DT_FLIPS], flips);
+  dt_count_add(DT_FLIPS, count == 2u ? 1u : 0u);
 }
 
 #ifdef DT_TAIL

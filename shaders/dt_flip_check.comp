@@ -8,6 +8,8 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "layout_dt.h"
 #include "common.glsl"
 
@@ -27,15 +29,17 @@ layout(push_constant) uniform Push { DtFlipPush p; };
 #define DT_CHECK
 #define DT_CLAIMS
 #define DT_LAST_GROUP
+#define DT_APPEND
 #include "dt_common.glsl"
 
-void check(uint i) {
+// Entry i: request or settle; returns true when a filter could not decide (the entry goes to the exact list).
+bool check(uint i) {
   uint entry = list[i];
   uint t = DT_ENTRY_SLOT(entry);
   uint k, uc;
   int r = dt_check_slot(t, DT_ENTRY_MODE(entry), DT_ENTRY_EDGE(entry), k, uc);
   if (r == DT_UNDECIDED) {
-    exact_list[atomicAdd(counters[DT_EXACT_FLIP], 1u)] = i;
+    return true;
   } else if (r == 1) {
     list[i] = DT_ENTRY(t, DT_REQUEST, k);
     partner[t] = uc;
@@ -45,10 +49,13 @@ void check(uint i) {
   } else {
     list[i] = DT_NONE;
   }
+  return false;
 }
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (i < counters[DT_COUNT_LIST0 + p.src]) check(i);
+  bool undecided = i < counters[DT_COUNT_LIST0 + p.src] && check(i);
+  uint at = dt_append_base(DT_EXACT_FLIP, undecided ? 1u : 0u);
+  if (undecided) exact_list[at] = i;
   if (dt_last_group() && gl_LocalInvocationIndex == 0u) dt_write_args(DT_ARGS_FLIP, dt_count(DT_EXACT_FLIP));
 }

@@ -5,6 +5,8 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "layout_dt.h"
 #include "common.glsl"
 
@@ -24,9 +26,11 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 #define DT_EXACT 1
 #define DT_WALK
 #define DT_LAST_GROUP
+#define DT_APPEND
 #include "dt_common.glsl"
 
-void relocate(uint i) {
+// Exact-list entry i: its walk and bid; returns the slot when this was the slot's first bid, else DT_NONE.
+uint relocate(uint i) {
   if (i == 0u) counters[DT_EXACT_WALKS] += counters[DT_EXACT_RELOC];
   uint at = exact_list[i], pt = list[at];
   dvec2 q = xy[pt];
@@ -34,12 +38,14 @@ void relocate(uint i) {
   uint code = dt_walk(NBR_TRI(loc[at]), q, p.max_steps, undecided);
   loc[at] = code;
   uint t = NBR_TRI(code);
-  if (atomicMin(pick[t], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(at)) == ~uint64_t(0))
-    bid_list[atomicAdd(counters[DT_BIDS], 1u)] = t;
+  bool first = atomicMin(pick[t], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(at)) == ~uint64_t(0);
+  return first ? t : DT_NONE;
 }
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (i < counters[DT_EXACT_RELOC]) relocate(i);
+  uint slot = i < counters[DT_EXACT_RELOC] ? relocate(i) : DT_NONE;
+  uint listed = dt_append_base(DT_BIDS, slot != DT_NONE ? 1u : 0u);
+  if (slot != DT_NONE) bid_list[listed] = slot;
   if (dt_last_group() && gl_LocalInvocationIndex == 0u) dt_write_args(DT_ARGS_BIDS, dt_count(DT_BIDS));
 }
