@@ -59,7 +59,9 @@ uint winner_of(uint n) {
   uint64_t c = claim[n];
   if (!dt_claim_current(c)) return DT_NONE;
   uint r = uint(c), t = NBR_TRI(r);
-  return claim[t] == c && claim[NBR_TRI(partner[t])] == c ? r : DT_NONE;
+  // A request claims its slot t and the neighbour u: n is one of them, whose claim is known to hold.
+  if (n != t) return claim[t] == c ? r : DT_NONE;
+  return claim[NBR_TRI(partner[t])] == c ? r : DT_NONE;
 }
 
 // Where edge l of slot n is after this pass; `flips`: n flips in this pass.

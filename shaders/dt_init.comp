@@ -55,6 +55,6 @@ void main() {
   dvec2 q = xy[i];
   double y0 = from_orderable64(red[0]), y1 = from_orderable64(~red[1]);
   uint qx = quantize(q.x, xy[0].x, xy[p.n - 1u].x), qy = quantize(q.y, y0, y1);
-  keys[i] = spread16(qx) | (spread16(qy) << 1);
+  keys[i] = (spread16(qx) | (spread16(qy) << 1)) >> p.key_shift;
   ids[i] = i;
 }

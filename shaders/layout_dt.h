@@ -8,7 +8,7 @@
 namespace cdtgpu::gpu::layout {
 #endif
 
-#define DT_WG 128
+#define DT_WG 256
 
 // loc[p] with this bit: the point is a vertex already (the rest names a slot it is a corner of, or was when
 // it was inserted: a place to start walks from for the points listed after it; see dt_hint).
@@ -79,6 +79,7 @@ struct DtInitPush {
   uint a;
   uint b;
   uint c;
+  uint key_shift;  // dt_init: the Morton keys' low bits dropped (DelaunayBuilder::start)
 };
 
 // Passes of an insertion round: over the point list (dt_relocate, dt_compact: n = its length) or over the
