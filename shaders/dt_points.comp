@@ -1,7 +1,8 @@
 // Delaunay start, step 1: over all points, the y range (for Morton keys; x is sorted, so its range is the first
 // and last point) and the point farthest from the line v0-v1 by a floating-point estimate of orient2d, ties to
 // the smallest index. The host checks the candidate exactly. Every result is an atomicMin of a 64-bit key,
-// reduced over the subgroup first (one atomic per subgroup and key: all invocations hit the same three words).
+// reduced over the workgroup first, and skipped when the key is not below the word's value: every workgroup
+// hits the same three words, where atomics queue (one per subgroup and word cost 0.13 ms at 2M points on the H100).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -33,6 +34,8 @@ uint64_t subgroup_min64(uint64_t v) {
   return (uint64_t(hmin) << 32) | uint64_t(lmin);
 }
 
+shared uint64_t part[3u * DT_WG];  // per subgroup: its three minima
+
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   uint64_t none = ~uint64_t(0);
@@ -48,9 +51,17 @@ void main() {
   k0 = subgroup_min64(k0);
   k1 = subgroup_min64(k1);
   k2 = subgroup_min64(k2);
-  if (subgroupElect() && k0 != none) {
-    atomicMin(red[0], k0);
-    atomicMin(red[1], k1);
-    atomicMin(red[2], k2);
+  if (subgroupElect()) {
+    part[3u * gl_SubgroupID] = k0;
+    part[3u * gl_SubgroupID + 1u] = k1;
+    part[3u * gl_SubgroupID + 2u] = k2;
+  }
+  barrier();
+  if (gl_LocalInvocationIndex < 3u) {
+    uint w = gl_LocalInvocationIndex;
+    uint64_t k = none;
+    for (uint s = 0u; s < gl_NumSubgroups; ++s) k = min(k, part[3u * s + w]);
+    // A plain read first: the minimum only falls, so a stale value can only cause an extra atomic.
+    if (k < red[w]) atomicMin(red[w], k);
   }
 }
