@@ -1,11 +1,15 @@
 // Sort key of each slot for the canonical triangle order: a finite triangle rotated to start at its smallest
 // vertex a, (a, b, c) counter-clockwise, gets key (a << 32 | b) and payload c. The directed edge a->b lies in one
 // triangle only, so finite keys are unique and sorting them is the canonical order. Infinite slots get key
-// (num_points << 32), above every finite key; count[0] counts the finite slots.
+// (num_points << 32), above every finite key; count[0] counts the finite slots (one atomic per subgroup).
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "layout.h"
 #include "common.glsl"
+#include "subgroup_append.glsl"
 
 layout(local_size_x = CANONICAL_WG) in;
 layout(std430, binding = 0) readonly buffer Verts { uint verts[]; };
@@ -31,5 +35,5 @@ void main() {
   }
   keys[t] = uvec2(v1, v0);
   payload[t] = v2;
-  atomicAdd(count[0], 1u);
+  SUBGROUP_ADD(count[0], 1u);
 }

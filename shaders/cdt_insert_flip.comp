@@ -3,9 +3,13 @@
 // slot pairs, and a winner reads only its own two slots, so the flips of one round do not race.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #include "layout_cdt.h"
 #include "common.glsl"
+#include "subgroup_append.glsl"
 
 layout(local_size_x = CDT_WG) in;
 layout(std430, binding = 0) buffer Verts { uint verts[]; };
@@ -37,5 +41,7 @@ void main() {
   uint t2 = NBR_TRI(code2), k2 = NBR_EDGE(code2);
   if (claim[t2] != key) return;
   cdt_flip(t1, k1, t2, k2, p.round);
-  flips[atomicAdd(ctl[CDT_CTL_FLIPS], 1u)] = uvec2(t1, t2);
+  uint at;
+  SUBGROUP_APPEND(at, ctl[CDT_CTL_FLIPS]);
+  flips[at] = uvec2(t1, t2);
 }

@@ -4,9 +4,13 @@
 // and Lawson's argument (each flip lowers the lifted surface) bounds the number of flips.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #include "layout_cdt.h"
 #include "common.glsl"
+#include "subgroup_append.glsl"
 
 layout(local_size_x = CDT_WG) in;
 layout(std430, binding = 0) buffer Verts { uint verts[]; };
@@ -28,7 +32,11 @@ layout(push_constant) uniform Push { CdtRoundPush p; };
 #include "cdt_common.glsl"
 
 void enqueue(uint t) {
-  if (atomicExchange(qstamp[t], p.round + 1u) != p.round + 1u) next_queue[atomicAdd(ctl[CDT_CTL_NEXT], 1u)] = t;
+  if (atomicExchange(qstamp[t], p.round + 1u) != p.round + 1u) {
+    uint at;
+    SUBGROUP_APPEND(at, ctl[CDT_CTL_NEXT]);
+    next_queue[at] = t;
+  }
 }
 
 void main() {
@@ -47,7 +55,9 @@ void main() {
   }
   if (won) {
     cdt_flip(t, k, u, ku, p.round);
-    flips[atomicAdd(ctl[CDT_CTL_FLIPS], 1u)] = uvec2(t, u);
+    uint at;
+    SUBGROUP_APPEND(at, ctl[CDT_CTL_FLIPS]);
+    flips[at] = uvec2(t, u);
     enqueue(t);
     enqueue(u);
   } else {

@@ -3,8 +3,12 @@
 // scheduling; nothing downstream depends on it (claims are keyed by edge, not by queue position).
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "layout_cdt.h"
 #include "common.glsl"
+#include "subgroup_append.glsl"
 
 layout(local_size_x = CDT_WG) in;
 layout(std430, binding = 0) readonly buffer Verts { uint verts[]; };
@@ -20,5 +24,7 @@ void main() {
   if (p.all == 0u && stamp[t] == CDT_NEVER) return;
   if (verts[3u * t] == INF_VERTEX || verts[3u * t + 1u] == INF_VERTEX || verts[3u * t + 2u] == INF_VERTEX) return;
   qstamp[t] = p.round;
-  queue[atomicAdd(ctl[CDT_CTL_NEXT], 1u)] = t;
+  uint at;
+  SUBGROUP_APPEND(at, ctl[CDT_CTL_NEXT]);
+  queue[at] = t;
 }

@@ -14,10 +14,14 @@
 // Every geometric question is orient2d(a, q, r) at one call site (lavapipe compiles each site separately).
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
 #include "layout_cdt.h"
 #include "common.glsl"
+#include "subgroup_append.glsl"
 #include "predicates.glsl"
 #include "cdt_common.glsl"
 
@@ -220,10 +224,9 @@ void main() {
     uint crossed = found == FOUND_CROSSED ? rows : 0u;
     counts[c] = crossed;
     start[c] = found == FOUND_CROSSED ? t0 : CDT_NEVER;
-    if (crossed != 0u) {
-      atomicAdd(ctl[CDT_CTL_CROSSED], crossed);
-      atomicMax(ctl[CDT_CTL_MAXK], crossed);
-    }
+    SUBGROUP_ADD(ctl[CDT_CTL_CROSSED], crossed);
+    uint most = subgroupMax(crossed);
+    if (subgroupElect() && most != 0u) atomicMax(ctl[CDT_CTL_MAXK], most);
     if (fixed_rows) {
       if (crossed > p.stride) ctl[CDT_CTL_ROUND_OVER] = 1u;
       for (uint i = min(crossed, p.stride); i < p.stride; ++i)
