@@ -34,10 +34,11 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
     Profiler prof(ctx_, 1);
     prof.begin(rec, "canonical order");
     rec.fill(count, 0);
-    rec.dispatch_groups(keys_, {tri.verts, keys, payload, count}, CanonicalKeysPush{slots, tri.num_points}, groups);
-    // Keys stay below (num_points + 1) << 32: the digits above that are zero and need no pass.
-    prims_.radix_sort(rec, keys, payload, slots, 64, 32 + std::bit_width(tri.num_points), {&keys2, &payload2});
-    rec.dispatch_groups(write_, {keys, payload, tris, count}, CanonicalKeysPush{slots, tri.num_points}, groups);
+    // Two vertex fields of `shift` bits: the digits above them are zero and need no pass.
+    const CanonicalKeysPush push{slots, tri.num_points, uint32_t(std::bit_width(tri.num_points))};
+    rec.dispatch_groups(keys_, {tri.verts, keys, payload, count}, push, groups);
+    prims_.radix_sort(rec, keys, payload, slots, 64, 2 * push.shift, {&keys2, &payload2});
+    rec.dispatch_groups(write_, {keys, payload, tris, count}, push, groups);
     prof.end(rec);
     rec.submit();
     if (gpu_ms) *gpu_ms = prof.results().front().ms;

@@ -1,7 +1,9 @@
 // Sort key of each slot for the canonical triangle order: a finite triangle rotated to start at its smallest
 // vertex a, (a, b, c) counter-clockwise, gets key (a << 32 | b) and payload c. The directed edge a->b lies in one
-// triangle only, so finite keys are unique and sorting them is the canonical order. Infinite slots get key
-// (num_points << 32), above every finite key; count[0] counts the finite slots (one atomic per subgroup).
+// triangle only, so finite keys are unique and sorting them is the canonical order. The key packs a and b into
+// p.shift bits each ((a << shift) | b, shift = the bit width of num_points): fewer radix passes than a 32-bit
+// b field. Infinite slots get a = num_points, after every finite key; count[0] counts the finite slots (one
+// atomic per subgroup).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
@@ -14,16 +16,19 @@
 layout(local_size_x = CANONICAL_WG) in;
 layout(std430, binding = 0) readonly buffer Verts { uint verts[]; };
 layout(std430, binding = 1) writeonly buffer Keys { uvec2 keys[]; };  // (low word, high word)
+layout(push_constant) uniform Push { CanonicalKeysPush p; };
+
+// (a << p.shift) | b as (low word, high word); 0 < shift < 32.
+uvec2 pack(uint a, uint b) { return uvec2((a << p.shift) | b, a >> (32u - p.shift)); }
 layout(std430, binding = 2) writeonly buffer Payload { uint payload[]; };
 layout(std430, binding = 3) buffer Count { uint count[]; };
-layout(push_constant) uniform Push { CanonicalKeysPush p; };
 
 void main() {
   uint t = linear_group_id() * CANONICAL_WG + gl_LocalInvocationIndex;
   if (t >= p.num_slots) return;
   uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
   if (v0 == INF_VERTEX || v1 == INF_VERTEX || v2 == INF_VERTEX) {
-    keys[t] = uvec2(0u, p.num_points);
+    keys[t] = pack(p.num_points, 0u);
     payload[t] = 0u;
     return;
   }
@@ -33,7 +38,7 @@ void main() {
   } else if (v2 < v0 && v2 < v1) {
     uint a = v2; v2 = v1; v1 = v0; v0 = a;
   }
-  keys[t] = uvec2(v1, v0);
+  keys[t] = pack(v0, v1);
   payload[t] = v2;
   SUBGROUP_ADD(count[0], 1u);
 }

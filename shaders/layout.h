@@ -61,7 +61,8 @@ struct RadixPush {
 #define CANONICAL_WG 256
 struct CanonicalKeysPush {
   uint num_slots;
-  uint num_points;  // infinite slots get key num_points << 32, after every finite one
+  uint num_points;  // infinite slots get vertex num_points first, after every finite triangle
+  uint shift;       // bits of each vertex field in the key: the bit width of num_points (1..31)
 };
 
 #ifdef __cplusplus
