@@ -372,7 +372,8 @@ Context create_context(const ContextOptions& options) {
   f.features.shaderFloat64 = VK_TRUE;
   f.features.shaderInt64 = VK_TRUE;
 
-  const char* exts[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME, VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME};
+  const char* exts[] = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME,
+                        VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME};
   const char* stats_env = std::getenv("CDTGPU_SHADER_STATS");
   ctx.shader_stats = stats_env && std::string(stats_env) == "1" &&
                      has_extension(ctx.physical, VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME);

@@ -31,8 +31,8 @@ constexpr uint32_t kPassLog = 512;
 
 // Words of a bit set over n slots or list positions.
 uint64_t rank_words(uint32_t n) { return n / 32 + 2; }
-// Words of the ranks over n list positions (shaders/dt_rank.comp): a prefix per bit-set word, the total, and a
-// prefix per tile of DT_WG words.
+// Words of the ranks over n list positions (shaders/dt_rank.comp): a prefix per bit-set word, the total, and
+// a prefix per tile of DT_WG words.
 uint64_t ranks_words(uint32_t n) { return rank_words(n) + 1 + (rank_words(n) + DT_WG - 1) / DT_WG; }
 
 // ExactChecks::adaptive inlines the exact stage in a round's flip checks when the last round needed it for
@@ -47,7 +47,8 @@ constexpr uint32_t kInlineExactBelow = 1024;
 constexpr uint64_t kLevelAlign = 256;
 uint64_t align_up(uint64_t v) { return (v + kLevelAlign - 1) / kLevelAlign * kLevelAlign; }
 
-// The round's copy of a bit set of `words` words kept twice (dt_rank clears the other one for the next round).
+// The round's copy of a bit set of `words` words kept twice (dt_rank clears the other one for the next
+// round).
 Binding bit_set(const Buffer& b, uint64_t words, uint32_t round) {
   return Binding(b, (round & 1) * align_up(words * 4), words * 4);
 }
@@ -371,14 +372,14 @@ void DelaunayBuilder::insert_round(State& st) const {
   const uint64_t samples = (uint64_t(st.n) + sample_stride - 1) / sample_stride;
   if (st.sampling && samples < uint64_t(st.n - 3 - st.left) + uint64_t(sample_until) * st.used) {
     st.sampling = false;
-    const DtRoundPush all{st.list_len, st.used, 0, cap, st.round, 0, sample_stride};
+    const DtRoundPush all{st.list_len, st.used, 0, cap, st.round, 0, sample_stride, {}};
     st.kernel("k:hint", [&] { st.rec.dispatch_groups(hint_, {st.loc}, all, groups(all.n)); });
   }
   // Compaction first, when a quarter of the list are vertices: the points still to insert keep their order,
   // their loc codes move with them, and the round's bids name positions in the compacted list. Not while
   // sampling: the sample is a set of positions.
   if (!st.sampling && uint64_t(st.list_len - st.left) * 4 >= st.list_len) {
-    const DtRoundPush all{st.list_len, st.used, 0, cap, st.round, 0};
+    const DtRoundPush all{st.list_len, st.used, 0, cap, st.round, 0, 0, {}};
     st.kernel("k:compact", [&] {
       st.rec.dispatch_groups(flags_, {st.loc, flags}, all, groups(all.n));
       scan(st, flags, offsets, all.n);
@@ -392,7 +393,7 @@ void DelaunayBuilder::insert_round(State& st) const {
   st.log_list_len = st.list_len;
   const uint32_t stride = st.sampling ? sample_stride : 1;
   st.sampled_rounds += st.sampling ? 1 : 0;
-  DtRoundPush points{st.list_len, st.used, st.used + 16, cap, st.round, 0, stride};
+  DtRoundPush points{st.list_len, st.used, st.used + 16, cap, st.round, 0, stride, {}};
   std::copy(std::begin(st.corners), std::end(st.corners), points.corners);
   st.kernel("k:relocate", [&] {
     st.rec.dispatch_groups(relocate_,
@@ -411,11 +412,12 @@ void DelaunayBuilder::insert_round(State& st) const {
   st.begin("insert");
   // Over the bid list (indirect, sized by dt_relocate_exact), not over every slot: late rounds have a few
   // thousand bids and millions of slots.
-  const DtRoundPush slots{points.n, st.used, 0, cap, st.round, ++st.epoch};
+  const DtRoundPush slots{points.n, st.used, 0, cap, st.round, ++st.epoch, 0, {}};
   const VkDeviceSize bid_args = DT_ARGS_BIDS * sizeof(uint32_t);
   const uint32_t words = (points.n + 31) / 32;
   const uint64_t slot_words = rank_words(cap), point_words = rank_words(st.n);
-  const DtRoundPush rank{words, st.used, uint32_t(point_words), uint32_t(slot_words), st.round, st.epoch};
+  const uint32_t clear_slots = uint32_t(slot_words), clear_points = uint32_t(point_words);
+  const DtRoundPush rank{words, st.used, clear_points, clear_slots, st.round, st.epoch, 0, {}};
   const Binding granted = bit_set(st.granted, slot_words, st.round);
   const Binding granted_at = bit_set(st.granted_at, point_words, st.round);
   st.kernel("k:claim", [&] {
@@ -530,7 +532,7 @@ void DelaunayBuilder::number_back(State& st) const {
   st.tri.points = scratch(kPoints16[0], uint64_t(n) * 16, "points");
   st.in_round = false;
   st.begin("number back");
-  const DtRoundPush push{n, st.used, 0, 0, 0, 0};
+  const DtRoundPush push{n, st.used, 0, 0, 0, 0, 0, {}};
   st.rec.dispatch_groups(number_back_, {st.pts, st.perm, st.tri.verts, st.tri.points}, push,
                          groups(std::max<uint64_t>(n, uint64_t(st.used) * 3)));
   st.end();

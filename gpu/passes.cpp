@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <string>
-#include <vector>
 #include <utility>
+#include <vector>
 
 #include "gpu/check.hpp"
 
@@ -76,16 +76,25 @@ void print_statistics(const Context& ctx, const std::string& name, VkPipeline pi
     VkPipelineExecutableInfoKHR ei{VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_INFO_KHR, nullptr, pipeline, e};
     uint32_t n = 0;
     stats(ctx.device, &ei, &n, nullptr);
-    std::vector<VkPipelineExecutableStatisticKHR> v(n, {VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_STATISTIC_KHR});
+    VkPipelineExecutableStatisticKHR blank{};
+    blank.sType = VK_STRUCTURE_TYPE_PIPELINE_EXECUTABLE_STATISTIC_KHR;
+    std::vector<VkPipelineExecutableStatisticKHR> v(n, blank);
     stats(ctx.device, &ei, &n, v.data());
     std::string line = "shader stats: " + name + ":";
     for (const auto& st : v) {
       line += std::string(" ") + st.name + "=";
       switch (st.format) {
-        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_BOOL32_KHR: line += st.value.b32 ? "1" : "0"; break;
-        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_INT64_KHR: line += std::to_string(st.value.i64); break;
-        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_UINT64_KHR: line += std::to_string(st.value.u64); break;
-        default: line += std::to_string(st.value.f64);
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_BOOL32_KHR:
+          line += st.value.b32 ? "1" : "0";
+          break;
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_INT64_KHR:
+          line += std::to_string(st.value.i64);
+          break;
+        case VK_PIPELINE_EXECUTABLE_STATISTIC_FORMAT_UINT64_KHR:
+          line += std::to_string(st.value.u64);
+          break;
+        default:
+          line += std::to_string(st.value.f64);
       }
     }
     std::fprintf(stderr, "%s\n", line.c_str());

@@ -154,6 +154,15 @@ DelaunayStats expect_cgal(const std::string& name, const std::vector<double>& xy
       (unsigned long long)stats.exact_walks, (unsigned long long)stats.exact_checks,
       n ? double(stats.peak_device_bytes) / double(n) : 0.0, gpu_ms, stages.c_str(), cgal_ms);
   EXPECT_EQ(check_triangulation(host), "") << name;
+  // The per-round log adds up: every point but the first triangle's inserted once, every flip counted once.
+  EXPECT_EQ(stats.round_log.size(), stats.rounds) << name;
+  uint64_t inserted = 0, flips = 0;
+  for (const DelaunayStats::Round& r : stats.round_log) {
+    inserted += r.inserted;
+    flips += r.flips;
+  }
+  if (stats.rounds > 0) EXPECT_EQ(inserted, n - 3) << name;
+  EXPECT_EQ(flips, stats.flips) << name;
   EXPECT_EQ(got.size(), want.size()) << name;
   if (got.size() != want.size()) return stats;
   size_t diff = 0;

@@ -1,8 +1,8 @@
 // cdtgpu_microbench: throughput of the GPU primitives, timed with GPU timestamps. After two warm-up runs,
 // prints the median of N runs (default 11) of: exclusive scan (16M, 64M uint32), radix sort (16M keys of
-// 32 and 64 bits with a uint32 payload), and 4M predicate quadruples when shaders/predicates_eval.comp exists;
-// then host costs (buffer allocation, submit round trip, staging transfers) on the host clock.
-// Sizes over the device's maxStorageBufferRange are skipped with a note.
+// 32 and 64 bits with a uint32 payload), and 4M predicate quadruples when shaders/predicates_eval.comp
+// exists; then host costs (buffer allocation, submit round trip, staging transfers) on the host clock. Sizes
+// over the device's maxStorageBufferRange are skipped with a note.
 //
 //   cdtgpu_microbench [--device NAME|INDEX] [--runs N] [--scale F] [--chain]
 //   (--scale 0.05: small sizes for lavapipe; --chain: only the chain of tiny commands)
@@ -147,15 +147,21 @@ void bench_chain(const Context& ctx, const Primitives& prims, const Options& o) 
   const uint32_t zero[3] = {0, 1, 1};
   Buffer args = upload_new(ctx, std::vector<uint32_t>(zero, zero + 3), "chain args");
   const layout::ScanAddPush push{128};
-  double one = median_ms(ctx, o.runs, [](Recorder&) {}, [&](Recorder& rec) {
-    for (int i = 0; i < k; ++i) rec.dispatch(prims.scan_add, {data, sums}, push, 1);
-  });
-  double none = median_ms(ctx, o.runs, [](Recorder&) {}, [&](Recorder& rec) {
-    for (int i = 0; i < k; ++i) rec.dispatch_indirect(prims.scan_add, {data, sums}, &push, args);
-  });
-  double fills = median_ms(ctx, o.runs, [](Recorder&) {}, [&](Recorder& rec) {
-    for (int i = 0; i < k; ++i) rec.fill(sums, 0);
-  });
+  double one = median_ms(
+      ctx, o.runs, [](Recorder&) {},
+      [&](Recorder& rec) {
+        for (int i = 0; i < k; ++i) rec.dispatch(prims.scan_add, {data, sums}, push, 1);
+      });
+  double none = median_ms(
+      ctx, o.runs, [](Recorder&) {},
+      [&](Recorder& rec) {
+        for (int i = 0; i < k; ++i) rec.dispatch_indirect(prims.scan_add, {data, sums}, &push, args);
+      });
+  double fills = median_ms(
+      ctx, o.runs, [](Recorder&) {},
+      [&](Recorder& rec) {
+        for (int i = 0; i < k; ++i) rec.fill(sums, 0);
+      });
   std::printf("chain of %d: one-group dispatch %.2f us, empty indirect %.2f us, fill %.2f us each\n", k,
               one * 1e3 / k, none * 1e3 / k, fills * 1e3 / k);
 }
@@ -214,9 +220,11 @@ int main(int argc, char** argv) {
     if (a == "--device" && i + 1 < argc) o.device = argv[++i];
     else if (a == "--runs" && i + 1 < argc) o.runs = std::max(1, std::atoi(argv[++i]));
     else if (a == "--scale" && i + 1 < argc) o.scale = std::atof(argv[++i]);
-    else if (a == "--chain") o.chain_only = true;
+    else if (a == "--chain")
+      o.chain_only = true;
     else {
-      std::fprintf(stderr, "usage: cdtgpu_microbench [--device NAME|INDEX] [--runs N] [--scale F] [--chain]\n");
+      std::fprintf(stderr,
+                   "usage: cdtgpu_microbench [--device NAME|INDEX] [--runs N] [--scale F] [--chain]\n");
       return 2;
     }
   }
