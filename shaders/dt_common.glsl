@@ -8,7 +8,7 @@
 //                 numbers.
 //   DT_FIX_EDGES  dt_fix_edge (verts, nbrs, claim, info, p.epoch, DT_RANKS): the neighbour repair after a
 //                 round of splits.
-//   DT_WALK       dt_walk (xy, verts, nbrs, counters): the relocation walk.
+//   DT_WALK       dt_walk, dt_bid_key, dt_bid (xy, verts, nbrs, counters, pick): the relocation walk and bid.
 //   DT_CHECK      dt_check_slot (xy, verts, nbrs, counters): the flip test of a slot's edges.
 //   DT_APPEND     dt_append_base, dt_count_add (counters): workgroup-aggregated list appends and counts.
 //   DT_LAST_GROUP dt_last_group, dt_write_args (counters, args): the last workgroup of a dispatch to finish
@@ -204,6 +204,15 @@ uint dt_bid_key(uint code, dvec2 q) {
   }
   dvec2 d = q - centre;
   return dt_orderable(float(dot(d, d)));
+}
+
+// Bids `bid` on slot t (pick[t], 64-bit atomicMin); 1 when it was the slot's first bid. A plain read first
+// skips the atomic of a bid that cannot win (the word only falls within a round, so a stale read costs at most
+// an atomic): a slot's bidders queue on its word.
+uint dt_bid(uint t, uint64_t bid) {
+  uint64_t now = pick[t];
+  if (now != ~uint64_t(0) && now <= bid) return 0u;
+  return atomicMin(pick[t], bid) == ~uint64_t(0) ? 1u : 0u;
 }
 #endif
 

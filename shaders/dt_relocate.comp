@@ -37,14 +37,6 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 #define DT_LAST_GROUP
 #include "dt_common.glsl"
 
-// Bids `bid` on slot t; 1 when it was the slot's first bid. A plain read first skips the atomic of a bid that
-// cannot win (the word only falls, so a stale read costs at most an atomic): a slot's bidders queue on its word.
-uint dt_bid(uint t, uint64_t bid) {
-  uint64_t now = pick[t];
-  if (now != ~uint64_t(0) && now <= bid) return 0u;
-  return atomicMin(pick[t], bid) == ~uint64_t(0) ? 1u : 0u;
-}
-
 void main() {
   uint i = (linear_group_id() * DT_WG + gl_LocalInvocationIndex) * max(p.stride, 1u);
   bool bids = false, undecided = false;

@@ -38,8 +38,7 @@ uint relocate(uint i) {
   uint code = dt_walk(NBR_TRI(loc[at]), q, p.max_steps, undecided);
   loc[at] = code;
   uint t = NBR_TRI(code);
-  bool first = atomicMin(pick[t], (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(at)) == ~uint64_t(0);
-  return first ? t : DT_NONE;
+  return dt_bid(t, (uint64_t(dt_bid_key(code, q)) << 32) | uint64_t(at)) == 1u ? t : DT_NONE;
 }
 
 void main() {
