@@ -180,8 +180,8 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       claim_(create_pass(ctx, {"dt_claim", 6, sizeof(DtRoundPush)})),
       grant_(create_pass(ctx, {"dt_grant", 6, sizeof(DtRoundPush)})),
       rank_(create_pass(ctx, {"dt_rank", 5, sizeof(DtRoundPush)})),
-      split_(create_pass(ctx, {"dt_split", 12, sizeof(DtRoundPush)})),
-      split_fix_(create_pass(ctx, {"dt_split_fix", 12, sizeof(DtRoundPush)})),
+      split_(create_pass(ctx, {"dt_split", 11, sizeof(DtRoundPush)})),
+      split_fix_(create_pass(ctx, {"dt_split_fix", 13, sizeof(DtRoundPush)})),
       flip_check_(create_pass(ctx, {"dt_flip_check", 9, sizeof(DtFlipPush)})),
       flip_check_exact_(create_pass(ctx, {"dt_flip_check_exact", 8, sizeof(DtFlipPush)})),
       flip_(create_pass(ctx, {"dt_flip", 9, sizeof(DtFlipPush)})) {}
@@ -434,14 +434,14 @@ void DelaunayBuilder::insert_round(State& st) const {
   });
   st.kernel("k:split", [&] {
     st.rec.dispatch_indirect(split_,
-                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.flip[0],
-                              st.counters, st.ranks, st.bids, granted_at, st.list},
+                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.counters,
+                              st.ranks, st.bids, granted_at, st.list},
                              &slots, st.args, bid_args);
   });
   st.kernel("k:split_fix", [&] {
     st.rec.dispatch_indirect(split_fix_,
                              {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.claim,
-                              st.counters, st.args, st.ranks, st.bids, granted_at},
+                              st.counters, st.args, st.ranks, st.bids, granted_at, st.flip[0]},
                              &slots, st.args, bid_args);
   });
   st.end();

@@ -31,6 +31,14 @@ uint dt_orderable(float f) {
   return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
 }
 
+// The flip-list entry of slot s after a split or flip: edge `skip` is known to be legal, its other two edges
+// are to be checked when `next` (edge skip + 1) and `prev` (edge skip - 1) say so; DT_NONE when neither is.
+uint dt_entry_after(uint s, uint skip, bool next, bool prev) {
+  if (next && prev) return DT_ENTRY(s, DT_CHECK_SKIP, skip);
+  if (next || prev) return DT_ENTRY(s, DT_CHECK_ONLY, next ? dt_next(skip) : dt_prev(skip));
+  return DT_NONE;
+}
+
 uint dt_inf_corner(uint v0, uint v1, uint v2) {
   return v0 == INF_VERTEX ? 0u : (v1 == INF_VERTEX ? 1u : (v2 == INF_VERTEX ? 2u : 3u));
 }
@@ -405,24 +413,27 @@ uint dt_rank(uint at) {
 // split. If it was not, it is pointed back at (q, e); this is its only writer. If it was, its edge either stayed
 // in place (same two vertices at the same index) or moved where info[u] says: NBR(X, 3) for a 1->3 split (edge
 // l went to slot X + l - 1, same index; l = 0 stayed), else NBR(w, l') = "the edge that left went to slot w,
-// index l'". The thread fixing u does the same from its side.
+// index l'". The thread fixing u does the same from its side. Returns whether q's side checks the edge in the
+// first flip pass: when u was split too, its side lists the edge as well, and the smaller slot checks it.
 bool dt_split_this_round(uint u) {
   uint64_t c = claim[u];
   uint t = uint(c);
   return dt_claim_current(c) && dt_granted(t);
 }
 
-void dt_fix_edge(uint q, uint e) {
+bool dt_fix_edge(uint q, uint e) {
   uint c = nbrs[3u * q + e];
   uint u = NBR_TRI(c), l = NBR_EDGE(c);
   if (!dt_split_this_round(u)) {
     nbrs[3u * u + l] = NBR(q, e);
-    return;
+    return true;
   }
   uint x = verts[3u * q + dt_next(e)], y = verts[3u * q + dt_prev(e)];
-  if (verts[3u * u + dt_next(l)] == y && verts[3u * u + dt_prev(l)] == x) return;
+  if (verts[3u * u + dt_next(l)] == y && verts[3u * u + dt_prev(l)] == x) return q < u;
   uint inf = info[u];
-  nbrs[3u * q + e] = NBR_EDGE(inf) == DT_INSIDE ? NBR(NBR_TRI(inf) + l - 1u, l) : inf;
+  uint f = NBR_EDGE(inf) == DT_INSIDE ? NBR(NBR_TRI(inf) + l - 1u, l) : inf;
+  nbrs[3u * q + e] = f;
+  return q < NBR_TRI(f);
 }
 #endif
 

@@ -6,9 +6,7 @@
 //   2->4, p on edge i of t = (c@i, a@i+1, b@i+2), whose neighbour s = (d@j, b@j+1, a@j+2) (possibly infinite):
 //     t = (c, a, p), X = (c, p, b) [t's edge i+1 moved there, info[t] = NBR(X, i+1)],
 //     s = (d, b, p), X+1 = (d, p, a) [s's edge j+1 moved there, info[s] = NBR(X+1, j+1)].
-// The changed slots go to flip list 0, with
-// the edges to check: a 1->3 triangle only its outer edge, a 2->4 triangle all but its spoke (the new edges at
-// p are locally Delaunay: docs/gpu-delaunay.md).
+// dt_split_fix then lists the changed slots for the flip passes.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
@@ -24,22 +22,19 @@ layout(std430, binding = 2) readonly buffer Loc { uint loc[]; };
 layout(std430, binding = 3) readonly buffer Pick { uint pickw[]; };
 layout(std430, binding = 4) readonly buffer Granted { uint granted[]; };
 layout(std430, binding = 5) writeonly buffer Info { uint info[]; };  // the partner buffer, idle now
-layout(std430, binding = 6) writeonly buffer Flip { uint flip_list[]; };
-layout(std430, binding = 7) buffer Counters { uint counters[]; };
-layout(std430, binding = 8) readonly buffer Ranks { uint ranks[]; };
-layout(std430, binding = 9) readonly buffer Bids { uint bid_list[]; };
-layout(std430, binding = 10) readonly buffer GrantedAt { uint granted_at[]; };
-layout(std430, binding = 11) readonly buffer List { uint list[]; };
+layout(std430, binding = 6) buffer Counters { uint counters[]; };
+layout(std430, binding = 7) readonly buffer Ranks { uint ranks[]; };
+layout(std430, binding = 8) readonly buffer Bids { uint bid_list[]; };
+layout(std430, binding = 9) readonly buffer GrantedAt { uint granted_at[]; };
+layout(std430, binding = 10) readonly buffer List { uint list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
-#define DT_APPEND
 #define DT_RANKS
 #include "dt_common.glsl"
 
-// Slot t's split, if granted; returns how many changed slots it lists (0, 3 or 4), in e.
-uint split(uint t, out uvec4 e) {
-  e = uvec4(0u);
-  if (!dt_granted(t)) return 0u;
+// Slot t's split, if granted.
+void split(uint t) {
+  if (!dt_granted(t)) return;
   uint at = pickw[2u * t], sc = pickw[2u * t + 1u], pt = list[at];
   uint k = NBR_EDGE(loc[at]);
   uint X = p.base + 2u * dt_rank(at), Y = X + 1u;
@@ -62,8 +57,7 @@ uint split(uint t, out uvec4 e) {
     nbrs[3u * Y + 1u] = NBR(X, 2u);
     nbrs[3u * Y + 2u] = n2;
     info[t] = NBR(X, DT_INSIDE);
-    e = uvec4(DT_ENTRY(t, DT_CHECK_ONLY, 0u), DT_ENTRY(X, DT_CHECK_ONLY, 1u), DT_ENTRY(Y, DT_CHECK_ONLY, 2u), 0u);
-    return 3u;
+    return;
   }
   uint s = NBR_TRI(sc), j = NBR_EDGE(sc);
   uint i1 = dt_next(k), i2 = dt_prev(k), j1 = dt_next(j), j2 = dt_prev(j);
@@ -93,22 +87,10 @@ uint split(uint t, out uvec4 e) {
   nbrs[3u * Y + j2] = NBR(s, j1);
   info[t] = NBR(X, i1);
   info[s] = NBR(Y, j1);
-  e = uvec4(DT_ENTRY(t, DT_CHECK_SKIP, i1), DT_ENTRY(X, DT_CHECK_SKIP, i2), DT_ENTRY(s, DT_CHECK_SKIP, j1),
-            DT_ENTRY(Y, DT_CHECK_SKIP, j2));
-  return 4u;
 }
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   if (i == 0u) counters[DT_WINNERS] = dt_split_count();
-  uvec4 e;
-  uint count = i < counters[DT_BIDS] ? split(bid_list[i], e) : 0u;
-  uint at = dt_append_base(DT_COUNT_LIST0, count);
-  if (count > 0u) {
-    if (at + count > p.capacity) {
-      atomicAdd(counters[DT_OVERFLOW], 1u);
-    } else {
-      for (uint k = 0u; k < count; ++k) flip_list[at + k] = e[k];
-    }
-  }
+  if (i < counters[DT_BIDS]) split(bid_list[i]);
 }

@@ -1,11 +1,16 @@
 // Insertion round, step 5, over the bid list: each split repairs the outward edges of its new triangles
-// (dt_fix_edge: through info[] when the neighbour was split too) and marks its point as a vertex; every slot
-// with a bid frees its pick word. The last workgroup sizes the first flip pass (over list 0) and empties list 1
+// (dt_fix_edge: through info[] when the neighbour was split too), marks its point as a vertex and lists its
+// changed slots in flip list 0 with the edges to check: a 1->3 triangle only its outer edge, a 2->4 triangle
+// its outer edge and, from t and X only, its half of the split edge (the spokes, the new edges at p, are
+// locally Delaunay: docs/gpu-delaunay.md); an outer edge whose neighbour was split too is checked from the
+// smaller slot only (dt_fix_edge). Every slot with a bid frees its pick word. The last workgroup sizes the first flip pass (over list 0) and empties list 1
 // and the exact lists for their next use.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
 #extension GL_EXT_shader_atomic_int64 : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "layout_dt.h"
 #include "common.glsl"
 
@@ -22,38 +27,54 @@ layout(std430, binding = 8) writeonly buffer Args { uint args[]; };
 layout(std430, binding = 9) readonly buffer Ranks { uint ranks[]; };
 layout(std430, binding = 10) readonly buffer Bids { uint bid_list[]; };
 layout(std430, binding = 11) readonly buffer GrantedAt { uint granted_at[]; };
+layout(std430, binding = 12) writeonly buffer Flip { uint flip_list[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };
 
+#define DT_APPEND
 #define DT_CLAIMS
 #define DT_FIX_EDGES
 #define DT_LAST_GROUP
 #define DT_RANKS
 #include "dt_common.glsl"
 
-void fix(uint t) {
+// Slot t's bid: the split's repair if granted; returns its flip-list entries, 0..4 of e (DT_NONE: none).
+uvec4 fix(uint t) {
   uint at = pickw[2u * t], sc = pickw[2u * t + 1u];
   pickw[2u * t] = DT_NONE;
   pickw[2u * t + 1u] = DT_NONE;
-  if (!dt_granted(t)) return;
+  if (!dt_granted(t)) return uvec4(DT_NONE);
   uint k = NBR_EDGE(loc[at]);
   loc[at] = DT_INSERTED | NBR(t, DT_INSIDE);  // t has the new vertex as a corner
-  uint X = p.base + 2u * dt_rank(at);
+  uint X = p.base + 2u * dt_rank(at), Y = X + 1u;
   if (k == DT_INSIDE) {
-    dt_fix_edge(t, 0u);
-    dt_fix_edge(X, 1u);
-    dt_fix_edge(X + 1u, 2u);
-  } else {
-    uint s = NBR_TRI(sc), j = NBR_EDGE(sc);
-    dt_fix_edge(t, dt_prev(k));
-    dt_fix_edge(X, dt_next(k));
-    dt_fix_edge(s, dt_prev(j));
-    dt_fix_edge(X + 1u, dt_next(j));
+    return uvec4(dt_fix_edge(t, 0u) ? DT_ENTRY(t, DT_CHECK_ONLY, 0u) : DT_NONE,
+                 dt_fix_edge(X, 1u) ? DT_ENTRY(X, DT_CHECK_ONLY, 1u) : DT_NONE,
+                 dt_fix_edge(Y, 2u) ? DT_ENTRY(Y, DT_CHECK_ONLY, 2u) : DT_NONE, DT_NONE);
   }
+  // t = (c, a, p), X = (c, p, b), s = (d, b, p), Y = (d, p, a) (dt_split): the spokes are edges k + 1 of t,
+  // k + 2 of X, j + 1 of s and j + 2 of Y; the halves of the split edge (t's and X's edge k) are checked
+  // from t and X.
+  uint s = NBR_TRI(sc), j = NBR_EDGE(sc);
+  return uvec4(dt_entry_after(t, dt_next(k), dt_fix_edge(t, dt_prev(k)), true),
+               dt_entry_after(X, dt_prev(k), true, dt_fix_edge(X, dt_next(k))),
+               dt_entry_after(s, dt_next(j), dt_fix_edge(s, dt_prev(j)), false),
+               dt_entry_after(Y, dt_prev(j), false, dt_fix_edge(Y, dt_next(j))));
 }
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (i < counters[DT_BIDS]) fix(bid_list[i]);
+  uvec4 e = i < counters[DT_BIDS] ? fix(bid_list[i]) : uvec4(DT_NONE);
+  uint count = 0u;  // the entries, packed to the front
+  for (uint k = 0u; k < 4u; ++k)
+    if (e[k] != DT_NONE) e[count++] = e[k];
+  uint at = dt_append_base(DT_COUNT_LIST0, count);
+  if (count > 0u) {
+    if (at + count > p.capacity) {
+      atomicAdd(counters[DT_OVERFLOW], 1u);
+    } else {
+      for (uint k = 0u; k < count; ++k) flip_list[at + k] = e[k];
+    }
+  }
   if (dt_last_group() && gl_LocalInvocationIndex == 0u) {
     uint n = dt_count(DT_COUNT_LIST0);
     dt_write_list_args(0u, n);
