@@ -48,7 +48,7 @@ constexpr uint64_t kLevelAlign = 256;
 uint64_t align_up(uint64_t v) { return (v + kLevelAlign - 1) / kLevelAlign * kLevelAlign; }
 
 // The round's copy of a bit set of `words` words kept twice (dt_rank clears the other one for the next
-// round).
+// round; dt_insert_small clears what it set, and the rounds it runs come first, after the fills).
 Binding bit_set(const Buffer& b, uint64_t words, uint32_t round) {
   return Binding(b, (round & 1) * align_up(words * 4), words * 4);
 }
@@ -130,6 +130,7 @@ struct DelaunayBuilder::State {
   bool in_round = false;  // the submits belong to st.log_round (its time goes to stats->round_log)
   bool sampling = false;  // only every sample_stride-th listed point walks and bids (the first rounds)
   uint32_t sampled_rounds = 0;
+  uint32_t small_rounds = 0;
   uint32_t epoch = 0;              // of the last claim step (a round's splits, a flip pass); 0 is never used
   uint32_t cur = 0;                // the flip list the next pass reads
   uint32_t passes_last_round = 0;  // non-empty flip passes the last round needed: the next first batch
@@ -166,6 +167,8 @@ struct DelaunayBuilder::State {
 DelaunayBuilder::DelaunayBuilder(const Context& ctx)
     : exact_checks(ctx.info.type == "cpu" ? ExactChecks::separate : ExactChecks::adaptive),
       tail_passes(ctx.info.type != "cpu"),
+      small_rounds(ctx.props.limits.maxComputeWorkGroupInvocations >= DT_SMALL_WG &&
+                   ctx.props.limits.maxComputeWorkGroupSize[0] >= DT_SMALL_WG),
       ctx_(ctx),
       prims_(ctx),
       points_(create_pass(ctx, {"dt_points", 2, sizeof(DtPointsPush)})),
@@ -239,6 +242,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     stats->flip_passes = st.c[DT_FLIP_PASSES];
     stats->tail_passes = st.c[DT_TAIL_DONE];
     stats->sampled_rounds = st.sampled_rounds;
+    stats->small_rounds = st.small_rounds;
     stats->peak_device_bytes = peak_bytes(n);
   }
   return std::move(st.tri);
@@ -420,30 +424,43 @@ void DelaunayBuilder::insert_round(State& st) const {
   const DtRoundPush rank{words, st.used, clear_points, clear_slots, st.round, st.epoch, 0, {}};
   const Binding granted = bit_set(st.granted, slot_words, st.round);
   const Binding granted_at = bit_set(st.granted_at, point_words, st.round);
-  st.kernel("k:claim", [&] {
-    st.rec.dispatch_indirect(claim_, {st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters}, &slots,
-                             st.args, bid_args);
-  });
-  st.kernel("k:grant+rank", [&] {
-    st.rec.dispatch_indirect(grant_, {st.pick, st.claim, granted, st.bids, st.counters, granted_at}, &slots,
-                             st.args, bid_args);
-    st.rec.dispatch_groups(rank_,
-                           {granted_at, st.ranks, st.counters, bit_set(st.granted, slot_words, st.round + 1),
-                            bit_set(st.granted_at, point_words, st.round + 1)},
-                           rank, groups(std::max<uint64_t>({words, slot_words, point_words})));
-  });
-  st.kernel("k:split", [&] {
-    st.rec.dispatch_indirect(split_,
-                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.counters,
-                              st.ranks, st.bids, granted_at, st.list},
-                             &slots, st.args, bid_args);
-  });
-  st.kernel("k:split_fix", [&] {
-    st.rec.dispatch_indirect(split_fix_,
-                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.claim,
-                              st.counters, st.args, st.ranks, st.bids, granted_at, st.flip[0]},
-                             &slots, st.args, bid_args);
-  });
+  if (small_rounds && st.used <= DT_SMALL_SLOTS) {
+    ++st.small_rounds;
+    if (!insert_small_)
+      insert_small_.emplace(create_pass(ctx_, {"dt_insert_small", 12, sizeof(DtRoundPush)}));
+    st.kernel("k:insert_small", [&] {
+      st.rec.dispatch_groups(*insert_small_,
+                             {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters,
+                              st.args, granted, st.partner, st.flip[0], st.list},
+                             slots, 1);
+    });
+  } else {
+    st.kernel("k:claim", [&] {
+      st.rec.dispatch_indirect(claim_, {st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters}, &slots,
+                               st.args, bid_args);
+    });
+    st.kernel("k:grant+rank", [&] {
+      st.rec.dispatch_indirect(grant_, {st.pick, st.claim, granted, st.bids, st.counters, granted_at}, &slots,
+                               st.args, bid_args);
+      st.rec.dispatch_groups(
+          rank_,
+          {granted_at, st.ranks, st.counters, bit_set(st.granted, slot_words, st.round + 1),
+           bit_set(st.granted_at, point_words, st.round + 1)},
+          rank, groups(std::max<uint64_t>({words, slot_words, point_words})));
+    });
+    st.kernel("k:split", [&] {
+      st.rec.dispatch_indirect(split_,
+                               {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.counters,
+                                st.ranks, st.bids, granted_at, st.list},
+                               &slots, st.args, bid_args);
+    });
+    st.kernel("k:split_fix", [&] {
+      st.rec.dispatch_indirect(split_fix_,
+                               {st.tri.verts, st.tri.nbrs, st.loc, st.pick, granted, st.partner, st.claim,
+                                st.counters, st.args, st.ranks, st.bids, granted_at, st.flip[0]},
+                               &slots, st.args, bid_args);
+    });
+  }
   st.end();
   st.cur = 0;
 

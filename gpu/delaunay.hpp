@@ -33,6 +33,7 @@ struct DelaunayStats {
   uint32_t flip_passes = 0;     // flip passes over a non-empty list
   uint32_t tail_passes = 0;     // of which run by a pass's last workgroup (DelaunayBuilder::tail_passes)
   uint32_t sampled_rounds = 0;  // rounds in which only the sample walked (DelaunayBuilder::sample_stride)
+  uint32_t small_rounds = 0;    // rounds whose insertion steps ran in one workgroup (DelaunayBuilder::small_rounds)
   uint64_t flips = 0;
   uint64_t exact_walks = 0;                 // relocation walks the filters could not finish (exact pass)
   uint64_t exact_checks = 0;                // slot flip checks the filters could not decide (exact pass)
@@ -92,6 +93,10 @@ class DelaunayBuilder {
   // one workgroup would run many exact checks). Default: on GPUs; on CPU devices the inlined exact stage
   // makes lavapipe's flip kernel slow.
   bool tail_passes;
+  // Rounds that start with at most DT_SMALL_SLOTS slots in use run claim, grant, split and fix in one
+  // workgroup of DT_SMALL_WG invocations (dt_insert_small) instead of five dispatches. Default: where the
+  // device allows workgroups that large.
+  bool small_rounds;
   // The first rounds, while there are few slots, let only every sample_stride-th point (in Morton order) walk
   // and bid, instead of relocating every point every round; then dt_hint starts the others' walks from a
   // sample point's slot. Builds of fewer than sample_min_points points (and a stride of 1) do not sample.
@@ -122,7 +127,7 @@ class DelaunayBuilder {
   Primitives prims_;
   Pass points_, init_, renumber_, hint_, number_back_, flags_, relocate_, relocate_exact_, compact_, claim_,
       grant_, rank_, split_, split_fix_, flip_check_, flip_check_exact_, flip_;
-  mutable std::optional<Pass> flip_check_inline_, flip_tail_;  // built on first use
+  mutable std::optional<Pass> flip_check_inline_, flip_tail_, insert_small_;  // built on first use
 };
 
 GpuTriangulation build_delaunay(const Context& ctx, std::span<const double> xy,

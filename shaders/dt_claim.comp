@@ -1,8 +1,5 @@
 // Insertion round, step 2, over the bid list (the slots with a bid): the point that won slot t's bid claims
-// what its split rewrites: t alone (inside: 1->3), or t and the neighbour s across the edge it lies on (2->4;
-// s may be infinite). A claim is an atomicMin of dt_claim_key(t) on each slot: the smallest requester always
-// wins all of its claims, so every round inserts something. The code NBR(s, edge in s) goes to the high word
-// of pick[t] for the later steps (the low word is the winner's list position).
+// what its split rewrites (dt_claim_bid).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
@@ -21,14 +18,10 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_CLAIMS
 #include "dt_common.glsl"
+#define DT_INSERT_CLAIM
+#include "dt_insert.glsl"
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  if (i >= counters[DT_BIDS]) return;
-  uint t = bid_list[i];
-  uint k = NBR_EDGE(loc[pickw[2u * t]]);  // the winner's list position
-  uint sc = k < 3u ? nbrs[3u * t + k] : DT_NONE;
-  pickw[2u * t + 1u] = sc;
-  atomicMin(claim[t], dt_claim_key(t));
-  if (k < 3u) atomicMin(claim[NBR_TRI(sc)], dt_claim_key(t));
+  if (i < counters[DT_BIDS]) dt_claim_bid(bid_list[i]);
 }

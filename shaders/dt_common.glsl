@@ -5,7 +5,7 @@
 // after it has declared the buffers the code names:
 //   DT_CLAIMS     dt_claim_key (push constant p.epoch, or DT_EPOCH): claims of one step.
 //   DT_RANKS      dt_granted, dt_rank (granted, granted_at, ranks): which slots split this round and their
-//                 numbers.
+//                 numbers. DT_GRANTED: dt_granted alone (granted).
 //   DT_FIX_EDGES  dt_fix_edge (verts, nbrs, claim, info, p.epoch, DT_RANKS): the neighbour repair after a
 //                 round of splits.
 //   DT_WALK       dt_walk, dt_bid_key, dt_bid (xy, verts, nbrs, counters, pick): the relocation walk and bid.
@@ -393,13 +393,15 @@ uint dt_request(uint entry) {
 #endif
 #endif
 
-#ifdef DT_RANKS
+#if defined(DT_RANKS) || defined(DT_GRANTED)
 // The granted splits of a round (dt_grant): a bit per slot, and a bit per list position of the winning point,
 // with the set bits before each 32-position word (shaders/dt_rank.comp: within its tile of DT_WG words, and
 // per tile, after the p.n list positions' words and the total). A split's number is the rank of its point's
 // position: the list is in Morton order, so the new slots of points that lie together get ids that lie
 // together, and the flip passes' loads of neighbouring slots share cache lines.
 bool dt_granted(uint t) { return ((granted[t >> 5u] >> (t & 31u)) & 1u) != 0u; }
+#endif
+#ifdef DT_RANKS
 uint dt_split_count() { return ranks[(p.n + 31u) / 32u]; }
 uint dt_rank(uint at) {
   uint w = at >> 5u, words = (p.n + 31u) / 32u;

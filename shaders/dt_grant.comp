@@ -1,5 +1,5 @@
-// Insertion round, step 3, over the bid list: slot t's split is granted when its point won every claim it made;
-// granted splits set their slot's bit and their point's list-position bit (DT_RANKS). dt_rank and a scan then
+// Insertion round, step 3, over the bid list: slot t's split is granted when its point won every claim it made
+// (dt_grant_bid); granted splits set their slot's bit and their point's list-position bit (DT_RANKS). dt_rank and a scan then
 // number the splits in list (Morton) order, two new slots each.
 #version 460
 #extension GL_GOOGLE_include_directive : require
@@ -19,14 +19,14 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 
 #define DT_CLAIMS
 #include "dt_common.glsl"
+#define DT_INSERT_GRANT
+#include "dt_insert.glsl"
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   if (i >= counters[DT_BIDS]) return;
   uint t = bid_list[i];
-  uint sc = pickw[2u * t + 1u];
-  uint64_t key = dt_claim_key(t);
-  if (claim[t] == key && (sc == DT_NONE || claim[NBR_TRI(sc)] == key)) {
+  if (dt_grant_bid(t)) {
     uint at = pickw[2u * t];
     atomicOr(granted[t >> 5u], 1u << (t & 31u));
     atomicOr(granted_at[at >> 5u], 1u << (at & 31u));

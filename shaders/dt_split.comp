@@ -32,65 +32,12 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 #define DT_RANKS
 #include "dt_common.glsl"
 
-// Slot t's split, if granted.
-void split(uint t) {
-  if (!dt_granted(t)) return;
-  uint at = pickw[2u * t], sc = pickw[2u * t + 1u], pt = list[at];
-  uint k = NBR_EDGE(loc[at]);
-  uint X = p.base + 2u * dt_rank(at), Y = X + 1u;
-  if (k == DT_INSIDE) {
-    uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
-    uint n1 = nbrs[3u * t + 1u], n2 = nbrs[3u * t + 2u];
-    verts[3u * t] = pt;
-    nbrs[3u * t + 1u] = NBR(X, 0u);
-    nbrs[3u * t + 2u] = NBR(Y, 0u);
-    verts[3u * X] = v0;
-    verts[3u * X + 1u] = pt;
-    verts[3u * X + 2u] = v2;
-    nbrs[3u * X] = NBR(t, 1u);
-    nbrs[3u * X + 1u] = n1;
-    nbrs[3u * X + 2u] = NBR(Y, 1u);
-    verts[3u * Y] = v0;
-    verts[3u * Y + 1u] = v1;
-    verts[3u * Y + 2u] = pt;
-    nbrs[3u * Y] = NBR(t, 2u);
-    nbrs[3u * Y + 1u] = NBR(X, 2u);
-    nbrs[3u * Y + 2u] = n2;
-    info[t] = NBR(X, DT_INSIDE);
-    return;
-  }
-  uint s = NBR_TRI(sc), j = NBR_EDGE(sc);
-  uint i1 = dt_next(k), i2 = dt_prev(k), j1 = dt_next(j), j2 = dt_prev(j);
-  uint c = verts[3u * t + k], a = verts[3u * t + i1], b = verts[3u * t + i2], d = verts[3u * s + j];
-  uint tn1 = nbrs[3u * t + i1], sn1 = nbrs[3u * s + j1];
-  // t = (c, a, p)
-  verts[3u * t + i2] = pt;
-  nbrs[3u * t + k] = NBR(Y, j);
-  nbrs[3u * t + i1] = NBR(X, i2);
-  // X = (c, p, b)
-  verts[3u * X + k] = c;
-  verts[3u * X + i1] = pt;
-  verts[3u * X + i2] = b;
-  nbrs[3u * X + k] = NBR(s, j);
-  nbrs[3u * X + i1] = tn1;
-  nbrs[3u * X + i2] = NBR(t, i1);
-  // s = (d, b, p)
-  verts[3u * s + j2] = pt;
-  nbrs[3u * s + j] = NBR(X, k);
-  nbrs[3u * s + j1] = NBR(Y, j2);
-  // Y = (d, p, a)
-  verts[3u * Y + j] = d;
-  verts[3u * Y + j1] = pt;
-  verts[3u * Y + j2] = a;
-  nbrs[3u * Y + j] = NBR(t, k);
-  nbrs[3u * Y + j1] = sn1;
-  nbrs[3u * Y + j2] = NBR(s, j1);
-  info[t] = NBR(X, i1);
-  info[s] = NBR(Y, j1);
-}
+#define DT_INSERT_SPLIT
+#define DT_SPLIT_NUMBER(t, at) dt_rank(at)
+#include "dt_insert.glsl"
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   if (i == 0u) counters[DT_WINNERS] = dt_split_count();
-  if (i < counters[DT_BIDS]) split(bid_list[i]);
+  if (i < counters[DT_BIDS]) dt_split_bid(bid_list[i]);
 }

@@ -37,33 +37,13 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 #define DT_RANKS
 #include "dt_common.glsl"
 
-// Slot t's bid: the split's repair if granted; returns its flip-list entries, 0..4 of e (DT_NONE: none).
-uvec4 fix(uint t) {
-  uint at = pickw[2u * t], sc = pickw[2u * t + 1u];
-  pickw[2u * t] = DT_NONE;
-  pickw[2u * t + 1u] = DT_NONE;
-  if (!dt_granted(t)) return uvec4(DT_NONE);
-  uint k = NBR_EDGE(loc[at]);
-  loc[at] = DT_INSERTED | NBR(t, DT_INSIDE);  // t has the new vertex as a corner
-  uint X = p.base + 2u * dt_rank(at), Y = X + 1u;
-  if (k == DT_INSIDE) {
-    return uvec4(dt_fix_edge(t, 0u) ? DT_ENTRY(t, DT_CHECK_ONLY, 0u) : DT_NONE,
-                 dt_fix_edge(X, 1u) ? DT_ENTRY(X, DT_CHECK_ONLY, 1u) : DT_NONE,
-                 dt_fix_edge(Y, 2u) ? DT_ENTRY(Y, DT_CHECK_ONLY, 2u) : DT_NONE, DT_NONE);
-  }
-  // t = (c, a, p), X = (c, p, b), s = (d, b, p), Y = (d, p, a) (dt_split): the spokes are edges k + 1 of t,
-  // k + 2 of X, j + 1 of s and j + 2 of Y; the halves of the split edge (t's and X's edge k) are checked
-  // from t and X.
-  uint s = NBR_TRI(sc), j = NBR_EDGE(sc);
-  return uvec4(dt_entry_after(t, dt_next(k), dt_fix_edge(t, dt_prev(k)), true),
-               dt_entry_after(X, dt_prev(k), true, dt_fix_edge(X, dt_next(k))),
-               dt_entry_after(s, dt_next(j), dt_fix_edge(s, dt_prev(j)), false),
-               dt_entry_after(Y, dt_prev(j), false, dt_fix_edge(Y, dt_next(j))));
-}
+#define DT_INSERT_FIX
+#define DT_SPLIT_NUMBER(t, at) dt_rank(at)
+#include "dt_insert.glsl"
 
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
-  uvec4 e = i < counters[DT_BIDS] ? fix(bid_list[i]) : uvec4(DT_NONE);
+  uvec4 e = i < counters[DT_BIDS] ? dt_fix_bid(bid_list[i]) : uvec4(DT_NONE);
   uint count = 0u;  // the entries, packed to the front
   for (uint k = 0u; k < 4u; ++k)
     if (e[k] != DT_NONE) e[count++] = e[k];

@@ -66,6 +66,11 @@ namespace cdtgpu::gpu::layout {
 #define DT_TAIL_MAX 512u
 #define DT_TAIL_PASSES 64u
 
+// dt_insert_small: an insertion round's claim, grant, split and fix in one workgroup while at most this many
+// slots are in use (the first rounds: a bid per slot at most, one per invocation; the granted bits fit 32 words).
+#define DT_SMALL_SLOTS 1024u
+#define DT_SMALL_WG 1024
+
 // dt_points: the y range (orderable 64-bit keys) and the point farthest from the line v0-v1.
 struct DtPointsPush {
   uint n;

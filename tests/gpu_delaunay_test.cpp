@@ -9,6 +9,7 @@
 //   CDTGPU_DT_PROFILE_KERNELS=1  per kernel too, per round and per flip-list length
 //   CDTGPU_DT_FLIP_BATCH=K     DelaunayBuilder::flip_passes_per_submit
 //   CDTGPU_DT_TAIL=0|1         DelaunayBuilder::tail_passes
+//   CDTGPU_DT_SMALL=0|1        DelaunayBuilder::small_rounds
 //   CDTGPU_DT_EXACT=separate|inline|adaptive  DelaunayBuilder::exact_checks
 //   CDTGPU_DT_SAMPLE=S         DelaunayBuilder::sample_stride (1: no sampled rounds)
 //   CDTGPU_DT_SMALL_CASES=N    small degenerate cases (default 300)
@@ -62,6 +63,7 @@ DelaunayBuilder& builder() {
       d.flip_passes_per_submit = uint32_t(std::atoi(k));
     d.profile_kernels = env_is("CDTGPU_DT_PROFILE_KERNELS", "1");
     if (const char* t = std::getenv("CDTGPU_DT_TAIL")) d.tail_passes = std::strcmp(t, "1") == 0;
+    if (const char* t = std::getenv("CDTGPU_DT_SMALL")) d.small_rounds = std::strcmp(t, "1") == 0;
     if (const char* k = std::getenv("CDTGPU_DT_SAMPLE")) d.sample_stride = uint32_t(std::atoi(k));
     if (const char* k = std::getenv("CDTGPU_DT_SAMPLE_UNTIL")) d.sample_until = uint32_t(std::atoi(k));
     if (const char* e = std::getenv("CDTGPU_DT_EXACT")) {
@@ -161,7 +163,9 @@ DelaunayStats expect_cgal(const std::string& name, const std::vector<double>& xy
     inserted += r.inserted;
     flips += r.flips;
   }
-  if (stats.rounds > 0) EXPECT_EQ(inserted, n - 3) << name;
+  if (stats.rounds > 0) {
+    EXPECT_EQ(inserted, n - 3) << name;
+  }
   EXPECT_EQ(flips, stats.flips) << name;
   EXPECT_EQ(got.size(), want.size()) << name;
   if (got.size() != want.size()) return stats;
@@ -390,6 +394,32 @@ TEST(GpuDelaunay, SampledRoundsMatchCgal) {
   }
 }
 
+// The first rounds' insertion steps in one workgroup (dt_insert_small) or dispatched one by one: the same
+// triangles either way, on inputs whose every round is small (a few hundred points) and on larger ones, where
+// the build switches from the one to the other; and the same slots on every run.
+TEST(GpuDelaunay, SmallRoundsMatchCgal) {
+  const std::pair<std::string, std::vector<double>> inputs[] = {
+      {"uniform 300", uniform(300, 51)},
+      {"uniform 20k", uniform(20000, 52)},
+      {"grid 40x30", grid(40, 30, 500000, 6000000, 1)},
+      {"integers+dups", integer_lattice(53)},
+      {"clustered", clustered(54, 4, 1500)}};
+  for (bool small : {false, true}) {
+    DelaunayBuilder dt(ctx());
+    dt.small_rounds = small;
+    for (const auto& [name, xy] : inputs) {
+      const std::string label = std::string(small ? "small rounds: " : "dispatched rounds: ") + name;
+      const DelaunayStats stats = expect_cgal(label, xy, dt);
+      if (small) {
+        EXPECT_GE(stats.small_rounds, 3u) << label;
+      } else {
+        EXPECT_EQ(stats.small_rounds, 0u) << label;
+      }
+    }
+    expect_same_slots_twice(dt, uniform(5000, 55));
+  }
+}
+
 // Most points outside the first triangle and many on the final hull: outside insertions every round.
 TEST(GpuDelaunay, RingAndAnnulus) {
   for (int seed = 0; seed < 2; ++seed) {
@@ -480,7 +510,11 @@ TEST(GpuDelaunay, Bench) {
   }
   for (auto& [round, kernels] : per_round) {
     std::string line;
-    for (auto& [name, ms] : kernels) line += " " + name.substr(2) + " " + std::to_string(ms).substr(0, 6);
+    char item[64];
+    for (auto& [name, ms] : kernels) {
+      std::snprintf(item, sizeof item, " %s %.4f", name.c_str() + 2, ms);
+      line += item;
+    }
     std::printf("[ dt round %2u ] list %8u:%s\n", round, list_len[round], line.c_str());
   }
   // flip_check and flip of one pass are adjacent in the log: attribute both to the check's list length.
