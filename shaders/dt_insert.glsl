@@ -90,6 +90,14 @@ void dt_split_bid(uint t) {
 #endif
 
 #ifdef DT_INSERT_FIX
+// The flip-list entries of e that are not DT_NONE, packed to the front; returns how many.
+uint dt_pack_entries(inout uvec4 e) {
+  uint count = 0u;
+  for (uint k = 0u; k < 4u; ++k)
+    if (e[k] != DT_NONE) e[count++] = e[k];
+  return count;
+}
+
 // Slot t's bid: the split's repair if granted; returns its flip-list entries, 0..4 of e (DT_NONE: none).
 uvec4 dt_fix_bid(uint t) {
   uint at = pickw[2u * t], sc = pickw[2u * t + 1u];

@@ -79,9 +79,7 @@ void main() {
   step_barrier();
   for (uint i = lid; i < n; i += DT_SMALL_WG) {
     uvec4 e = dt_fix_bid(bid_list[i]);
-    uint count = 0u;  // the entries, packed to the front
-    for (uint k = 0u; k < 4u; ++k)
-      if (e[k] != DT_NONE) e[count++] = e[k];
+    uint count = dt_pack_entries(e);
     if (count == 0u) continue;
     uint at = atomicAdd(listed, count);
     if (at + count > p.capacity) {

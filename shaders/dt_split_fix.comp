@@ -44,9 +44,7 @@ layout(push_constant) uniform Push { DtRoundPush p; };
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   uvec4 e = i < counters[DT_BIDS] ? dt_fix_bid(bid_list[i]) : uvec4(DT_NONE);
-  uint count = 0u;  // the entries, packed to the front
-  for (uint k = 0u; k < 4u; ++k)
-    if (e[k] != DT_NONE) e[count++] = e[k];
+  uint count = dt_pack_entries(e);
   uint at = dt_append_base(DT_COUNT_LIST0, count);
   if (count > 0u) {
     if (at + count > p.capacity) {
