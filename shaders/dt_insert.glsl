@@ -98,6 +98,27 @@ uint dt_pack_entries(inout uvec4 e) {
   return count;
 }
 
+// Writes the `count` packed entries of e to flip list 0 from position `at` (a list overflow is counted: a bug).
+void dt_list_entries(uint at, uint count, uvec4 e) {
+  if (count == 0u) return;
+  if (at + count > p.capacity) {
+    atomicAdd(counters[DT_OVERFLOW], 1u);
+    return;
+  }
+  for (uint k = 0u; k < count; ++k) flip_list[at + k] = e[k];
+}
+
+// The round's splits are done and listed, n entries in flip list 0: the first flip pass's dispatch size and
+// count; list 1, the bid list and the exact lists emptied for their next use. One invocation, last.
+void dt_round_listed(uint n) {
+  dt_write_list_args(0u, n);
+  counters[DT_COUNT_LIST1] = 0u;
+  counters[DT_BIDS] = 0u;
+  counters[DT_EXACT_RELOC] = 0u;
+  counters[DT_EXACT_FLIP] = 0u;
+  if (n > 0u) counters[DT_FLIP_PASSES] += 1u;
+}
+
 // Slot t's bid: the split's repair if granted; returns its flip-list entries, 0..4 of e (DT_NONE: none).
 uvec4 dt_fix_bid(uint t) {
   uint at = pickw[2u * t], sc = pickw[2u * t + 1u];

@@ -80,24 +80,13 @@ void main() {
   for (uint i = lid; i < n; i += DT_SMALL_WG) {
     uvec4 e = dt_fix_bid(bid_list[i]);
     uint count = dt_pack_entries(e);
-    if (count == 0u) continue;
-    uint at = atomicAdd(listed, count);
-    if (at + count > p.capacity) {
-      atomicAdd(counters[DT_OVERFLOW], 1u);
-    } else {
-      for (uint k = 0u; k < count; ++k) flip_list[at + k] = e[k];
-    }
+    if (count > 0u) dt_list_entries(atomicAdd(listed, count), count, e);
   }
   step_barrier();
   if (lid < words) granted[lid] = 0u;
   if (lid == 0u) {
     counters[DT_WINNERS] = winners;
     counters[DT_COUNT_LIST0] = listed;
-    dt_write_list_args(0u, listed);
-    counters[DT_COUNT_LIST1] = 0u;
-    counters[DT_BIDS] = 0u;  // the bid list is done with
-    counters[DT_EXACT_RELOC] = 0u;
-    counters[DT_EXACT_FLIP] = 0u;
-    if (listed > 0u) counters[DT_FLIP_PASSES] += 1u;
+    dt_round_listed(listed);
   }
 }

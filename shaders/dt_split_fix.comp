@@ -45,21 +45,6 @@ void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   uvec4 e = i < counters[DT_BIDS] ? dt_fix_bid(bid_list[i]) : uvec4(DT_NONE);
   uint count = dt_pack_entries(e);
-  uint at = dt_append_base(DT_COUNT_LIST0, count);
-  if (count > 0u) {
-    if (at + count > p.capacity) {
-      atomicAdd(counters[DT_OVERFLOW], 1u);
-    } else {
-      for (uint k = 0u; k < count; ++k) flip_list[at + k] = e[k];
-    }
-  }
-  if (dt_last_group() && gl_LocalInvocationIndex == 0u) {
-    uint n = dt_count(DT_COUNT_LIST0);
-    dt_write_list_args(0u, n);
-    counters[DT_COUNT_LIST1] = 0u;
-    counters[DT_BIDS] = 0u;  // the bid list is done with
-    counters[DT_EXACT_RELOC] = 0u;
-    counters[DT_EXACT_FLIP] = 0u;
-    if (n > 0u) counters[DT_FLIP_PASSES] += 1u;
-  }
+  dt_list_entries(dt_append_base(DT_COUNT_LIST0, count), count, e);
+  if (dt_last_group() && gl_LocalInvocationIndex == 0u) dt_round_listed(dt_count(DT_COUNT_LIST0));
 }
