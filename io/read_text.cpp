@@ -5,12 +5,14 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <string_view>
 
 #include "core/error.hpp"
 #include "core/repair.hpp"
 #include "io/readers.hpp"
+#include "io/text_source.hpp"
 
 namespace cdtgpu {
 
@@ -62,49 +64,92 @@ uint32_t add_source(InputSet& in, const std::string& name) {
 
 }  // namespace
 
-void read_xyz(std::istream& text, const std::string& name, InputSet& in) {
+namespace {
+
+enum class XyzLine { point, skip, header };
+
+// One line of XYZ text. Only the first line with content may be a header (its first field not a number).
+XyzLine parse_xyz_line(const char* p, const char* end, bool may_be_header, uint64_t line_no,
+                       const std::string& name, Point3& point) {
+  auto field_end = [](char c) { return is_space(c) || is_separator(c); };
+  while (p < end && is_space(*p)) ++p;
+  if (p == end || *p == '#') return XyzLine::skip;
+  double v[3];
+  int n = 0;
+  for (; n < 3; ++n) {
+    while (p < end && is_space(*p)) ++p;
+    if (n > 0 && p < end && is_separator(*p)) {
+      ++p;
+      while (p < end && is_space(*p)) ++p;
+    }
+    if (p == end) break;
+    const char* start = p;
+    const Parse r = parse_number(p, end, v[n], field_end);
+    if (r == Parse::ok) continue;
+    if (n == 0 && may_be_header && r == Parse::not_a_number) return XyzLine::header;
+    if (r == Parse::out_of_range)
+      throw InputError(name, line_no, "number out of range in column " + std::to_string(n + 1));
+    const std::string tok = token_at(start, end);
+    throw InputError(name, line_no,
+                     "column " + std::to_string(n + 1) +
+                         (tok.empty() ? std::string(" is empty") : " is not a number: '" + tok + "'"));
+  }
+  if (n < 3)
+    throw InputError(name, line_no, "expected x y z, found " + std::to_string(n) + " number" + (n == 1 ? "" : "s"));
+  point = Point3{v[0], v[1], v[2]};
+  return XyzLine::point;
+}
+
+// Calls f(line_begin, line_end) for every line of text[begin, end); returns the position after the last.
+template <typename F>
+void for_each_line(std::string_view text, size_t begin, size_t end, F&& f) {
+  const char* p = text.data() + begin;
+  const char* stop = text.data() + end;
+  while (p < stop) {
+    const char* nl = static_cast<const char*>(std::memchr(p, '\n', size_t(stop - p)));
+    const char* e = nl ? nl : stop;
+    if (!f(p, e)) return;
+    p = e + 1;
+  }
+}
+
+}  // namespace
+
+void read_xyz_text(std::string_view text, const std::string& name, InputSet& in) {
   const uint32_t source = add_source(in, name);
   const size_t before = in.points.size() + in.lines.size();
-  auto field_end = [](char c) { return is_space(c) || is_separator(c); };
-  std::string line;
+  // The first line with content, alone: it may be a header. Every later line is a point, blank or a comment.
   uint64_t line_no = 0;
-  bool seen_first = false;  // the first non-blank, non-comment line may be a header
-  while (std::getline(text, line)) {
+  size_t rest = text.size();
+  for_each_line(text, 0, text.size(), [&](const char* b, const char* e) {
     ++line_no;
-    if (line_no == 1) strip_bom(line);
-    const char* p = line.data();
-    const char* end = p + line.size();
-    while (p < end && is_space(*p)) ++p;
-    if (p == end || *p == '#') continue;
-    double v[3];
-    int n = 0;
-    for (; n < 3; ++n) {
-      while (p < end && is_space(*p)) ++p;
-      if (n > 0 && p < end && is_separator(*p)) {
-        ++p;
-        while (p < end && is_space(*p)) ++p;
-      }
-      if (p == end) break;
-      const char* start = p;
-      const Parse r = parse_number(p, end, v[n], field_end);
-      if (r == Parse::ok) continue;
-      if (n == 0 && !seen_first && r == Parse::not_a_number) break;  // header line
-      if (r == Parse::out_of_range)
-        throw InputError(name, line_no, "number out of range in column " + std::to_string(n + 1));
-      const std::string tok = token_at(start, end);
-      throw InputError(name, line_no,
-                       "column " + std::to_string(n + 1) +
-                           (tok.empty() ? std::string(" is empty") : " is not a number: '" + tok + "'"));
-    }
-    const bool header = n == 0 && !seen_first;
-    seen_first = true;
-    if (header) continue;
-    if (n < 3)
-      throw InputError(name, line_no,
-                       "expected x y z, found " + std::to_string(n) + " number" + (n == 1 ? "" : "s"));
-    add_point(in, source, line_no, Point3{v[0], v[1], v[2]});
-  }
+    Point3 p;
+    const XyzLine kind = parse_xyz_line(b, e, true, line_no, name, p);
+    if (kind == XyzLine::skip) return true;
+    if (kind == XyzLine::point) add_point(in, source, line_no, p);
+    rest = std::min(text.size(), size_t(e - text.data()) + 1);
+    return false;
+  });
+  const std::vector<Chunk> chunks = split_lines(text.substr(rest), chunk_bytes(text.size() - rest), line_no + 1);
+  std::vector<InputSet> parts(chunks.size());
+  parse_chunks(chunks, [&](size_t k, const Chunk& c) {
+    InputSet& part = parts[k] = chunk_part(source, name);
+    part.points.reserve((c.end - c.begin) / 16);
+    uint64_t line = c.first_line;
+    for_each_line(text.substr(rest), c.begin, c.end, [&](const char* b, const char* e) {
+      Point3 p;
+      if (parse_xyz_line(b, e, false, line, name, p) == XyzLine::point) add_point(part, source, line, p);
+      ++line;
+      return true;
+    });
+  });
+  append_parts(in, parts);
   require_geometry(in, before, name);
+}
+
+void read_xyz(std::istream& text, const std::string& name, InputSet& in) {
+  const TextSource src = TextSource::read(text, name);
+  read_xyz_text(src.text(), name, in);
 }
 
 namespace {

@@ -6,11 +6,14 @@
 // returned false on a valid three-line file and reports no position, read_polygon_WKT rejects POLYGON Z
 // (building footprints with heights), and it takes "nan" as a coordinate. Using CGAL for some types and this
 // for the rest would give two grammars and two error paths; this one names the line of every error.
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,6 +21,7 @@
 #include "core/error.hpp"
 #include "core/repair.hpp"
 #include "io/readers.hpp"
+#include "io/text_source.hpp"
 
 namespace cdtgpu {
 
@@ -265,31 +269,68 @@ class Parser {
 
 }  // namespace
 
-void read_wkt(std::istream& text, const std::string& name, InputSet& in) {
+namespace {
+
+// Parses the geometries that start in text[c.begin, c.end). One that is still open at c.end is read on past it;
+// text before the first geometry start (the end of one begun in an earlier chunk, `depth` > 0 parentheses
+// still open) is skipped.
+void parse_wkt_chunk(std::string_view text, const Chunk& c, long depth, const std::string& name, uint32_t source,
+                     InputSet& in) {
+  size_t p = c.begin, start = 0;  // start: first byte of the pending geometry
+  uint64_t line_no = c.first_line, start_line = 0;
+  bool pending = false;
+  while (p < text.size() && (p < c.end || pending)) {
+    const void* nl = std::memchr(text.data() + p, '\n', text.size() - p);
+    const size_t e = nl ? size_t(static_cast<const char*>(nl) - text.data()) : text.size();
+    const std::string_view line = text.substr(p, e - p);
+    const bool skipping = depth > 0 && !pending;  // the tail of a geometry owned by an earlier chunk
+    if (!skipping && !pending) {
+      if (line.find_first_not_of(" \t\r\v\f") == std::string_view::npos) {
+        p = e + 1, ++line_no;
+        continue;
+      }
+      pending = true, start = p, start_line = line_no;
+    }
+    for (char ch : line) depth += (ch == '(') - (ch == ')');
+    if (depth <= 0) {
+      if (pending) Parser(text.substr(start, std::min(e + 1, text.size()) - start), start_line, name, source, in).parse_all();
+      pending = false;
+      depth = 0;
+    }
+    p = e + 1, ++line_no;
+  }
+  if (pending) Parser(text.substr(start), start_line, name, source, in).parse_all();  // reports the unclosed '('
+}
+
+}  // namespace
+
+void read_wkt_text(std::string_view text, const std::string& name, InputSet& in) {
   in.sources.push_back(name);
   const uint32_t source = uint32_t(in.sources.size() - 1);
   const size_t before = in.points.size() + in.lines.size();
-  std::string line, pending;  // pending: a geometry whose parentheses are still open
-  uint64_t line_no = 0, start = 0;
-  long depth = 0;
-  while (std::getline(text, line)) {
-    ++line_no;
-    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 byte order mark
-    if (pending.empty()) {
-      if (line.find_first_not_of(" \t\r\v\f") == std::string::npos) continue;
-      start = line_no;
-    }
-    for (char c : line) depth += (c == '(') - (c == ')');
-    pending += line;
-    pending += '\n';
-    if (depth <= 0) {
-      Parser(pending, start, name, source, in).parse_all();
-      pending.clear();
-      depth = 0;
-    }
-  }
-  if (!pending.empty()) Parser(pending, start, name, source, in).parse_all();  // reports the unclosed '('
+  const std::vector<Chunk> chunks = split_lines(text, chunk_bytes(text.size()));
+  // Parentheses open at each chunk's start: a running sum of every earlier chunk's balance. Valid input never
+  // goes below zero, and invalid input fails in the geometry where it does, so the sum is exact up to the
+  // first error, the one reported.
+  std::vector<long> open(chunks.size() + 1, 0);
+  tbb::parallel_for(size_t(0), chunks.size(), [&](size_t k) {
+    long d = 0;
+    for (size_t i = chunks[k].begin; i < chunks[k].end; ++i) d += (text[i] == '(') - (text[i] == ')');
+    open[k + 1] = d;
+  });
+  for (size_t k = 0; k < chunks.size(); ++k) open[k + 1] += open[k];
+  std::vector<InputSet> parts(chunks.size());
+  parse_chunks(chunks, [&](size_t k, const Chunk& c) {
+    parts[k] = chunk_part(source, name);
+    parse_wkt_chunk(text, c, std::max(0L, open[k]), name, source, parts[k]);
+  });
+  append_parts(in, parts);
   if (in.points.size() + in.lines.size() == before) throw InputError(name, 0, "no geometry");
+}
+
+void read_wkt(std::istream& text, const std::string& name, InputSet& in) {
+  const TextSource src = TextSource::read(text, name);
+  read_wkt_text(src.text(), name, in);
 }
 
 }  // namespace cdtgpu

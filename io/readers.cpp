@@ -11,6 +11,7 @@
 #include <iostream>
 
 #include "core/error.hpp"
+#include "io/text_source.hpp"
 
 namespace cdtgpu {
 
@@ -39,6 +40,14 @@ void read_text_file(const std::string& path, Reader reader, InputSet& in) {
   if (file.bad()) throw InputError(path, 0, "read error");
 }
 
+// Mapped whole and parsed on all cores.
+template <typename Reader>
+void read_mapped(const std::string& path, Reader reader, InputSet& in) {
+  open_text(path);  // the plain messages for a missing file or a directory
+  const TextSource src = TextSource::open(path);
+  reader(src.text(), path, in);
+}
+
 }  // namespace
 
 void read_input(const std::string& path, const ReadOptions& options, InputSet& in) {
@@ -50,9 +59,9 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
   if (ext == ".shp")
     read_shapefile(path, options, in);
   else if (ext == ".wkt")
-    read_text_file(path, read_wkt, in);
+    read_mapped(path, read_wkt_text, in);
   else if (ext == ".xyz" || ext == ".csv" || ext == ".txt")
-    read_text_file(path, read_xyz, in);
+    read_mapped(path, read_xyz_text, in);
   else if (ext == ".asc")
     read_text_file(path, read_ascii_grid, in);
   else

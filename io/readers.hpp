@@ -2,6 +2,7 @@
 #pragma once
 #include <istream>
 #include <string>
+#include <string_view>
 
 #include "core/model.hpp"
 
@@ -18,6 +19,9 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
 void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in);
 void read_wkt(std::istream& text, const std::string& name, InputSet& in);
 void read_xyz(std::istream& text, const std::string& name, InputSet& in);
+// The same on a whole text (a mapped file): parsed on all cores, with the same results and messages.
+void read_wkt_text(std::string_view text, const std::string& name, InputSet& in);
+void read_xyz_text(std::string_view text, const std::string& name, InputSet& in);
 void read_ascii_grid(std::istream& text, const std::string& name, InputSet& in);
 
 // The text format of ../shared/data/cdt-peer-inputs: "V E", V lines "x y", E lines "i j" (0-based).

@@ -1,0 +1,153 @@
+// The text readers parse in chunks on all cores (io/text_source.hpp): inputs of several chunks must give the
+// same points, lines, repairs and error lines as reading line by line would.
+#include <gtest/gtest.h>
+
+#include <charconv>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/error.hpp"
+#include "io/readers.hpp"
+#include "io/text_source.hpp"
+
+using namespace cdtgpu;
+
+namespace {
+
+std::string num(double v) {
+  char buf[32];
+  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+}
+
+// n points, one per line, with comments and blank lines between them; far over one chunk (256 KiB).
+std::string xyz_text(int n, std::vector<Point3>& expected) {
+  std::string s = "x,y,z\n";
+  for (int i = 0; i < n; ++i) {
+    const Point3 p{500000 + i * 0.25, 6000000 + (i % 977) * 1.5, i * 0.001};
+    expected.push_back(p);
+    s += num(p.x) + "," + num(p.y) + "," + num(p.z) + (i % 7 == 0 ? "\r\n" : "\n");
+    if (i % 1000 == 0) s += "# comment\n\n";
+  }
+  return s;
+}
+
+// Line number (1-based) of the first line of `s` that contains `needle`.
+uint64_t line_of(const std::string& s, const std::string& needle) {
+  const size_t at = s.find(needle);
+  return 1 + uint64_t(std::count(s.begin(), s.begin() + std::ptrdiff_t(at), '\n'));
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+}  // namespace
+
+TEST(TextSource, SplitLinesEndsEveryChunkAtALineEndAndNumbersLines) {
+  const std::string text = "a\nbb\nccc\ndddd\ne";
+  const std::vector<Chunk> chunks = split_lines(text, 3);
+  ASSERT_FALSE(chunks.empty());
+  EXPECT_EQ(chunks.front().begin, 0u);
+  EXPECT_EQ(chunks.back().end, text.size());
+  uint64_t line = 1;
+  for (size_t k = 0; k < chunks.size(); ++k) {
+    if (k > 0) {
+      EXPECT_EQ(chunks[k].begin, chunks[k - 1].end);
+    }
+    if (chunks[k].end < text.size()) {
+      EXPECT_EQ(text[chunks[k].end - 1], '\n');
+    }
+    EXPECT_EQ(chunks[k].first_line, line);
+    line += uint64_t(std::count(text.begin() + long(chunks[k].begin), text.begin() + long(chunks[k].end), '\n'));
+  }
+}
+
+TEST(TextSource, MapsAFileAndDropsTheByteOrderMark) {
+  const auto path = std::filesystem::temp_directory_path() / "cdtgpu_text_source.xyz";
+  std::ofstream(path, std::ios::binary) << "\xEF\xBB\xBF" << "1 2 3\n";
+  EXPECT_EQ(TextSource::open(path.string()).text(), "1 2 3\n");
+  std::filesystem::remove(path);
+}
+
+TEST(ParallelReaders, XyzOfManyChunksGivesEveryPointInOrder) {
+  std::vector<Point3> expected;
+  const std::string text = xyz_text(60000, expected);
+  ASSERT_GT(text.size(), 4u * chunk_bytes(0));
+  InputSet in;
+  read_xyz_text(text, "big.xyz", in);
+  EXPECT_EQ(in.points, expected);
+}
+
+TEST(ParallelReaders, XyzReportsTheFirstBadLineOfTheFile) {
+  std::vector<Point3> expected;
+  std::string text = xyz_text(60000, expected);
+  // Two errors in different chunks: the earlier one is reported, with its own line number.
+  const std::string late = num(expected[55000].x) + ",";
+  const std::string early = num(expected[31000].x) + ",";
+  text.replace(text.find(late), late.size(), "oops,");
+  const uint64_t early_line = line_of(text, early);
+  text.replace(text.find(early), early.size(), num(expected[31000].x) + ",nan_or_worse,");
+  EXPECT_EQ(error_of([&] {
+              InputSet in;
+              read_xyz_text(text, "big.xyz", in);
+            }),
+            "big.xyz:" + std::to_string(early_line) + ": column 2 is not a number: 'nan_or_worse'");
+}
+
+TEST(ParallelReaders, WktGeometriesSpanningChunkEndsAreReadWhole) {
+  // Every LINESTRING spans three lines, so some cross chunk ends; degenerate ones become points in order.
+  std::string text;
+  std::vector<Point3> points;
+  size_t lines = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double x = 500000 + i, y = 6000000 + (i % 13);
+    if (i % 5 == 0) {
+      text += "LINESTRING Z (" + num(x) + " " + num(y) + " 1,\n" + num(x) + " " + num(y) + " 1)\n";
+      points.push_back({x, y, 1});  // one distinct vertex: kept as a point
+    } else {
+      text += "LINESTRING Z (" + num(x) + " " + num(y) + " 1,\n  " + num(x + 0.5) + " " + num(y) + " 2,\n  " +
+              num(x + 0.5) + " " + num(y + 0.5) + " 3)\n";
+      ++lines;
+    }
+    if (i % 3 == 0) text += "\n";
+  }
+  ASSERT_GT(text.size(), 4u * chunk_bytes(0));
+  InputSet in;
+  read_wkt_text(text, "big.wkt", in);
+  EXPECT_EQ(in.points, points);
+  ASSERT_EQ(in.lines.size(), lines);
+  EXPECT_EQ(in.repairs.degenerate_lines, 4000u);
+  for (const Polyline& l : in.lines) ASSERT_EQ(l.points.size(), 3u);
+  // Records are the geometries' first lines: the 7th geometry (i = 6) starts on line ...
+  EXPECT_EQ(in.lines[4].record, line_of(text, "LINESTRING Z (500006 "));
+  EXPECT_EQ(in.lines.back().points.back().x, 500000 + 19999 + 0.5);
+}
+
+TEST(ParallelReaders, WktReportsTheFirstBadGeometryOfTheFile) {
+  std::string text;
+  for (int i = 0; i < 40000; ++i)
+    text += "POINT (" + num(500000 + i) + " 6000000)\n" + (i % 2 ? "LINESTRING (0 0,\n 1 1)\n" : "");
+  const std::string early = "POINT (530000 ", late = "POINT (535000 ";
+  text.replace(text.find(late), late.size(), "POINT (535000 x ");
+  text.replace(text.find(early), early.size(), "PIONT (530000 ");
+  EXPECT_EQ(error_of([&] {
+              InputSet in;
+              read_wkt_text(text, "big.wkt", in);
+            }),
+            "big.wkt:" + std::to_string(line_of(text, "PIONT")) + ": unknown geometry type 'PIONT'");
+  // An unclosed '(' at the very end names the geometry's line.
+  std::string open = text.substr(0, text.find("PIONT")) + "LINESTRING (1 2, 3 4\n";
+  EXPECT_NE(error_of([&] {
+              InputSet in;
+              read_wkt_text(open, "open.wkt", in);
+            }).find("open.wkt:" + std::to_string(line_of(open, "LINESTRING (1 2, 3 4"))),
+            std::string::npos);
+}
