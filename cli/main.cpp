@@ -64,9 +64,11 @@ int main(int argc, char** argv) {
   t->add_option("--format", tri.format, "obj, ply or wkt (default: from the output's extension)");
   t->add_flag("--ascii", tri.write.ascii, "PLY: ascii instead of binary little-endian");
   t->add_flag("--wkt-multipolygon", tri.write.wkt_multipolygon, "WKT: MULTIPOLYGON Z instead of TIN Z");
-  t->add_option("--backend", tri.backend, "gpu (Vulkan compute, default) or cgal (the CPU reference)")
-      ->default_val("gpu")
-      ->check(CLI::IsMember({"gpu", "cgal"}));
+  t->add_option("--backend", tri.backend,
+                 "auto (default: the GPU for inputs of 100K points or more when a hardware GPU is there, else "
+                 "CGAL), gpu (Vulkan compute, any device, lavapipe included) or cgal (the CPU reference)")
+      ->default_val("auto")
+      ->check(CLI::IsMember({"auto", "gpu", "cgal"}));
   t->add_option("--stats", tri.stats_path, "write counts, CRS and stage times as JSON to this file");
   add_input_options(t, tri.input, crs, utm_zone, epsg);
 

@@ -12,6 +12,8 @@
 #include "core/prepare.hpp"
 #include "core/stats.hpp"
 #include "core/verify.hpp"
+#include "cli/gpu_start.hpp"
+#include "gpu/check.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
 
@@ -43,14 +45,25 @@ struct Loaded {
   PreparedInput prepared;
 };
 
-// `merge`: the duplicate merging of prepare (the CPU's by default; the GPU backend passes its own).
-Loaded load(const InputOptions& options, RunStats& stats, const PointMerger& merge = merge_points) {
+// Read and projected; what prepare() needs next.
+Loaded read_all(const InputOptions& options, RunStats& stats) {
   Loaded l;
   timed(stats, "read", [&] {
     for (const std::string& path : options.inputs) read_input(path, options.read, l.in);
   });
   l.crs = choose_crs(l.in, options.crs);
   timed(stats, "project", [&] { project(l.in, l.crs); });
+  return l;
+}
+
+uint64_t point_count(const InputSet& in) {
+  uint64_t n = in.points.size();
+  for (const Polyline& line : in.lines) n += line.points.size();
+  return n;
+}
+
+// `merge`: the duplicate merging of prepare (the CPU's by default; the GPU backend passes its own).
+void prepare_all(Loaded& l, RunStats& stats, const PointMerger& merge = merge_points) {
   l.prepared = timed(stats, "prepare", [&] { return prepare(l.in, merge); });
   spdlog::info("CRS: {}", l.crs.name);
 
@@ -81,6 +94,12 @@ Loaded load(const InputOptions& options, RunStats& stats, const PointMerger& mer
   c["null_shapes"] = r.null_shapes;
   c["nodata_cells"] = r.nodata_cells;
   stats.crs = l.crs.name;
+}
+
+
+Loaded load(const InputOptions& options, RunStats& stats) {
+  Loaded l = read_all(options, stats);
+  prepare_all(l, stats);
   return l;
 }
 
@@ -93,7 +112,6 @@ void write_stats(const RunStats& stats, const std::string& path) {
 
 int run_triangulate(const TriangulateOptions& options) {
   RunStats stats;
-  stats.backend = options.backend;
   WriteOptions write = options.write;
   if (!options.format.empty())
     write.format = parse_format(options.format);
@@ -101,23 +119,48 @@ int run_triangulate(const TriangulateOptions& options) {
     throw UsageError("writing to stdout needs --format (obj, ply or wkt)");
   else
     write.format = format_from_extension(options.output);
-  if (options.backend != "gpu" && options.backend != "cgal")
-    throw UsageError("unknown backend '" + options.backend + "' (use gpu or cgal)");
+  if (options.backend != "auto" && options.backend != "gpu" && options.backend != "cgal")
+    throw UsageError("unknown backend '" + options.backend + "' (use auto, gpu or cgal)");
 
-  // The device comes first: a machine that cannot run the GPU backend fails before reading anything.
-  std::optional<gpu::Context> ctx;
-  std::optional<gpu::GpuCdt> cdt;
-  if (options.backend == "gpu") {
-    gpu::ContextOptions co;
-    co.device = options.device;
-    ctx.emplace(gpu::create_context(co));
-    cdt.emplace(*ctx);
-    stats.device = ctx->info.name;
-    spdlog::debug("device: {} ({} {})", ctx->info.name, ctx->info.driver_name, ctx->info.driver_info);
+  // The GPU starts on its own thread while the inputs are read: forced, or when auto may pick it (the files
+  // are large enough to hold auto_min_points() points).
+  const uint64_t min_points = auto_min_points();
+  std::optional<GpuStart> start;
+  if (options.backend == "gpu" ||
+      (options.backend == "auto" && input_bytes(options.input.inputs) >= min_points * kAutoBytesPerPoint))
+    start.emplace(options.device, options.backend == "auto");
+
+  Loaded l = read_all(options.input, stats);
+  std::string reason = "--backend " + options.backend;
+  bool use_gpu = options.backend == "gpu";
+  if (options.backend == "auto") {
+    const uint64_t n = point_count(l.in);
+    if (n < min_points) {
+      reason = std::to_string(n) + " input points, fewer than " + std::to_string(min_points) +
+               ": the CPU is faster than the GPU's start-up";
+    } else {
+      if (!start) start.emplace(options.device, true);
+      try {
+        start->cdt();
+        use_gpu = true;
+        reason = std::to_string(n) + " input points on a GPU";
+      } catch (const gpu::DeviceError& e) {
+        reason = std::string("no GPU to use (") + e.what() + ")";
+      }
+    }
   }
+  gpu::GpuCdt* cdt = use_gpu ? &start->cdt() : nullptr;  // a forced GPU's start error is thrown here
+  stats.backend = use_gpu ? "gpu" : "cgal";
+  stats.backend_reason = reason;
+  if (cdt) {
+    stats.device = start->context().info.name;
+    spdlog::debug("device: {} ({} {})", stats.device, start->context().info.driver_name,
+                  start->context().info.driver_info);
+  }
+  spdlog::debug("backend {}: {}", stats.backend, reason);
 
   // With the GPU backend, duplicates are merged on the GPU too (the same result as the CPU's merge).
-  Loaded l = load(options.input, stats, cdt ? cdt->merger() : PointMerger(merge_points));
+  prepare_all(l, stats, cdt ? cdt->merger() : PointMerger(merge_points));
   CdtResult result = timed(stats, "triangulate", [&] {
     if (!cdt) return triangulate_cgal(l.prepared);
     gpu::GpuCdtStats gs;

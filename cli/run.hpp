@@ -20,7 +20,7 @@ struct TriangulateOptions {
   std::string output;        // "-" for stdout
   std::string format;        // empty: from the output's extension
   WriteOptions write;
-  std::string backend = "gpu";  // gpu (default) or cgal (the CPU reference)
+  std::string backend = "auto";  // auto (default: cli/gpu_start.hpp), gpu or cgal (the CPU reference)
   std::string device;           // Vulkan device override for the gpu backend
   std::string stats_path;    // empty: none
 };

@@ -11,7 +11,8 @@ namespace cdtgpu {
 struct RunStats {
   nlohmann::ordered_json counts = nlohmann::ordered_json::object();
   std::string crs;
-  std::string backend;
+  std::string backend;         // the backend that ran: gpu or cgal
+  std::string backend_reason;  // why (auto's choice, or the flag)
   std::string device;  // the Vulkan device, for the gpu backend
   std::vector<std::pair<std::string, double>> stage_ms;  // in run order
   nlohmann::ordered_json gpu_stage_ms = nlohmann::ordered_json::object();  // device timestamps, if any
@@ -21,6 +22,7 @@ struct RunStats {
     j["counts"] = counts;
     j["crs"] = crs;
     j["backend"] = backend;
+    if (!backend_reason.empty()) j["backend_reason"] = backend_reason;
     if (!device.empty()) j["device"] = device;
     nlohmann::ordered_json s = nlohmann::ordered_json::object();
     for (const auto& [k, v] : stage_ms) s[k] = v;

@@ -5,10 +5,14 @@
 #include <cctype>
 #include <cstdlib>
 #include <cstring>
+#include <mutex>
 #include <sstream>
+#include <string_view>
+#include <vector>
 #include <utility>
 
 #include "gpu/check.hpp"
+#include "gpu/pipeline_cache.hpp"
 
 namespace cdtgpu::gpu {
 namespace {
@@ -172,6 +176,9 @@ std::vector<VkPhysicalDevice> physical_devices(VkInstance instance) {
 VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                           VkDebugUtilsMessageTypeFlagsEXT, const VkDebugUtilsMessengerCallbackDataEXT* data,
                                           void* user) {
+  // Pipelines compile on worker threads (gpu/passes.cpp), so messages may come from several at once.
+  static std::mutex mutex;
+  std::lock_guard lock(mutex);
   auto* messages = static_cast<std::vector<std::string>*>(user);
   std::string m = severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT ? "error: " : "warning: ";
   m += data->pMessage ? data->pMessage : "";
@@ -273,11 +280,29 @@ std::string describe_devices(const std::string& override_name) {
 }
 
 namespace {
+// Saves the pipeline cache when the run compiled something new, then destroys it.
+void save_cache(Context& c) {
+  if (!c.pipeline_cache) return;
+  size_t n = 0;
+  std::vector<char> data;
+  if (vkGetPipelineCacheData(c.device, c.pipeline_cache, &n, nullptr) == VK_SUCCESS && n > 0) {
+    data.resize(n);
+    if (vkGetPipelineCacheData(c.device, c.pipeline_cache, &n, data.data()) != VK_SUCCESS) data.clear();
+    data.resize(std::min(n, data.size()));
+  }
+  if (!data.empty() && !c.pipeline_cache_file.empty() &&
+      (data.size() != c.pipeline_cache_loaded || std::hash<std::string_view>{}({data.data(), data.size()}) != c.pipeline_cache_hash))
+    save_pipeline_cache(c.pipeline_cache_file, c.props, data);
+  vkDestroyPipelineCache(c.device, c.pipeline_cache, nullptr);
+  c.pipeline_cache = VK_NULL_HANDLE;
+}
+
 void release(Context& c) {
   if (c.device) {
     vkDeviceWaitIdle(c.device);
     c.staging.reset();
     c.temp_pool.reset();
+    save_cache(c);
     if (c.pool) vkDestroyCommandPool(c.device, c.pool, nullptr);
     vkDestroyDevice(c.device, nullptr);
   }
@@ -316,6 +341,10 @@ Context& Context::operator=(Context&& o) noexcept {
   o.messages_ = std::make_unique<std::vector<std::string>>();
   staging = std::move(o.staging);
   temp_pool = std::move(o.temp_pool);
+  pipeline_cache = std::exchange(o.pipeline_cache, VK_NULL_HANDLE);
+  pipeline_cache_file = std::move(o.pipeline_cache_file);
+  pipeline_cache_loaded = o.pipeline_cache_loaded;
+  pipeline_cache_hash = o.pipeline_cache_hash;
   return *this;
 }
 
@@ -354,6 +383,8 @@ Context create_context(const ContextOptions& options) {
   vkGetPhysicalDeviceProperties(ctx.physical, &ctx.props);
   vkGetPhysicalDeviceMemoryProperties(ctx.physical, &ctx.memory);
   ctx.queue_family = static_cast<uint32_t>(compute_family(ctx.physical, nullptr));
+  if (options.hardware_only && ctx.info.type == "cpu")
+    throw DeviceError(ctx.info.name + " is a CPU Vulkan driver, not a GPU");
 
   float priority = 1.0f;
   VkDeviceQueueCreateInfo qi{};
@@ -399,6 +430,22 @@ Context create_context(const ContextOptions& options) {
   pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pi.queueFamilyIndex = ctx.queue_family;
   VK_CHECK(vkCreateCommandPool(ctx.device, &pi, nullptr, &ctx.pool));
+
+  ctx.pipeline_cache_file = pipeline_cache_path(ctx.props);
+  const std::vector<char> seed = load_pipeline_cache(ctx.pipeline_cache_file, ctx.props);
+  VkPipelineCacheCreateInfo ci{};
+  ci.sType = VK_STRUCTURE_TYPE_PIPELINE_CACHE_CREATE_INFO;
+  ci.initialDataSize = seed.size();
+  ci.pInitialData = seed.empty() ? nullptr : seed.data();
+  // A driver may still refuse data that passed our checks (it validates its own header): start empty then.
+  if (vkCreatePipelineCache(ctx.device, &ci, nullptr, &ctx.pipeline_cache) != VK_SUCCESS && !seed.empty()) {
+    ci.initialDataSize = 0;
+    ci.pInitialData = nullptr;
+    VK_CHECK(vkCreatePipelineCache(ctx.device, &ci, nullptr, &ctx.pipeline_cache));
+  } else if (!seed.empty()) {
+    ctx.pipeline_cache_loaded = seed.size();
+    ctx.pipeline_cache_hash = std::hash<std::string_view>{}({seed.data(), seed.size()});
+  }
   return ctx;
 }
 

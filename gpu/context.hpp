@@ -46,6 +46,9 @@ struct ContextOptions {
   // Enable VK_LAYER_KHRONOS_validation when it is installed. The env var CDTGPU_VALIDATION=1 turns it on as
   // well (and then a missing layer is an error).
   bool validation = false;
+  // Throw DeviceError instead of creating a device on a CPU Vulkan driver (lavapipe): `--backend auto` runs the
+  // CGAL backend there, which is faster.
+  bool hardware_only = false;
 };
 
 // Lists every physical device the loader sees (creates and destroys its own instance).
@@ -75,6 +78,11 @@ struct Context {
   // CDTGPU_SHADER_STATS=1 and VK_KHR_pipeline_executable_properties: create_pass prints each pipeline's
   // statistics (registers, spills: what limits occupancy) to stderr.
   bool shader_stats = false;
+  // Pipelines are created through this cache, seeded from and saved to disk (gpu/pipeline_cache.hpp).
+  VkPipelineCache pipeline_cache = VK_NULL_HANDLE;
+  std::string pipeline_cache_file;   // empty: not kept on disk
+  size_t pipeline_cache_loaded = 0;  // bytes of driver data the run started with
+  uint64_t pipeline_cache_hash = 0;  // of that data: saved again only when it changed
 
   // Every validation warning or error recorded since creation (or the last clear_messages()).
   const std::vector<std::string>& messages() const { return *messages_; }

@@ -2,6 +2,12 @@
 #include "gpu/passes.hpp"
 
 #include <algorithm>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -45,22 +51,86 @@ Pass& Pass::operator=(Pass&& o) noexcept {
   push_size = o.push_size;
   set_layout = std::exchange(o.set_layout, VK_NULL_HANDLE);
   layout = std::exchange(o.layout, VK_NULL_HANDLE);
-  pipeline = std::exchange(o.pipeline, VK_NULL_HANDLE);
+  pipeline_ = std::exchange(o.pipeline_, VK_NULL_HANDLE);
+  compiling_ = std::move(o.compiling_);
+  o.compiling_ = {};
   return *this;
 }
 
 Pass::~Pass() { release(); }
 
+VkPipeline Pass::handle() const {
+  if (!pipeline_ && compiling_.valid()) pipeline_ = compiling_.get();
+  return pipeline_;
+}
+
 void Pass::release() {
-  if (pipeline) vkDestroyPipeline(device, pipeline, nullptr);
+  if (compiling_.valid()) {
+    compiling_.wait();  // the worker still uses the layout
+    try {
+      handle();
+    } catch (...) {  // a failed compile left nothing to destroy
+    }
+    compiling_ = {};
+  }
+  if (pipeline_) vkDestroyPipeline(device, pipeline_, nullptr);
   if (layout) vkDestroyPipelineLayout(device, layout, nullptr);
   if (set_layout) vkDestroyDescriptorSetLayout(device, set_layout, nullptr);
-  pipeline = VK_NULL_HANDLE;
+  pipeline_ = VK_NULL_HANDLE;
   layout = VK_NULL_HANDLE;
   set_layout = VK_NULL_HANDLE;
 }
 
 namespace {
+
+// Pipeline compiles in the order they were asked for, one worker per core. First come, first compiled: the
+// passes constructors create first are the ones a run uses first.
+class CompileQueue {
+ public:
+  static CompileQueue& get() {
+    static CompileQueue queue;
+    return queue;
+  }
+  void push(std::function<void()> job) {
+    {
+      std::lock_guard lock(mutex_);
+      jobs_.push_back(std::move(job));
+      if (workers_.size() < max_workers_ && idle_ == 0) workers_.emplace_back([this] { work(); });
+    }
+    ready_.notify_one();
+  }
+  ~CompileQueue() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    ready_.notify_all();
+    for (std::thread& t : workers_) t.join();
+  }
+
+ private:
+  void work() {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      ++idle_;
+      ready_.wait(lock, [&] { return stop_ || !jobs_.empty(); });
+      --idle_;
+      if (jobs_.empty()) return;  // stopping
+      std::function<void()> job = std::move(jobs_.front());
+      jobs_.pop_front();
+      lock.unlock();
+      job();
+      lock.lock();
+    }
+  }
+  std::mutex mutex_;
+  std::condition_variable ready_;
+  std::deque<std::function<void()>> jobs_;
+  std::vector<std::thread> workers_;
+  size_t max_workers_ = std::max(1u, std::thread::hardware_concurrency());
+  size_t idle_ = 0;
+  bool stop_ = false;
+};
 
 // One line per pipeline executable: its name and every statistic the driver reports.
 void print_statistics(const Context& ctx, const std::string& name, VkPipeline pipeline) {
@@ -130,25 +200,34 @@ Pass create_pass(const Context& ctx, const PassDesc& desc) {
   pl.pPushConstantRanges = &range;
   VK_CHECK(vkCreatePipelineLayout(ctx.device, &pl, nullptr, &pass.layout));
 
-  VkShaderModuleCreateInfo mi{};
-  mi.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO;
-  mi.codeSize = code.size_bytes();
-  mi.pCode = code.data();
-  VkShaderModule module = VK_NULL_HANDLE;
-  VK_CHECK(vkCreateShaderModule(ctx.device, &mi, nullptr, &module));
-
-  VkComputePipelineCreateInfo ci{};
-  ci.sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO;
-  ci.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
-  ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-  ci.stage.module = module;
-  ci.stage.pName = "main";
-  ci.layout = pass.layout;
-  if (ctx.shader_stats) ci.flags |= VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR;
-  VkResult r = vkCreateComputePipelines(ctx.device, VK_NULL_HANDLE, 1, &ci, nullptr, &pass.pipeline);
-  vkDestroyShaderModule(ctx.device, module, nullptr);
-  if (r != VK_SUCCESS) vk_fail(r, ("vkCreateComputePipelines for pass '" + desc.name + "'").c_str(), __FILE__, __LINE__);
-  if (ctx.shader_stats) print_statistics(ctx, desc.name, pass.pipeline);
+  // The compile itself, on a worker: what it needs is copied or outlives the pass (the context, the SPIR-V).
+  const Context* c = &ctx;
+  const VkPipelineLayout layout = pass.layout;
+  const std::string name = desc.name;
+  auto job = std::make_shared<std::packaged_task<VkPipeline()>>([c, layout, name, code] {
+    VkShaderModuleCreateInfo mi{};
+    mi.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO;
+    mi.codeSize = code.size_bytes();
+    mi.pCode = code.data();
+    VkShaderModule module = VK_NULL_HANDLE;
+    VK_CHECK(vkCreateShaderModule(c->device, &mi, nullptr, &module));
+    VkComputePipelineCreateInfo ci{};
+    ci.sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO;
+    ci.stage.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO;
+    ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    ci.stage.module = module;
+    ci.stage.pName = "main";
+    ci.layout = layout;
+    if (c->shader_stats) ci.flags |= VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR;
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    VkResult r = vkCreateComputePipelines(c->device, c->pipeline_cache, 1, &ci, nullptr, &pipeline);
+    vkDestroyShaderModule(c->device, module, nullptr);
+    if (r != VK_SUCCESS) vk_fail(r, ("vkCreateComputePipelines for pass '" + name + "'").c_str(), __FILE__, __LINE__);
+    if (c->shader_stats) print_statistics(*c, name, pipeline);
+    return pipeline;
+  });
+  pass.compiling_ = job->get_future().share();
+  CompileQueue::get().push([job] { (*job)(); });
   return pass;
 }
 

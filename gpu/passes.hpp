@@ -22,6 +22,7 @@
 #include <vulkan/vulkan.h>
 
 #include <cstdint>
+#include <future>
 #include <span>
 #include <string>
 #include <string_view>
@@ -42,7 +43,9 @@ struct PassDesc {
   uint32_t push_size = 0; // bytes of the push-constant block (0: none)
 };
 
-// Move-only; owns its shader module, layouts and pipeline.
+// Move-only; owns its layouts and pipeline. The pipeline compiles on a worker thread (a FIFO queue with one
+// worker per core, through the context's pipeline cache): constructors create every pass they might need at
+// once, the compiles overlap with each other and with the run, and handle() waits only for the one it needs.
 struct Pass {
   VkDevice device = VK_NULL_HANDLE;
   std::string name;
@@ -50,7 +53,9 @@ struct Pass {
   uint32_t push_size = 0;
   VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
   VkPipelineLayout layout = VK_NULL_HANDLE;
-  VkPipeline pipeline = VK_NULL_HANDLE;
+
+  // The pipeline, once compiled; throws DeviceError when its compile failed.
+  VkPipeline handle() const;
 
   Pass() = default;
   Pass(Pass&& o) noexcept;
@@ -60,7 +65,10 @@ struct Pass {
   ~Pass();
 
  private:
+  friend Pass create_pass(const Context& ctx, const PassDesc& desc);
   void release();
+  mutable VkPipeline pipeline_ = VK_NULL_HANDLE;
+  mutable std::shared_future<VkPipeline> compiling_;
 };
 
 Pass create_pass(const Context& ctx, const PassDesc& desc);

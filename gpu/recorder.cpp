@@ -86,7 +86,7 @@ void Recorder::bind(const Pass& pass, std::initializer_list<Binding> bindings, c
                       std::to_string(bindings.size()));
   if (pass.push_size && !push) throw DeviceError("pass '" + pass.name + "' needs push constants");
   barrier();
-  vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pass.pipeline);
+  vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pass.handle());
   std::vector<VkDescriptorBufferInfo> infos;
   std::vector<VkWriteDescriptorSet> writes;
   infos.reserve(bindings.size());

@@ -1,6 +1,8 @@
 // End to end: the cdtgpu binary on real files, one test per output format and per bad-input case.
 #include <gtest/gtest.h>
 
+#include "gpu/context.hpp"
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -106,12 +108,13 @@ TEST_F(Cli, SameInputGivesSameBytes) {
   EXPECT_EQ(slurp(path("c.obj")), slurp(path("d.obj")));
 }
 
-// The GPU backend is the default; its bytes equal the CGAL reference backend's in every format.
+// The GPU backend, forced (lavapipe included); its bytes equal the CGAL reference backend's in every format.
 TEST_F(Cli, GpuBackendWritesTheSameBytesAsCgal) {
   write_terrain();
   std::string in = path("dem.csv") + " " + path("lines.wkt");
   for (std::string ext : {"obj", "ply", "wkt"}) {
-    Result g = run("triangulate " + in + " -q -o " + path("gpu." + ext) + " --stats " + path("gpu.json"));
+    Result g = run("triangulate " + in + " -q --backend gpu -o " + path("gpu." + ext) + " --stats " +
+                   path("gpu.json"));
     ASSERT_EQ(g.code, 0) << g.err;
     Result c = run("triangulate " + in + " -q --backend cgal -o " + path("cgal." + ext));
     ASSERT_EQ(c.code, 0) << c.err;
@@ -126,11 +129,45 @@ TEST_F(Cli, GpuBackendWritesTheSameBytesAsCgal) {
   Result bad = run("triangulate " + in + " -q --backend fast -o " + path("x.ply"));
   EXPECT_EQ(bad.code, 2);
   EXPECT_EQ(files_matching("x."), 0u);
-  Result nodev = run("triangulate " + in + " -q --device no-such-gpu -o " + path("y.ply"));
+  Result nodev = run("triangulate " + in + " -q --backend gpu --device no-such-gpu -o " + path("y.ply"));
   EXPECT_EQ(nodev.code, 3) << nodev.err;
   EXPECT_NE(nodev.err.find("no-such-gpu"), std::string::npos) << nodev.err;
   EXPECT_NE(nodev.err.find("--backend cgal"), std::string::npos) << nodev.err;  // the way out is named
   EXPECT_EQ(files_matching("y."), 0u);
+}
+
+// --backend auto (the default): CGAL for small inputs, without touching Vulkan; for large ones the GPU only where
+// it is hardware (on lavapipe, CGAL). Whatever it picks, the bytes are the same, and the stats say why.
+TEST_F(Cli, AutoBackendPicksByInputSizeAndDevice) {
+  write_terrain();
+  std::string in = path("dem.csv") + " " + path("lines.wkt");
+  ASSERT_EQ(run("triangulate " + in + " -q --backend cgal -o " + path("cgal.ply")).code, 0);
+  Result small = run("triangulate " + in + " -q -o " + path("small.ply") + " --stats " + path("small.json"));
+  ASSERT_EQ(small.code, 0) << small.err;
+  auto stats = nlohmann::json::parse(slurp(path("small.json")));
+  EXPECT_EQ(stats["backend"], "cgal");
+  EXPECT_NE(stats["backend_reason"].get<std::string>().find("fewer than 100000"), std::string::npos);
+  EXPECT_FALSE(stats.contains("device"));
+  EXPECT_EQ(slurp(path("small.ply")), slurp(path("cgal.ply")));
+
+  // Every input counts as large: the device decides.
+  bool hardware = false;
+  for (const cdtgpu::gpu::DeviceInfo& d : cdtgpu::gpu::list_devices()) hardware = hardware || (d.type != "cpu" && d.missing.empty());
+  ::setenv("CDTGPU_AUTO_MIN_POINTS", "1", 1);
+  Result big = run("triangulate " + in + " -q -o " + path("large.ply") + " --stats " + path("large.json"));
+  Result nodev = run("triangulate " + in + " -q --device no-such-gpu -o " + path("nodev.ply"));
+  ::unsetenv("CDTGPU_AUTO_MIN_POINTS");
+  ASSERT_EQ(big.code, 0) << big.err;
+  stats = nlohmann::json::parse(slurp(path("large.json")));
+  EXPECT_EQ(stats["backend"], hardware ? "gpu" : "cgal") << stats["backend_reason"];
+  if (!hardware) {
+    EXPECT_NE(stats["backend_reason"].get<std::string>().find("CPU Vulkan driver"), std::string::npos)
+        << stats["backend_reason"];
+  }
+  EXPECT_EQ(slurp(path("large.ply")), slurp(path("cgal.ply")));
+  // No usable device: auto still triangulates, on the CPU.
+  EXPECT_EQ(nodev.code, 0) << nodev.err;
+  EXPECT_EQ(slurp(path("nodev.ply")), slurp(path("cgal.ply")));
 }
 
 TEST_F(Cli, StdinToStdoutAndStats) {

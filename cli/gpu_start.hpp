@@ -1,0 +1,46 @@
+// The GPU backend made ready on a thread of its own (Vulkan instance, device, pipelines) while the inputs are
+// read, and the `--backend auto` rule that decides whether a run uses it.
+#pragma once
+#include <cstdint>
+#include <future>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gpu/cdt_pipeline.hpp"
+#include "gpu/context.hpp"
+
+namespace cdtgpu {
+
+// Below this many input points `--backend auto` runs CGAL without touching Vulkan: the GPU's start-up
+// (instance, device, pipelines from the cache) costs more than CGAL's whole triangulation. Measured on the
+// H100 machine with `cdtgpu bench --table e2e` (docs/performance.md). CDTGPU_AUTO_MIN_POINTS overrides it.
+constexpr uint64_t kAutoMinPoints = 100000;
+uint64_t auto_min_points();
+
+// Inputs whose files hold at least this many bytes per point of kAutoMinPoints start the GPU while being
+// read (an ASCII grid cell can be 4 bytes; a text XYZ point ~30): a guess that only decides what overlaps.
+constexpr uint64_t kAutoBytesPerPoint = 4;
+
+// Sum of the sizes of the input files that exist (stdin counts 0).
+uint64_t input_bytes(const std::vector<std::string>& paths);
+
+class GpuStart {
+ public:
+  // Starts creating the context and every pipeline now. hardware_only: refuse a CPU Vulkan driver.
+  GpuStart(const std::string& device, bool hardware_only);
+  ~GpuStart();
+  // Waits for the start; rethrows its DeviceError.
+  gpu::GpuCdt& cdt();
+  const gpu::Context& context();
+
+ private:
+  struct Ready {
+    gpu::Context ctx;
+    std::unique_ptr<gpu::GpuCdt> cdt;
+  };
+  std::future<std::unique_ptr<Ready>> pending_;
+  std::unique_ptr<Ready> ready_;
+};
+
+}  // namespace cdtgpu
