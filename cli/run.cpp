@@ -13,6 +13,7 @@
 #include "core/stats.hpp"
 #include "core/verify.hpp"
 #include "cli/gpu_start.hpp"
+#include "cli/progress.hpp"
 #include "gpu/check.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
@@ -20,11 +21,13 @@
 namespace cdtgpu {
 namespace {
 
-// Times a stage; a stage over a second gets a progress line even without -v.
+// Times a stage; a stage over a second gets a progress line on a terminal and a log line even without -v.
 template <class F>
 auto timed(RunStats& stats, const std::string& name, F&& f) {
+  Progress progress(name);
   auto t0 = std::chrono::steady_clock::now();
   auto finish = [&] {
+    progress.stop();
     double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     stats.stage_ms.emplace_back(name, ms);
     spdlog::log(ms > 1000 ? spdlog::level::info : spdlog::level::debug, "{}: {:.1f} ms", name, ms);
