@@ -1,5 +1,7 @@
 #include "cli/gpu_start.hpp"
 
+#include <cctype>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 
@@ -10,24 +12,33 @@ uint64_t auto_min_points() {
   return kAutoMinPoints;
 }
 
-uint64_t input_bytes(const std::vector<std::string>& paths) {
+uint64_t max_input_points(const std::vector<std::string>& paths) {
   uint64_t total = 0;
   for (const std::string& p : paths) {
     std::error_code ec;
     if (p == "-" || !std::filesystem::is_regular_file(p, ec)) continue;
-    total += std::filesystem::file_size(p, ec);
+    std::string ext = std::filesystem::path(p).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    const uint64_t bytes_per_point = ext == ".asc" ? 2 : ext == ".shp" ? 28 : 6;
+    total += std::filesystem::file_size(p, ec) / bytes_per_point;
   }
   return total;
 }
 
 GpuStart::GpuStart(const std::string& device, bool hardware_only) {
-  pending_ = std::async(std::launch::async, [device, hardware_only] {
+  pending_ = std::async(std::launch::async, [this, device, hardware_only] {
+    using Clock = std::chrono::steady_clock;
+    auto ms = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
     auto r = std::make_unique<Ready>();
     gpu::ContextOptions options;
     options.device = device;
     options.hardware_only = hardware_only;
+    auto t = Clock::now();
     r->ctx = gpu::create_context(options);
+    context_ms = ms(t);
+    t = Clock::now();
     r->cdt = std::make_unique<gpu::GpuCdt>(r->ctx);  // queues every pipeline's compile
+    pipelines_ms = ms(t);
     return r;
   });
 }

@@ -18,12 +18,10 @@ namespace cdtgpu {
 constexpr uint64_t kAutoMinPoints = 100000;
 uint64_t auto_min_points();
 
-// Inputs whose files hold at least this many bytes per point of kAutoMinPoints start the GPU while being
-// read (an ASCII grid cell can be 4 bytes; a text XYZ point ~30): a guess that only decides what overlaps.
-constexpr uint64_t kAutoBytesPerPoint = 4;
-
-// Sum of the sizes of the input files that exist (stdin counts 0).
-uint64_t input_bytes(const std::vector<std::string>& paths);
+// The most points the input files can hold, from their sizes and the fewest bytes a point takes in each format
+// (an ASCII grid cell 2, a text line 6, a shapefile point record 28; stdin counts 0). Auto starts the GPU
+// while reading only when this reaches auto_min_points(): a guess that decides what overlaps, never what runs.
+uint64_t max_input_points(const std::vector<std::string>& paths);
 
 class GpuStart {
  public:
@@ -33,6 +31,8 @@ class GpuStart {
   // Waits for the start; rethrows its DeviceError.
   gpu::GpuCdt& cdt();
   const gpu::Context& context();
+  // Host milliseconds of the start's two parts: instance and device, then queueing every pipeline.
+  double context_ms = 0, pipelines_ms = 0;
 
  private:
   struct Ready {

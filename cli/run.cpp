@@ -129,8 +129,7 @@ int run_triangulate(const TriangulateOptions& options) {
   // are large enough to hold auto_min_points() points).
   const uint64_t min_points = auto_min_points();
   std::optional<GpuStart> start;
-  if (options.backend == "gpu" ||
-      (options.backend == "auto" && input_bytes(options.input.inputs) >= min_points * kAutoBytesPerPoint))
+  if (options.backend == "gpu" || (options.backend == "auto" && max_input_points(options.input.inputs) >= min_points))
     start.emplace(options.device, options.backend == "auto");
 
   Loaded l = read_all(options.input, stats);
@@ -144,7 +143,7 @@ int run_triangulate(const TriangulateOptions& options) {
     } else {
       if (!start) start.emplace(options.device, true);
       try {
-        start->cdt();
+        timed(stats, "gpu start", [&] { start->cdt(); });
         use_gpu = true;
         reason = std::to_string(n) + " input points on a GPU";
       } catch (const gpu::DeviceError& e) {
@@ -152,10 +151,13 @@ int run_triangulate(const TriangulateOptions& options) {
       }
     }
   }
-  gpu::GpuCdt* cdt = use_gpu ? &start->cdt() : nullptr;  // a forced GPU's start error is thrown here
+  if (options.backend == "gpu") timed(stats, "gpu start", [&] { start->cdt(); });  // a start error is thrown here
+  gpu::GpuCdt* cdt = use_gpu ? &start->cdt() : nullptr;
   stats.backend = use_gpu ? "gpu" : "cgal";
   stats.backend_reason = reason;
   if (cdt) {
+    stats.stage_ms.emplace_back("gpu start: context (own thread)", start->context_ms);
+    stats.stage_ms.emplace_back("gpu start: pipelines queued (own thread)", start->pipelines_ms);
     stats.device = start->context().info.name;
     spdlog::debug("device: {} ({} {})", stats.device, start->context().info.driver_name,
                   start->context().info.driver_info);
@@ -188,9 +190,15 @@ int run_triangulate(const TriangulateOptions& options) {
   stats.counts["steiner_points"] = result.steiner_points;
   stats.counts["vertices"] = result.mesh.vertices.size();
   stats.counts["triangles"] = result.mesh.triangles.size();
-  write_stats(stats, options.stats_path);
   spdlog::info("{} vertices, {} triangles ({} constraints, {} Steiner points)", result.mesh.vertices.size(),
                result.mesh.triangles.size(), l.prepared.constraints.size(), result.steiner_points);
+  if (cdt) stats.stage_ms.emplace_back("gpu pipeline waits", gpu::pipeline_wait_ms());
+  timed(stats, "release", [&] {
+    start.reset();
+    l = Loaded{};
+    result = CdtResult{};
+  });
+  write_stats(stats, options.stats_path);
   return 0;
 }
 

@@ -2,6 +2,8 @@
 #include "gpu/passes.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <functional>
@@ -59,8 +61,18 @@ Pass& Pass::operator=(Pass&& o) noexcept {
 
 Pass::~Pass() { release(); }
 
+namespace {
+std::atomic<int64_t> wait_ns{0};
+}  // namespace
+
+double pipeline_wait_ms() { return double(wait_ns.load()) * 1e-6; }
+
 VkPipeline Pass::handle() const {
-  if (!pipeline_ && compiling_.valid()) pipeline_ = compiling_.get();
+  if (!pipeline_ && compiling_.valid()) {
+    const auto t = std::chrono::steady_clock::now();
+    pipeline_ = compiling_.get();
+    wait_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t).count();
+  }
   return pipeline_;
 }
 
