@@ -196,6 +196,7 @@ struct Cell {
   Series stages;
   json runs = json::array();
   std::string device;
+  json counts;  // the last run's stats counts (vertices, constraints, triangles, ...)
   std::string output;
   uint64_t output_bytes = 0;
   std::string equal = "-";  // yes / no / - (failed)
@@ -296,6 +297,7 @@ Cell run_cell(const BenchOptions& o, const std::string& binary, const std::strin
     for (const auto& [name, ms] : f.stages) c.stages.add(name, ms);
     c.runs.push_back(figures_json(r));
     if (r.stats.contains("device")) c.device = r.stats["device"].get<std::string>();
+    if (r.stats.contains("counts")) c.counts = r.stats["counts"];
   }
   std::error_code ec;
   c.output_bytes = fs::file_size(c.output, ec);
@@ -323,6 +325,7 @@ json cell_json(const Cell& c, uint64_t input_bytes, bool first_run) {
   const double read = stage(c, "read");
   if (read > 0) j["read_mb_per_s"] = double(input_bytes) / 1e6 / (read / 1e3);
   j["output_bytes"] = c.output_bytes;
+  j["counts"] = c.counts;
   j["bytes_equal"] = c.equal == "yes";
   j["runs"] = c.runs;
   return j;

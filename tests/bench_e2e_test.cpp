@@ -153,6 +153,9 @@ TEST_F(E2eDir, SmallRowGivesByteEqualPlysFromBothBackendsAndFormats) {
         EXPECT_TRUE(cell["stage_median_ms"].contains(stage)) << stage;
       EXPECT_EQ(cell.contains("gpu_median_ms"), cell["backend"] == "gpu");
       EXPECT_FALSE(cell.contains("first_run"));
+      EXPECT_EQ(cell["counts"]["input_points"], 2000 + 500 + row["lines"].get<int>());
+      EXPECT_EQ(cell["counts"]["constraints"], 500);
+      EXPECT_EQ(cell["counts"]["steiner_points"], 0);
     }
   }
   // --keep leaves every output; the gpu's and cgal's PLYs of the shapefiles are the same bytes as text's
