@@ -1,6 +1,7 @@
 // cdtgpu bench: times the CDT of the deterministic workloads (core/workloads.hpp) with a CGAL configured for
 // speed and with the GPU backend (gpu/cdt_pipeline.hpp), checks both give the same triangles, and prints a
-// table like the paper's (Chen et al. 2026); --ablation prints its Table 3.
+// table like the paper's (Chen et al. 2026); --ablation prints its Table 3; --table e2e (bench/e2e.hpp) times the
+// whole `cdtgpu triangulate` as a child process.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -30,7 +31,7 @@ struct BackendRun {
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
 
 struct BenchOptions {
-  std::string table = "all";        // 1, 2, long, terrain, all (those four) or dt (Delaunay only)
+  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only) or e2e
   bool quick = false;               // 20K..80K points instead of 1M..4M
   std::vector<std::string> sizes;   // point counts overriding the table's, e.g. 50000 or 1.5M
   int runs = 5;                     // timed runs per backend and workload (median), after one warm-up
