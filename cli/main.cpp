@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <iostream>
 
-#include "cli/bench.hpp"
+#include "bench/bench.hpp"
 #include "cli/run.hpp"
 #include "gpu/check.hpp"
 #include "gpu/context.hpp"

@@ -4,10 +4,12 @@
 # then run one part per device call (each fits the 10-minute limit), carrying .devpack:
 #   bash scripts/device-bench.sh 1    # tables 1 and 2, the ablation
 #   bash scripts/device-bench.sh 2    # Delaunay only, long constraints, terrain
+#   bash scripts/device-bench.sh 3    # end to end (cdtgpu triangulate as a child): 20K, 200K, 2M points
+#   bash scripts/device-bench.sh 4    # end to end: 4M points
 # JSON files and nvidia-smi's clock log go to $OUT (the device tool's folder), else ./bench-out. Plot them with
 #   scripts/plot_bench.py OUT/*.json -o docs/img
 set -euo pipefail
-part=${1:?usage: device-bench.sh 1|2}
+part=${1:?usage: device-bench.sh 1|2|3|4}
 out=${OUT:-bench-out}
 mkdir -p "$out"
 run() { bash .devpack/run cdtgpu "$@"; }
@@ -27,5 +29,11 @@ case $part in
     run bench --table long "${common[@]}" --json "$out/h100-long.json"
     run bench --table terrain "${common[@]}" --json "$out/h100-terrain.json"
     ;;
-  *) echo "part must be 1 or 2" >&2; exit 2 ;;
+  3)
+    run bench --table e2e --sizes 20K,200K,2M --json "$out/h100-e2e-small.json"
+    ;;
+  4)
+    run bench --table e2e --sizes 4M --json "$out/h100-e2e-4m.json"
+    ;;
+  *) echo "part must be 1, 2, 3 or 4" >&2; exit 2 ;;
 esac

@@ -16,8 +16,8 @@
 #include "core/verify.hpp"
 #include "core/workloads.hpp"
 
-// cli/ sources are compiled into the cdtgpu executable only, so the bench is built into this test directly.
-#include "cli/bench.cpp"
+// The bench is built into this test directly, so that the tests reach its internal functions.
+#include "bench/bench.cpp"
 
 using namespace cdtgpu;
 

@@ -1,6 +1,7 @@
 // cdtgpu bench: times the CDT of the deterministic workloads (core/workloads.hpp) with a CGAL configured for
 // speed and with the GPU backend (gpu/cdt_pipeline.hpp), checks both give the same triangles, and prints a
-// table like the paper's (Chen et al. 2026); --ablation prints its Table 3.
+// table like the paper's (Chen et al. 2026); --ablation prints its Table 3; --table e2e (bench/e2e.hpp) times the
+// whole `cdtgpu triangulate` as a child process.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -30,7 +31,7 @@ struct BackendRun {
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
 
 struct BenchOptions {
-  std::string table = "all";        // 1, 2, long, terrain, all (those four) or dt (Delaunay only)
+  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only) or e2e
   bool quick = false;               // 20K..80K points instead of 1M..4M
   std::vector<std::string> sizes;   // point counts overriding the table's, e.g. 50000 or 1.5M
   int runs = 5;                     // timed runs per backend and workload (median), after one warm-up
@@ -41,6 +42,12 @@ struct BenchOptions {
   bool gpu = true;                  // false (--cgal-only): CGAL column only
   std::string device;               // Vulkan device override, as `cdtgpu devices` lists
   bool ablation = false;            // the paper's Table 3 instead of the tables
+  // --table e2e (bench/e2e.hpp): `cdtgpu triangulate` timed as a child process, from files to the written PLY
+  std::vector<std::string> backends;  // empty: auto, gpu, cgal
+  std::vector<std::string> formats;   // empty: text, shp
+  std::string binary;                 // the cdtgpu to time; empty: this executable (/proc/self/exe)
+  std::string keep_dir;               // keep every input, output, stats file and log here; empty: a temp dir
+  bool first_run = true;              // the run with empty caches (on lavapipe it compiles every pipeline: ~1 min)
 };
 
 // Adds the options above to a `bench` subcommand.
@@ -53,5 +60,11 @@ int run_bench(const BenchOptions& options);
 // (the TDS's vertices carry their index), points spatially sorted then inserted with a hint, constraints
 // inserted by vertex handle. total_ms = point insertion (sort included) + constraint insertion.
 BackendRun run_cgal_fast(const PreparedInput& prepared);
+
+// Shared by the tables: a --sizes value ("50000", "50K", "1.5M"; UsageError otherwise), the CPU's model name,
+// the time now as ISO 8601 UTC.
+uint64_t parse_bench_size(const std::string& s);
+std::string bench_cpu_model();
+std::string bench_utc_now();
 
 }  // namespace cdtgpu

@@ -1,6 +1,7 @@
 // cdtgpu bench: generate each workload, prepare it, time the fast CGAL CDT (and the GPU backend when given),
 // check the triangles against the reference backend, print the table and optionally write every figure as JSON.
-#include "cli/bench.hpp"
+#include "bench/bench.hpp"
+#include "bench/e2e.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -315,14 +316,19 @@ BackendRun run_cgal_delaunay(const PreparedInput& p) {
   return r;
 }
 
+uint64_t parse_bench_size(const std::string& s) { return parse_size(s); }
+std::string bench_cpu_model() { return cpu_model(); }
+std::string bench_utc_now() { return utc_now(); }
+
 void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_option("--table", o.table,
                   "1 (1M..4M points, 500K constraints), 2 (2M points, 200K..1M constraints), long (long "
-                  "constraints), terrain (DEM grid + contours), all (these four), or dt (Delaunay only: 1M..8M "
-                  "uniform points and a grid, CGAL's Delaunay_triangulation_2)")
+                  "constraints), terrain (DEM grid + contours), all (these four), dt (Delaunay only: 1M..8M "
+                  "uniform points and a grid, CGAL's Delaunay_triangulation_2), or e2e (`cdtgpu triangulate` "
+                  "as a child process, files in, PLY out: 20K..4M points + a quarter as many contour segments)")
       ->default_val("all")
-      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all"}));
-  cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points) that finish in about a minute on 2 cores");
+      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e"}));
+  cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points; e2e: 20K and 200K) that finish in about a minute on 2 cores");
   cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
   cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
       ->default_val(5)
@@ -336,6 +342,16 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_flag("--ablation", o.ablation,
                 "the paper's Table 3: the first --sizes value (default 2M points, 40K with --quick) with a tenth, a "
                 "quarter and half as many constraints; the full method and each part switched off");
+  cmd->add_option("--backends", o.backends, "e2e: the child's --backend values to time (default auto,gpu,cgal)")
+      ->delimiter(',');
+  cmd->add_option("--formats", o.formats, "e2e: input formats, text (.xyz + .wkt) and/or shp (default text,shp)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"text", "shp"}));
+  cmd->add_option("--binary", o.binary, "e2e: the cdtgpu executable to time (default: this one)");
+  cmd->add_flag("!--no-first-run", o.first_run,
+                "e2e: skip the run with empty shader and pipeline caches (minutes on lavapipe, which compiles every "
+                "pipeline then)");
+  cmd->add_option("--keep", o.keep_dir, "e2e: write inputs, outputs, stats and logs into this folder and keep them");
 }
 
 namespace {
@@ -517,6 +533,7 @@ void warm_pipelines(const gpu::Context& ctx) {
 }  // namespace
 
 int run_bench(const BenchOptions& o) {
+  if (o.table == "e2e") return run_e2e(o);  // the child processes open their own devices
   gpu::ContextOptions co;
   co.device = o.device;
   std::string device = "none (--cgal-only)", device_name;
