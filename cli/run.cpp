@@ -14,6 +14,7 @@
 #include "core/verify.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
+#include "io/output_guard.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -103,6 +104,7 @@ int run_triangulate(const TriangulateOptions& options) {
     write.format = format_from_extension(options.output);
   if (options.backend != "gpu" && options.backend != "cgal")
     throw UsageError("unknown backend '" + options.backend + "' (use gpu or cgal)");
+  check_outputs_spare_inputs(options.input.inputs, triangulate_outputs(options.output, options.stats_path));
 
   // The device comes first: a machine that cannot run the GPU backend fails before reading anything.
   std::optional<gpu::Context> ctx;
