@@ -8,6 +8,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
+#include <iterator>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -18,7 +20,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/error.hpp"
+#include "io/readers.hpp"
+
 namespace fs = std::filesystem;
+using namespace cdtgpu;
 
 namespace {
 
@@ -281,6 +287,134 @@ TEST_F(Reliability, SigkillWhileWritingKeepsTheOldOutput) {
   EXPECT_EQ(slurp(path("old.ply")), "the old output\n");
   // SIGKILL cannot be caught: the stale old.ply.tmp-PID stays (documented in docs/rules.md).
   EXPECT_LE(files_containing(".tmp-"), 1u);
+}
+
+// ---- damaged shapefiles ----
+
+std::string bytes_of(const std::string& p) {
+  std::ifstream f(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+void put_bytes(const std::string& p, const std::string& b) { std::ofstream(p, std::ios::binary) << b; }
+uint32_t be32_at(const std::string& b, size_t at) {
+  return uint32_t(uint8_t(b[at])) << 24 | uint32_t(uint8_t(b[at + 1])) << 16 | uint32_t(uint8_t(b[at + 2])) << 8 |
+         uint8_t(b[at + 3]);
+}
+void put_be32(std::string& b, size_t at, uint32_t v) {
+  for (int k = 0; k < 4; ++k) b[at + k] = char((v >> (24 - 8 * k)) & 0xff);
+}
+
+// The 1-based record of the .shp holding byte `at`, from the .shx.
+uint64_t record_at(const std::string& shx, size_t at) {
+  uint64_t found = 0;
+  for (size_t i = 0; 100 + 8 * i + 8 <= shx.size(); ++i)
+    if (uint64_t(be32_at(shx, 100 + 8 * i)) * 2 <= at) found = i + 1;
+  return found;
+}
+
+// Reads path, expects an InputError naming `part` at `record`.
+void expect_damage(const std::string& path, const std::string& part, uint64_t record, const ReadOptions& o = {}) {
+  InputSet in;
+  try {
+    read_input(path, o, in);
+    ADD_FAILURE() << path << ": accepted; expected an error with '" << part << "' at record " << record;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(part), std::string::npos) << e.what();
+    EXPECT_EQ(e.record, record) << e.what();
+  }
+}
+
+class Damage : public Reliability {
+ public:
+  void copy_sample(const std::string& name) const {
+    for (const char* ext : {".shp", ".shx", ".dbf", ".prj"})
+      fs::copy_file(kSample + name + ext, dir / (name + ext));
+  }
+};
+
+TEST_F(Damage, HundredFlippedBytesInTheMiddleNameTheRecord) {
+  copy_sample("contours");
+  std::string shp = bytes_of(path("contours.shp"));
+  const size_t mid = shp.size() / 2;
+  for (size_t k = mid; k < mid + 100; ++k) shp[k] = char(~shp[k]);
+  put_bytes(path("contours.shp"), shp);
+  const uint64_t record = record_at(bytes_of(path("contours.shx")), mid);
+  Result r = run("triangulate " + path("contours.shp") + " --backend cgal -q -o " + path("t.ply"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("contours.shp:" + std::to_string(record) + ": corrupt record"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("t.ply")));
+}
+
+TEST_F(Damage, FlippedBytesAnywhereAreCaught) {
+  // 100 bytes flipped at 40 places through each sample shapefile: every one is refused at the record hit.
+  for (const std::string name : {"contours", "buildings"}) {
+    copy_sample(name);
+    const std::string good = bytes_of(path(name + ".shp")), shx = bytes_of(path(name + ".shx"));
+    for (int step = 0; step < 40; ++step) {
+      const size_t at = 100 + (good.size() - 200) * size_t(step) / 40;
+      std::string bad = good;
+      for (size_t k = at; k < at + 100; ++k) bad[k] = char(~bad[k]);
+      put_bytes(path(name + ".shp"), bad);
+      InputSet in;
+      try {
+        read_input(path(name + ".shp"), {}, in);
+        ADD_FAILURE() << name << ": 100 bytes flipped at " << at << " accepted";
+      } catch (const InputError& e) {
+        // The damage is in the record holding `at`, or in the next one when it reaches that one's header.
+        EXPECT_GE(e.record, record_at(shx, at)) << e.what();
+        EXPECT_LE(e.record, record_at(shx, at + 100)) << e.what();
+      }
+    }
+    put_bytes(path(name + ".shp"), good);
+  }
+}
+
+TEST_F(Damage, RecordHeaderThatDisagreesWithTheShx) {
+  copy_sample("contours");
+  const std::string shx = bytes_of(path("contours.shx"));
+  // Record 3's length in the .shx one word short.
+  std::string bad = shx;
+  put_be32(bad, 100 + 8 * 2 + 4, be32_at(shx, 100 + 8 * 2 + 4) - 1);
+  put_bytes(path("contours.shx"), bad);
+  expect_damage(path("contours.shp"), "disagrees with the index", 3);
+  // Record 5's offset pointing at record 4.
+  bad = shx;
+  put_be32(bad, 100 + 8 * 4, be32_at(shx, 100 + 8 * 3));
+  put_bytes(path("contours.shx"), bad);
+  expect_damage(path("contours.shp"), "disagrees with the index", 5);
+  // Record 2's offset past the end of the .shp.
+  bad = shx;
+  put_be32(bad, 100 + 8, 0x7fffffff);
+  put_bytes(path("contours.shx"), bad);
+  expect_damage(path("contours.shp"), "outside the file", 2);
+}
+
+TEST_F(Damage, PartIndexOutOfRange) {
+  copy_sample("buildings");
+  std::string shp = bytes_of(path("buildings.shp"));
+  const std::string shx = bytes_of(path("buildings.shx"));
+  // Record 2's first part starts at vertex 1000 (content: type, box, nParts, nPoints, parts[]).
+  const size_t content = size_t(be32_at(shx, 100 + 8)) * 2 + 8;
+  const size_t part0 = content + 4 + 32 + 4 + 4;
+  shp[part0] = char(0xe8), shp[part0 + 1] = char(0x03);
+  put_bytes(path("buildings.shp"), shp);
+  expect_damage(path("buildings.shp"), "buildings.shp:2: corrupt", 2);
+}
+
+TEST_F(Damage, CoordinateOutsideTheHeaderBox) {
+  // A point moved by 1 km, everything else consistent: outside the header's box.
+  copy_sample("buildings");
+  std::string shp = bytes_of(path("buildings.shp"));
+  const std::string shx = bytes_of(path("buildings.shx"));
+  const size_t content = size_t(be32_at(shx, 100 + 8 * 6)) * 2 + 8;  // record 7
+  const uint32_t parts = uint8_t(shp[content + 36]);
+  const size_t x0 = content + 44 + 4 * parts;
+  double x;
+  std::memcpy(&x, &shp[x0], 8);
+  x += 0.01;  // degrees: about 1 km
+  std::memcpy(&shp[x0], &x, 8);
+  put_bytes(path("buildings.shp"), shp);
+  expect_damage(path("buildings.shp"), "buildings.shp:7: corrupt record: vertex 1", 7);
 }
 
 }  // namespace
