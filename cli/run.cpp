@@ -48,7 +48,7 @@ struct Loaded {
 Loaded load(const InputOptions& options, RunStats& stats, const PointMerger& merge = merge_points) {
   Loaded l;
   timed(stats, "read", [&] {
-    for (const std::string& path : options.inputs) read_input(path, options.read, l.in);
+    read_inputs(options.inputs, options.read, l.in);
   });
   l.crs = choose_crs(l.in, options.crs);
   timed(stats, "project", [&] { project(l.in, l.crs); });

@@ -140,16 +140,18 @@ struct ZField {
   }
 };
 
-// Opens the .dbf and finds the z field. Returns nothing when the field is unavailable and the geometry has
-// its own z (a Z shapefile without the field, such as footprints read along with contours); otherwise a
-// missing .dbf or field is an error listing what there is.
+// Opens the .dbf and finds the z field. Returns nothing, with the reason in why_not, when the field is
+// unavailable and the geometry has its own z (a Z shapefile without the field, such as footprints read along
+// with contours: read_inputs decides whether that is allowed); otherwise a missing .dbf or field is an error
+// listing what there is.
 std::optional<ZField> open_z_field(const std::string& shp, const fs::path& base, const std::string& name,
-                                   bool geometry_has_z, int shp_records) {
+                                   bool geometry_has_z, int shp_records, std::string& why_not) {
   SAHooks hooks = capturing_hooks();
   const std::optional<std::string> dbf_path = companion(base, ".dbf");
   if (!dbf_path) {
+    why_not = "no attribute file " + base.string() + ".dbf, needed for the z field " + name;
     if (geometry_has_z) return std::nullopt;
-    throw InputError(shp, 0, "no attribute file " + base.string() + ".dbf, needed for the z field " + name);
+    throw InputError(shp, 0, why_not);
   }
   ZField z;
   z.path = *dbf_path;
@@ -183,9 +185,9 @@ std::optional<ZField> open_z_field(const std::string& shp, const fs::path& base,
     z.field = i;
   }
   if (z.field >= 0) return z;
+  why_not = "no field " + name + " in " + z.path + " (fields: " + (fields.empty() ? "none" : fields) + ")";
   if (geometry_has_z) return std::nullopt;
-  throw InputError(
-      shp, 0, "no field " + name + " in " + z.path + " (fields: " + (fields.empty() ? "none" : fields) + ")");
+  throw InputError(shp, 0, why_not);
 }
 
 void check_parts(const SHPObject& o, const std::string& path, uint64_t record) {
@@ -332,6 +334,12 @@ void read_prj(const fs::path& base, InputSet& in) {
 }  // namespace
 
 void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in) {
+  ZFieldLookup lookup;
+  read_shapefile(path, options, in, &lookup);
+  if (!options.z_field.empty() && !lookup.found) throw InputError(path, 0, lookup.why_not);
+}
+
+void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in, ZFieldLookup* lookup) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "no such file");
   const fs::path base = fs::path(path).replace_extension();
@@ -357,7 +365,10 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
   const Box box = header_box(shp.get(), type);
 
   std::optional<ZField> z_field;
-  if (!options.z_field.empty()) z_field = open_z_field(path, base, options.z_field, has_z(type), count);
+  if (!options.z_field.empty()) {
+    z_field = open_z_field(path, base, options.z_field, has_z(type), count, lookup->why_not);
+    lookup->found = z_field.has_value();
+  }
 
   in.sources.push_back(path);
   const uint32_t source = uint32_t(in.sources.size() - 1);

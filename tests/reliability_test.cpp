@@ -417,4 +417,33 @@ TEST_F(Damage, CoordinateOutsideTheHeaderBox) {
   expect_damage(path("buildings.shp"), "buildings.shp:7: corrupt record: vertex 1", 7);
 }
 
+// ---- --z-field that no input has ----
+
+TEST_F(Damage, ZFieldThatNoShapefileHasIsAnError) {
+  copy_sample("contours");
+  copy_sample("buildings");
+  const std::string both = path("contours.shp") + " " + path("buildings.shp");
+  Result r = run("triangulate " + both + " --z-field NOPE --backend cgal -q -o " + path("t.ply"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no input shapefile has the z field NOPE"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("contours.dbf (fields: ELEV)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("(fields: ID, GROUND, HEIGHT)"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("t.ply")));
+  // The README's run: contours have ELEV, the footprints do not and keep their own z (said at info level).
+  r = run("triangulate " + both + " " + kSample + "dem.xyz --z-field ELEV --backend cgal -o " + path("t.ply"));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("buildings.shp: no field ELEV"), std::string::npos) << r.err;
+  // The contours' .dbf missing: no input has ELEV.
+  fs::remove(path("contours.dbf"));
+  r = run("triangulate " + path("contours.shp") + " --z-field ELEV --backend cgal -q -o " + path("u.ply"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no attribute file"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("ELEV"), std::string::npos) << r.err;
+  // No shapefile at all.
+  write_points();
+  r = run(tri(path("p.xyz")) + "--z-field ELEV -o " + path("v.ply"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("no input is a shapefile"), std::string::npos) << r.err;
+}
+
 }  // namespace
