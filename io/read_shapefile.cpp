@@ -20,6 +20,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
@@ -319,16 +320,37 @@ void check_coordinates(const SHPObject& o, const Box& file, bool z_from_geometry
   }
 }
 
-void read_prj(const fs::path& base, InputSet& in) {
-  if (!in.source_crs_wkt.empty()) return;
+// The shapefile's own .prj (path, trimmed text); empty when there is none.
+std::pair<std::string, std::string> own_prj(const fs::path& base) {
   const std::optional<std::string> prj = companion(base, ".prj");
-  if (!prj) return;
+  if (!prj) return {};
   std::ifstream f(*prj, std::ios::binary);
   std::ostringstream text;
   text << f.rdbuf();
   std::string s = text.str();
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.pop_back();
-  in.source_crs_wkt = s;
+  return {*prj, s};
+}
+
+void read_prj(const fs::path& base, InputSet& in) {
+  if (!in.source_crs_wkt.empty()) return;
+  in.source_crs_wkt = own_prj(base).second;
+}
+
+// A .prj of WKT1 GEOGCS / WKT2 GEOGCRS: the coordinates are longitude and latitude in degrees.
+bool says_geographic(const std::string& wkt) {
+  const std::string w = upper(wkt.substr(0, 8));
+  return w.rfind("GEOGCS[", 0) == 0 || w.rfind("GEOGCRS[", 0) == 0;
+}
+
+// Under a geographic .prj, a latitude of -95 or a longitude of 200 is damage, not metres.
+void check_lon_lat(const SHPObject& o, const std::string& prj, const std::string& path, uint64_t record) {
+  for (int k = 0; k < o.nVertices; ++k)
+    if (!(o.padfX[k] >= -180 && o.padfX[k] <= 180 && o.padfY[k] >= -90 && o.padfY[k] <= 90))
+      throw InputError(path, record,
+                       "vertex " + std::to_string(k + 1) + " (" + Box::number(o.padfX[k]) + " " +
+                           Box::number(o.padfY[k]) + ") is not a longitude/latitude, and " + prj +
+                           " says the coordinates are geographic (longitude -180 to 180, latitude -90 to 90)");
 }
 
 }  // namespace
@@ -363,6 +385,8 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
     throw InputError(*shx, 0,
                      "holds " + std::to_string(index.records()) + " records, shapelib read " + std::to_string(count));
   const Box box = header_box(shp.get(), type);
+  const auto [prj_path, prj_text] = own_prj(base);
+  const bool geographic = says_geographic(prj_text);
 
   std::optional<ZField> z_field;
   if (!options.z_field.empty()) {
@@ -393,6 +417,7 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
     check_parts(*o, path, record);
     const bool z_from_geometry = !z_field && has_z(type) && o->padfZ;
     check_coordinates(*o, box, z_from_geometry, path, record);
+    if (geographic) check_lon_lat(*o, prj_path, path, record);
     const double z_attribute = z_field ? z_field->read(i) : 0.0;
     auto vertex = [&](int k) {
       return Point3{o->padfX[k], o->padfY[k], z_from_geometry ? o->padfZ[k] : z_attribute};

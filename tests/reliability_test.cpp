@@ -2,12 +2,14 @@
 // links, FIFOs, stdout), outputs that are inputs, interrupted runs, damaged shapefiles, unknown z fields and
 // lon/lat data across the antimeridian. Each test failed on the code before the fix it pins down.
 #include <gtest/gtest.h>
+#include <shapefil.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <iterator>
 #include <csignal>
@@ -21,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
+#include "core/projection.hpp"
 #include "io/readers.hpp"
 
 namespace fs = std::filesystem;
@@ -444,6 +447,74 @@ TEST_F(Damage, ZFieldThatNoShapefileHasIsAnError) {
   r = run(tri(path("p.xyz")) + "--z-field ELEV -o " + path("v.ply"));
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("no input is a shapefile"), std::string::npos) << r.err;
+}
+
+// ---- lon/lat across the antimeridian, and lon/lat out of range ----
+
+TEST(Antimeridian, ZoneOfTheUnwrappedCentre) {
+  // Fiji, both sides of 180: the mean longitude is 0 (zone 31, half the globe away); the centre is 180.
+  InputSet in;
+  in.points = {{179.9, -16.1, 0}, {-179.9, -16.3, 0}, {179.95, -16.4, 0}, {-179.85, -16.0, 0}};
+  const Crs crs = choose_crs(in, parse_crs("auto"));
+  EXPECT_TRUE(crs.zone == 1 || crs.zone == 60) << crs.name;
+  EXPECT_FALSE(crs.north);
+  project(in, crs);
+  // 0.25 degree of longitude at 16S is about 26.7 km: projected, the points stay that close.
+  for (const Point3& p : in.points) {
+    EXPECT_NEAR(p.x, 500000, 400000) << p.x;
+    EXPECT_NEAR(std::hypot(p.x - in.points[0].x, p.y - in.points[0].y), 20000, 20000);
+  }
+  // Data on one side is unchanged: Katoomba still goes to zone 56.
+  InputSet k;
+  k.points = {{150.30, -33.70, 0}, {150.32, -33.72, 0}};
+  EXPECT_EQ(choose_crs(k, parse_crs("auto")).zone, 56);
+}
+
+TEST_F(Reliability, AntimeridianDataIsProjectedToItsOwnZone) {
+  write("fiji.xyz", "179.9 -16.1 1\n-179.9 -16.3 2\n179.95 -16.4 3\n-179.85 -16.0 4\n180 -16.2 5\n");
+  Result r = run("triangulate " + path("fiji.xyz") + " --backend cgal -o " + path("t.obj") + " --stats " +
+                 path("s.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("antimeridian"), std::string::npos) << r.err;
+  const std::string crs = nlohmann::json::parse(slurp(path("s.json")))["crs"];
+  EXPECT_TRUE(crs == "WGS 84 / UTM zone 1S" || crs == "WGS 84 / UTM zone 60S") << crs;
+  EXPECT_EQ(run("verify " + path("t.obj") + " " + path("fiji.xyz")).code, 0);
+}
+
+TEST_F(Reliability, LatitudeBeyond90IsNotSilent) {
+  // Without a .prj: kept as projected coordinates, with a warning.
+  write("ll.xyz", "150.30 -95.70 1\n150.32 -33.70 2\n150.31 -33.72 3\n");
+  Result r = run("triangulate " + path("ll.xyz") + " --backend cgal -o " + path("t.obj"));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("latitude"), std::string::npos) << r.err;
+  // A shapefile whose .prj says geographic: an error naming the file and the record.
+  SHPHandle shp = SHPCreate(path("pts").c_str(), SHPT_POINT);
+  ASSERT_NE(shp, nullptr);
+  const double xs[] = {150.30, 150.32, 150.31}, ys[] = {-33.70, -95.70, -33.72};
+  for (int i = 0; i < 3; ++i) {
+    SHPObject* o = SHPCreateSimpleObject(SHPT_POINT, 1, &xs[i], &ys[i], nullptr);
+    SHPWriteObject(shp, -1, o);
+    SHPDestroyObject(o);
+  }
+  SHPClose(shp);
+  fs::copy_file(kSample + "contours.prj", dir / "pts.prj");
+  r = run("triangulate " + path("pts.shp") + " --backend cgal -o " + path("u.obj"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("pts.shp:2: vertex 1 (150.32 -95.7) is not a longitude/latitude"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(path("u.obj")));
+}
+
+TEST_F(Reliability, GeographicPrjWithProjectedCoordinatesIsAnError) {
+  // Contours in lon/lat (geographic .prj) with DEM points in metres: not one coordinate system.
+  for (const char* ext : {".shp", ".shx", ".dbf", ".prj"})
+    fs::copy_file(kSample + "contours" + ext, dir / (std::string("contours") + ext));
+  write("dem.xyz", "273741 5796489 10\n274741 5797489 12\n273800 5796500 11\n");
+  Result r = run("triangulate " + path("contours.shp") + " " + path("dem.xyz") + " --backend cgal -o " +
+                 path("t.obj"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("contours.shp: its .prj says lon/lat"), std::string::npos) << r.err;
 }
 
 }  // namespace
