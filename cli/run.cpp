@@ -139,7 +139,11 @@ int run_triangulate(const TriangulateOptions& options) {
   });
   if (result.mesh.triangles.empty())
     spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
-  timed(stats, "write", [&] { write_mesh_file(result.mesh, l.crs, write, options.output); });
+  // A .prj beside a device, FIFO or /dev/stdout makes no sense (it would be /dev/stdout.prj): the CRS name
+  // in the stream is all such an output gets.
+  Crs out_crs = l.crs;
+  if (is_special_output(options.output)) out_crs.wkt.clear();
+  timed(stats, "write", [&] { write_mesh_file(result.mesh, out_crs, write, options.output); });
 
   stats.counts["steiner_points"] = result.steiner_points;
   stats.counts["vertices"] = result.mesh.vertices.size();

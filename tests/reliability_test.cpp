@@ -176,6 +176,27 @@ TEST_F(Reliability, DevStdoutWritesToTheRedirectedStream) {
   EXPECT_EQ(slurp(path("piped.obj")), slurp(path("ref.obj")));
 }
 
+TEST_F(Reliability, NoPrjBesideASpecialOutput) {
+  // Lon/lat input has a CRS with a .prj: beside a regular file it is written, beside a FIFO or a link to
+  // /proc/self/fd/1 (as /dev/stdout is) it is not.
+  write("ll.xyz", "150.30 -33.70 1000\n150.32 -33.70 1010\n150.31 -33.72 1005\n");
+  ASSERT_EQ(run("triangulate " + path("ll.xyz") + " --backend cgal -q -o " + path("t.obj")).code, 0);
+  EXPECT_TRUE(fs::exists(path("t.prj")));
+  fs::create_symlink("/proc/self/fd/1", dir / "stdout");
+  Result r = run("triangulate " + path("ll.xyz") + " --backend cgal -q --format obj -o " + path("stdout"),
+                 path("out.obj"));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(path("out.obj")).find("# crs: WGS 84 / UTM zone 56S"), std::string::npos);
+  ASSERT_EQ(::mkfifo(path("pipe.obj").c_str(), 0600), 0);
+  std::string received;
+  std::thread reader([&] { received = slurp(path("pipe.obj")); });
+  r = run("triangulate " + path("ll.xyz") + " --backend cgal -q -o " + path("pipe.obj"));
+  reader.join();
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(path("stdout.prj")));
+  EXPECT_FALSE(fs::exists(path("pipe.prj")));
+}
+
 TEST_F(Reliability, ReplacedFileKeepsItsPermissions) {
   write_points();
   write("t.obj", "old\n");
