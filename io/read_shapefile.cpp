@@ -380,10 +380,11 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
       !(type == SHPT_NULL && count == 0))
     throw InputError(path, 0, std::string("shape type ") + SHPTypeName(type) + " is not supported");
 
+  // shapelib counts the records from the .shx header's length, which check_main_header held to the file size.
   RecordIndex index(path, *shx);
-  if (index.records() != size_t(count))
-    throw InputError(*shx, 0,
-                     "holds " + std::to_string(index.records()) + " records, shapelib read " + std::to_string(count));
+  if (index.records() < size_t(count))
+    throw InputError(*shx, 0, "truncated: " + std::to_string(index.records()) + " entries for " +
+                                  std::to_string(count) + " records");
   const Box box = header_box(shp.get(), type);
   const auto [prj_path, prj_text] = own_prj(base);
   const bool geographic = says_geographic(prj_text);
