@@ -6,6 +6,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cctype>
 #include <filesystem>
 #include <optional>
@@ -51,17 +52,16 @@ std::string normal(const std::string& path) {
 }  // namespace
 
 std::vector<std::string> triangulate_outputs(const std::string& mesh, const std::string& stats) {
-  std::vector<std::string> out;
-  if (mesh != "-") {
-    out.push_back(mesh);
-    // The writer puts the CRS beside a regular output file (io/writers.cpp write_mesh_file).
-    if (!is_special_output(mesh)) out.push_back(fs::path(mesh).replace_extension(".prj").string());
-  }
+  std::vector<std::string> out = {mesh};
+  // The writer puts the CRS beside a regular output file (io/writers.cpp write_mesh_file).
+  if (!is_special_output(mesh)) out.push_back(fs::path(mesh).replace_extension(".prj").string());
   if (!stats.empty()) out.push_back(stats);
   return out;
 }
 
 void check_outputs_spare_inputs(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs) {
+  if (std::count(outputs.begin(), outputs.end(), "-") > 1)
+    throw UsageError("only one output can go to stdout (-): the mesh and the stats would be mixed");
   for (size_t i = 0; i < outputs.size(); ++i) {
     const std::string& out = outputs[i];
     if (out == "-") continue;

@@ -227,9 +227,12 @@ TEST_F(Reliability, OutputThatIsAnInputIsRefusedBeforeReading) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(slurp(path("p.xyz")), before);
   EXPECT_FALSE(fs::exists(path("t.obj")));
-  // Stats and mesh on one path.
+  // Stats and mesh on one path, or both on stdout.
   r = run(tri(path("p.xyz")) + "-o " + path("t.obj") + " --stats " + path("t.obj"));
   EXPECT_EQ(r.code, 2) << r.err;
+  r = run(tri(path("p.xyz")) + "-o - --format obj --stats -");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("stdout"), std::string::npos) << r.err;
 }
 
 TEST_F(Reliability, OutputPrjThatIsAnInputPrjIsRefused) {
