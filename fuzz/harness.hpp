@@ -65,7 +65,7 @@ inline const std::filesystem::path& scratch() {
     std::filesystem::path path;
     Dir()
         : path((std::filesystem::is_directory("/dev/shm") ? std::filesystem::path("/dev/shm")
-                                                            : std::filesystem::temp_directory_path()) /
+                                                          : std::filesystem::temp_directory_path()) /
                ("cdtgpu-fuzz-" + std::to_string(::getpid()))) {
       std::filesystem::create_directories(path);
     }
@@ -78,7 +78,8 @@ inline const std::filesystem::path& scratch() {
 }
 
 inline void put(const std::filesystem::path& p, const uint8_t* data, size_t size) {
-  std::ofstream(p, std::ios::binary | std::ios::trunc).write(reinterpret_cast<const char*>(data), std::streamsize(size));
+  std::ofstream(p, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), std::streamsize(size));
 }
 
 // The first byte picks the format (obj, ply, wkt); the rest is the file.
@@ -90,7 +91,9 @@ inline void fuzz_mesh(const uint8_t* data, size_t size) {
   expect_only_input_errors([&] { read_mesh_file(p.string()); });
 }
 
-inline uint32_t le32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24; }
+inline uint32_t le32(const uint8_t* p) {
+  return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
 
 // [flags][shp length][shx length] shp shx dbf. Flags: bit 0 reads z from the DBF field ELEV, bit 1 leaves the
 // .dbf out, bit 2 adds a geographic .prj.

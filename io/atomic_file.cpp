@@ -29,8 +29,8 @@ namespace fs = std::filesystem;
 
 // ---- the temporary file removed on SIGINT / SIGTERM / SIGHUP ----
 // One at a time: outputs are written one after another. The handler uses only async-signal-safe calls
-// (unlink, raise); SA_RESETHAND restores the default action, so the re-raised signal ends the process with the
-// status a shell expects (128 + signal).
+// (unlink, raise); SA_RESETHAND restores the default action, so the re-raised signal ends the process with
+// the status a shell expects (128 + signal).
 char g_temp_path[4096];
 volatile std::sig_atomic_t g_temp_armed = 0;
 
@@ -44,7 +44,8 @@ void install_signal_handlers() {
   std::call_once(once, [] {
     for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
       struct sigaction old {};
-      if (::sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;  // nohup: keep ignoring
+      if (::sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN)
+        continue;  // nohup: keep ignoring
       struct sigaction sa {};
       sa.sa_handler = remove_temp_and_reraise;
       sigemptyset(&sa.sa_mask);
@@ -74,7 +75,9 @@ struct WriteError {
 // badbit (and, with exceptions on, rethrows).
 class FdBuf : public std::streambuf {
  public:
-  explicit FdBuf(int fd) : fd_(fd), buffer_(1 << 16) { setp(buffer_.data(), buffer_.data() + buffer_.size()); }
+  explicit FdBuf(int fd) : fd_(fd), buffer_(1 << 16) {
+    setp(buffer_.data(), buffer_.data() + buffer_.size());
+  }
   int error() const { return error_; }
   // Writes what is buffered; false (and error() set) on failure.
   bool drain() {
@@ -132,7 +135,8 @@ class FdBuf : public std::streambuf {
   throw std::runtime_error(path + ": " + what + ": " + std::strerror(err));
 }
 
-// Runs write over fd and drains the buffer; throws "path: write failed: ..." on an OS error. Does not close fd.
+// Runs write over fd and drains the buffer; throws "path: write failed: ..." on an OS error. Does not close
+// fd.
 void write_fd(int fd, const std::string& path, const std::function<void(std::ostream&)>& write) {
   FdBuf buf(fd);
   std::ostream out(&buf);
@@ -233,7 +237,8 @@ void write_in_place(const std::string& path, const std::function<void(std::ostre
   close_checked(fd, path);
 }
 
-void write_replacing(const std::string& path, const Target& t, const std::function<void(std::ostream&)>& write) {
+void write_replacing(const std::string& path, const Target& t,
+                     const std::function<void(std::ostream&)>& write) {
   const std::string tmp = t.path + ".tmp-" + std::to_string(::getpid());
   arm_temp(tmp);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
@@ -244,7 +249,8 @@ void write_replacing(const std::string& path, const Target& t, const std::functi
   }
   try {
     // The new file keeps the old one's permissions (umask applies to a new one only).
-    if (t.exists && ::fchmod(fd, t.mode & 07777) != 0) fail(path, "cannot set the permissions of " + tmp, errno);
+    if (t.exists && ::fchmod(fd, t.mode & 07777) != 0)
+      fail(path, "cannot set the permissions of " + tmp, errno);
     write_fd(fd, path, write);
     // Synced before the rename, so that a crash can leave the old file or the new one, never an empty one.
     if (::fsync(fd) != 0 && errno != EINVAL) fail(path, "write failed (sync)", errno);
@@ -284,9 +290,15 @@ void write_file_atomically(const std::string& path, const std::function<void(std
   }
   const Target t = classify(path);
   switch (t.kind) {
-    case Target::Fd: write_fd(t.fd, path, write); return;
-    case Target::InPlace: write_in_place(t.path, write); return;
-    case Target::Replace: write_replacing(path, t, write); return;
+    case Target::Fd:
+      write_fd(t.fd, path, write);
+      return;
+    case Target::InPlace:
+      write_in_place(t.path, write);
+      return;
+    case Target::Replace:
+      write_replacing(path, t, write);
+      return;
   }
 }
 

@@ -59,7 +59,8 @@ std::vector<std::string> triangulate_outputs(const std::string& mesh, const std:
   return out;
 }
 
-void check_outputs_spare_inputs(const std::vector<std::string>& inputs, const std::vector<std::string>& outputs) {
+void check_outputs_spare_inputs(const std::vector<std::string>& inputs,
+                                const std::vector<std::string>& outputs) {
   if (std::count(outputs.begin(), outputs.end(), "-") > 1)
     throw UsageError("only one output can go to stdout (-): the mesh and the stats would be mixed");
   for (size_t i = 0; i < outputs.size(); ++i) {

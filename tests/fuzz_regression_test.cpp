@@ -1,5 +1,6 @@
 // Replays the inputs that crashed a fuzz target (fuzz/, scripts/fuzz.sh) through the same entry points: each
-// must now end in InputError or be read, never crash or throw anything else. Files: tests/data/fuzz/<target>/.
+// must now end in InputError or be read, never crash or throw anything else. Files:
+// tests/data/fuzz/<target>/.
 #include <gtest/gtest.h>
 
 #include <filesystem>

@@ -10,17 +10,16 @@
 
 #include <chrono>
 #include <cmath>
-#include <cstring>
-#include <iterator>
 #include <csignal>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <thread>
-
-#include <nlohmann/json.hpp>
 
 #include "core/error.hpp"
 #include "core/projection.hpp"
@@ -82,7 +81,9 @@ class Reliability : public ::testing::Test {
     return "/dev/" + name;
   }
   void write_points() const { write("p.xyz", "0 0 1\n10 0 2\n0 10 3\n10 10 4\n5 5 5\n"); }
-  std::string tri(const std::string& inputs) const { return "triangulate " + inputs + " --backend cgal --crs none -q "; }
+  std::string tri(const std::string& inputs) const {
+    return "triangulate " + inputs + " --backend cgal --crs none -q ";
+  }
 };
 
 // ---- special output paths ----
@@ -246,7 +247,8 @@ TEST_F(Reliability, OutputPrjThatIsAnInputPrjIsRefused) {
   EXPECT_EQ(slurp(path("contours.prj")), prj);
   EXPECT_FALSE(fs::exists(path("contours.ply")));
   // Writing the .dbf or .shx as the mesh is refused too.
-  r = run("triangulate " + path("contours.shp") + " --backend cgal -q --format obj -o " + path("contours.dbf"));
+  r = run("triangulate " + path("contours.shp") + " --backend cgal -q --format obj -o " +
+          path("contours.dbf"));
   EXPECT_EQ(r.code, 2) << r.err;
 }
 
@@ -324,8 +326,8 @@ std::string bytes_of(const std::string& p) {
 }
 void put_bytes(const std::string& p, const std::string& b) { std::ofstream(p, std::ios::binary) << b; }
 uint32_t be32_at(const std::string& b, size_t at) {
-  return uint32_t(uint8_t(b[at])) << 24 | uint32_t(uint8_t(b[at + 1])) << 16 | uint32_t(uint8_t(b[at + 2])) << 8 |
-         uint8_t(b[at + 3]);
+  return uint32_t(uint8_t(b[at])) << 24 | uint32_t(uint8_t(b[at + 1])) << 16 |
+         uint32_t(uint8_t(b[at + 2])) << 8 | uint8_t(b[at + 3]);
 }
 void put_be32(std::string& b, size_t at, uint32_t v) {
   for (int k = 0; k < 4; ++k) b[at + k] = char((v >> (24 - 8 * k)) & 0xff);
@@ -340,7 +342,8 @@ uint64_t record_at(const std::string& shx, size_t at) {
 }
 
 // Reads path, expects an InputError naming `part` at `record`.
-void expect_damage(const std::string& path, const std::string& part, uint64_t record, const ReadOptions& o = {}) {
+void expect_damage(const std::string& path, const std::string& part, uint64_t record,
+                   const ReadOptions& o = {}) {
   InputSet in;
   try {
     read_input(path, o, in);
@@ -368,7 +371,8 @@ TEST_F(Damage, HundredFlippedBytesInTheMiddleNameTheRecord) {
   const uint64_t record = record_at(bytes_of(path("contours.shx")), mid);
   Result r = run("triangulate " + path("contours.shp") + " --backend cgal -q -o " + path("t.ply"));
   EXPECT_EQ(r.code, 2) << r.err;
-  EXPECT_NE(r.err.find("contours.shp:" + std::to_string(record) + ": corrupt record"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("contours.shp:" + std::to_string(record) + ": corrupt record"), std::string::npos)
+      << r.err;
   EXPECT_FALSE(fs::exists(path("t.ply")));
 }
 
@@ -457,7 +461,8 @@ TEST_F(Damage, ZFieldThatNoShapefileHasIsAnError) {
   EXPECT_NE(r.err.find("(fields: ID, GROUND, HEIGHT)"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("t.ply")));
   // The README's run: contours have ELEV, the footprints do not and keep their own z (said at info level).
-  r = run("triangulate " + both + " " + kSample + "dem.xyz --z-field ELEV --backend cgal -o " + path("t.ply"));
+  r = run("triangulate " + both + " " + kSample + "dem.xyz --z-field ELEV --backend cgal -o " +
+          path("t.ply"));
   EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("buildings.shp: no field ELEV"), std::string::npos) << r.err;
   // The contours' .dbf missing: no input has ELEV.
