@@ -66,6 +66,11 @@ void check_outputs_spare_inputs(const std::vector<std::string>& inputs,
   for (size_t i = 0; i < outputs.size(); ++i) {
     const std::string& out = outputs[i];
     if (out == "-") continue;
+    // A missing folder used to fail only at the end, after the whole triangulation (exit 3).
+    const fs::path folder = fs::path(out).parent_path();
+    std::error_code ec;
+    if (!folder.empty() && !fs::is_directory(folder, ec))
+      throw UsageError("cannot write " + out + ": there is no folder " + folder.string());
     const auto id = identity(out);
     if (id && !is_special_output(out)) {
       for (const std::string& input : inputs) {

@@ -228,6 +228,10 @@ TEST_F(Reliability, OutputThatIsAnInputIsRefusedBeforeReading) {
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(slurp(path("p.xyz")), before);
   EXPECT_FALSE(fs::exists(path("t.obj")));
+  // An output in a folder that does not exist: refused before the work, not after it.
+  r = run(tri(path("p.xyz")) + "-o " + path("no/such/t.obj"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("there is no folder"), std::string::npos) << r.err;
   // Stats and mesh on one path, or both on stdout.
   r = run(tri(path("p.xyz")) + "-o " + path("t.obj") + " --stats " + path("t.obj"));
   EXPECT_EQ(r.code, 2) << r.err;
