@@ -17,6 +17,7 @@
 #include "gpu/check.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
+#include "io/output_guard.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -52,7 +53,7 @@ struct Loaded {
 Loaded read_all(const InputOptions& options, RunStats& stats) {
   Loaded l;
   timed(stats, "read", [&] {
-    for (const std::string& path : options.inputs) read_input(path, options.read, l.in);
+    read_inputs(options.inputs, options.read, l.in);
   });
   l.crs = choose_crs(l.in, options.crs);
   timed(stats, "project", [&] { project(l.in, l.crs); });
@@ -124,6 +125,7 @@ int run_triangulate(const TriangulateOptions& options) {
     write.format = format_from_extension(options.output);
   if (options.backend != "auto" && options.backend != "gpu" && options.backend != "cgal")
     throw UsageError("unknown backend '" + options.backend + "' (use auto, gpu or cgal)");
+  check_outputs_spare_inputs(options.input.inputs, triangulate_outputs(options.output, options.stats_path));
 
   // The GPU starts on its own thread while the inputs are read: forced, or when auto may pick it (the files
   // are large enough to hold auto_min_points() points).
@@ -185,7 +187,11 @@ int run_triangulate(const TriangulateOptions& options) {
   });
   if (result.mesh.triangles.empty())
     spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
-  timed(stats, "write", [&] { write_mesh_file(result.mesh, l.crs, write, options.output); });
+  // A .prj beside a device, FIFO or /dev/stdout makes no sense (it would be /dev/stdout.prj): the CRS name
+  // in the stream is all such an output gets.
+  Crs out_crs = l.crs;
+  if (is_special_output(options.output)) out_crs.wkt.clear();
+  timed(stats, "write", [&] { write_mesh_file(result.mesh, out_crs, write, options.output); });
 
   stats.counts["steiner_points"] = result.steiner_points;
   stats.counts["vertices"] = result.mesh.vertices.size();

@@ -13,6 +13,8 @@
 #include <cmath>
 #include <limits>
 
+#include <spdlog/spdlog.h>
+
 #include "core/error.hpp"
 
 namespace cdtgpu {
@@ -159,6 +161,36 @@ Bounds bounds_of(const InputSet& in) {
   return b;
 }
 
+// Longitudes of lon/lat data that crosses the antimeridian (points at 179.9 and -179.9) span almost 360
+// degrees and their mean is near 0: the zone picked from it lay half the globe away. The range with negative
+// longitudes moved up by 360 is the data's real extent when it is the shorter one.
+struct LonRange {
+  double min, max;
+  bool unwrapped;
+};
+
+LonRange lon_range(const InputSet& in, const Bounds& b) {
+  LonRange r{b.min_x, b.max_x, false};
+  if (b.max_x - b.min_x <= 180) return r;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  auto add = [&](double x) {
+    const double u = x < 0 ? x + 360 : x;
+    lo = std::min(lo, u);
+    hi = std::max(hi, u);
+  };
+  for (const Point3& p : in.points) add(p.x);
+  for (const Polyline& l : in.lines)
+    for (const Point3& p : l.points) add(p.x);
+  if (hi - lo < b.max_x - b.min_x) r = {lo, hi, true};
+  return r;
+}
+
+// The .prj of the first shapefile read says the coordinates are geographic (WKT1 GEOGCS, WKT2 GEOGCRS).
+bool prj_is_geographic(const std::string& wkt) {
+  const std::string w = lower(wkt.substr(0, 8));
+  return w.rfind("geogcs[", 0) == 0 || w.rfind("geogcrs[", 0) == 0;
+}
+
 bool is_lon_lat(const Bounds& b) {
   return !b.empty() && b.min_x >= -180 && b.max_x <= 180 && b.min_y >= -90 && b.max_y <= 90;
 }
@@ -227,17 +259,41 @@ Crs choose_crs(const InputSet& in, const CrsRequest& request) {
   }
   const Bounds b = bounds_of(in);
   const bool lon_lat = is_lon_lat(b);
+  const std::string extent = "x from " + fmt_number(b.min_x) + " to " + fmt_number(b.max_x) + ", y from " +
+                             fmt_number(b.min_y) + " to " + fmt_number(b.max_y);
+  // The readers check each shapefile against its own .prj; this catches other inputs read along with a
+  // geographic shapefile that are not lon/lat (mixed coordinate systems would be triangulated as one).
+  if (!b.empty() && !lon_lat && prj_is_geographic(in.source_crs_wkt))
+    throw InputError(in.sources.empty() ? std::string("input") : in.sources.front(), 0,
+                     "its .prj says lon/lat (" + kept_crs(in, "").name + ") but the coordinates read are not (" +
+                         extent + "): are the inputs in different coordinate systems? (--crs none keeps them as "
+                         "read)");
   if (request.mode == Mode::Auto) {
-    if (!lon_lat) return kept_crs(in, b.empty() ? "none" : "as input (projected)");
-    const double lon = (b.min_x + b.max_x) / 2, lat = (b.min_y + b.max_y) / 2;
+    if (!lon_lat) {
+      // Latitude -95 (a typo or a swapped column) used to be taken as projected metres without a word.
+      if (!b.empty() && b.min_x >= -180 && b.max_x <= 180 && b.min_y >= -180 && b.max_y <= 180)
+        spdlog::warn("coordinates look like lon/lat but some latitude is beyond +-90 ({}): kept as projected "
+                     "coordinates; --crs none says that is meant",
+                     extent);
+      return kept_crs(in, b.empty() ? "none" : "as input (projected)");
+    }
+    const LonRange lons = lon_range(in, b);
+    double lon = (lons.min + lons.max) / 2;
+    if (lon >= 180) lon -= 360;
+    const double lat = (b.min_y + b.max_y) / 2;
+    if (lons.unwrapped)
+      spdlog::info("lon/lat data crosses the antimeridian (longitudes {} to {} east): zone chosen for its centre {}",
+                   fmt_number(lons.min), fmt_number(lons.max), fmt_number(lon));
+    else if (lons.max - lons.min > 180)
+      spdlog::warn("lon/lat data spans {} degrees of longitude: no UTM zone suits it, distortion will be large",
+                   fmt_number(lons.max - lons.min));
     // Force a UTM zone even near the poles (the standard rule would choose UPS there).
     const int zone = GeographicLib::UTMUPS::StandardZone(lat, lon, GeographicLib::UTMUPS::UTM);
     return make_crs(Datum::Wgs84, zone, lat >= 0);
   }
   if (!b.empty() && !lon_lat)
-    throw UsageError("a projection was requested but the input is not lon/lat (x from " + fmt_number(b.min_x) +
-                     " to " + fmt_number(b.max_x) + ", y from " + fmt_number(b.min_y) + " to " +
-                     fmt_number(b.max_y) + "); use --crs auto or none for projected input");
+    throw UsageError("a projection was requested but the input is not lon/lat (" + extent +
+                     "); use --crs auto or none for projected input");
   if (request.mode == Mode::Utm) {
     if (request.zone < 1 || request.zone > 60) throw UsageError("UTM zone must be 1 to 60");
     return make_crs(Datum::Wgs84, request.zone, request.north);

@@ -1,57 +1,304 @@
-// Whole-or-nothing output: write to "<path>.tmp-<pid>" in the target's folder (so the rename stays on one
-// file system and is atomic), then rename over the target. Any exception removes the temporary file.
+// Whole-or-nothing output that never replaces what is not a regular file. A regular file is written to
+// "<path>.tmp-<pid>" in its own folder (so the rename stays on one file system and is atomic), synced, and
+// renamed over it. Renaming over a device, a FIFO or a symbolic link would replace the node itself (/dev/full
+// would become a plain file, a link would stop pointing at its target), so those are handled apart: links are
+// followed to the file they name, other non-regular files are written in place. Every write, sync and close
+// is checked: std::ofstream's close cannot report a failed final flush, so the bytes go through write(2).
 #include "io/atomic_file.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
+#include <mutex>
 #include <stdexcept>
+#include <streambuf>
+#include <vector>
 
 namespace cdtgpu {
 
-void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
-  if (path == "-") {
-    write(std::cout);
-    std::cout.flush();
-    if (!std::cout) throw std::runtime_error("<stdout>: write failed");
-    return;
+namespace {
+
+namespace fs = std::filesystem;
+
+// ---- the temporary file removed on SIGINT / SIGTERM / SIGHUP ----
+// One at a time: outputs are written one after another. The handler uses only async-signal-safe calls
+// (unlink, raise); SA_RESETHAND restores the default action, so the re-raised signal ends the process with
+// the status a shell expects (128 + signal).
+char g_temp_path[4096];
+volatile std::sig_atomic_t g_temp_armed = 0;
+
+extern "C" void remove_temp_and_reraise(int sig) {
+  if (g_temp_armed) ::unlink(g_temp_path);
+  ::raise(sig);
+}
+
+void install_signal_handlers() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+      struct sigaction old {};
+      if (::sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN)
+        continue;  // nohup: keep ignoring
+      struct sigaction sa {};
+      sa.sa_handler = remove_temp_and_reraise;
+      sigemptyset(&sa.sa_mask);
+      sa.sa_flags = SA_RESETHAND;
+      ::sigaction(sig, &sa, nullptr);
+    }
+  });
+}
+
+void arm_temp(const std::string& tmp) {
+  install_signal_handlers();
+  g_temp_armed = 0;
+  if (tmp.size() >= sizeof g_temp_path) return;  // too long to keep: a signal then leaves it behind
+  std::memcpy(g_temp_path, tmp.c_str(), tmp.size() + 1);
+  g_temp_armed = 1;
+}
+
+void disarm_temp() { g_temp_armed = 0; }
+
+// ---- a checked stream over a file descriptor ----
+
+struct WriteError {
+  int err;
+};
+
+// Buffers in 64 KiB and writes with write(2); a failed write throws WriteError, which std::ostream turns into
+// badbit (and, with exceptions on, rethrows).
+class FdBuf : public std::streambuf {
+ public:
+  explicit FdBuf(int fd) : fd_(fd), buffer_(1 << 16) {
+    setp(buffer_.data(), buffer_.data() + buffer_.size());
   }
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-  std::ofstream out;
-  // A large buffer: the writers hand over big blocks, but small writes (headers) should not each hit the OS.
-  static thread_local char buffer[1 << 16];
-  out.rdbuf()->pubsetbuf(buffer, sizeof buffer);
-  out.open(tmp, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error(path + ": cannot create " + tmp + ": " + std::strerror(errno));
+  int error() const { return error_; }
+  // Writes what is buffered; false (and error() set) on failure.
+  bool drain() {
+    const char* p = pbase();
+    size_t n = size_t(pptr() - pbase());
+    setp(buffer_.data(), buffer_.data() + buffer_.size());
+    return write_all(p, n);
+  }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (!drain()) throw WriteError{error_};
+    if (!traits_type::eq_int_type(c, traits_type::eof())) {
+      *pptr() = traits_type::to_char_type(c);
+      pbump(1);
+    }
+    return traits_type::not_eof(c);
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    if (n <= epptr() - pptr()) {
+      std::memcpy(pptr(), s, size_t(n));
+      pbump(int(n));
+      return n;
+    }
+    // Large blocks (the writers hand over ~1 MiB) go straight to the OS after what is buffered.
+    if (!drain() || !write_all(s, size_t(n))) throw WriteError{error_};
+    return n;
+  }
+  int sync() override { return drain() ? 0 : -1; }
+
+ private:
+  bool write_all(const char* p, size_t n) {
+    while (n > 0) {
+      const ssize_t w = ::write(fd_, p, n);
+      if (w < 0) {
+        if (errno == EINTR) continue;
+        error_ = errno;
+        return false;
+      }
+      if (w == 0) {  // not expected from write(2); do not spin
+        error_ = EIO;
+        return false;
+      }
+      p += w;
+      n -= size_t(w);
+    }
+    return true;
+  }
+  int fd_;
+  std::vector<char> buffer_;
+  int error_ = 0;
+};
+
+[[noreturn]] void fail(const std::string& path, const std::string& what, int err) {
+  throw std::runtime_error(path + ": " + what + ": " + std::strerror(err));
+}
+
+// Runs write over fd and drains the buffer; throws "path: write failed: ..." on an OS error. Does not close
+// fd.
+void write_fd(int fd, const std::string& path, const std::function<void(std::ostream&)>& write) {
+  FdBuf buf(fd);
+  std::ostream out(&buf);
+  out.exceptions(std::ios::badbit | std::ios::failbit);
   try {
-    out.exceptions(std::ios::badbit | std::ios::failbit);
     write(out);
     out.flush();
-    out.close();
-  } catch (const std::ios_base::failure& e) {
-    const int err = errno;
-    out.exceptions(std::ios::goodbit);
-    out.close();
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(path + ": write failed: " + (err ? std::strerror(err) : e.what()));
+  } catch (const WriteError& e) {
+    fail(path, "write failed", e.err);
+  } catch (const std::ios_base::failure&) {
+    fail(path, "write failed", buf.error() ? buf.error() : EIO);
+  }
+  if (!buf.drain()) fail(path, "write failed", buf.error());
+}
+
+void close_checked(int fd, const std::string& path) {
+  // Linux releases the descriptor even when close fails (EINTR included): never retry.
+  if (::close(fd) != 0 && errno != EINTR) fail(path, "write failed (close)", errno);
+}
+
+// The descriptor that /dev/stdout, /dev/stderr, /dev/fd/N or /proc/self/fd/N stands for, else -1. Writing to
+// it directly keeps the shell's offset and append mode (opening the path again would truncate a redirected
+// file, or fail for a socket).
+int fd_path(const std::string& path) {
+  if (path == "/dev/stdout") return 1;
+  if (path == "/dev/stderr") return 2;
+  for (const char* prefix : {"/dev/fd/", "/proc/self/fd/"}) {
+    const std::string p = prefix;
+    if (path.rfind(p, 0) != 0 || path.size() == p.size() || path.size() > p.size() + 6) continue;
+    int fd = 0;
+    for (size_t i = p.size(); i < path.size(); ++i) {
+      if (path[i] < '0' || path[i] > '9') return -1;
+      fd = fd * 10 + (path[i] - '0');
+    }
+    return fd;
+  }
+  return -1;
+}
+
+// What a path names, with symbolic links followed by hand (a dangling link names the file it would create).
+struct Target {
+  enum Kind { Fd, InPlace, Replace } kind = Replace;
+  std::string path;  // InPlace: the path to open; Replace: the file to replace (links resolved)
+  int fd = -1;       // Fd
+  bool exists = false;
+  mode_t mode = 0;
+};
+
+Target classify(const std::string& path) {
+  Target t;
+  if ((t.fd = fd_path(path)) >= 0) {
+    t.kind = Target::Fd;
+    return t;
+  }
+  fs::path p = path;
+  for (int hops = 0;; ++hops) {
+    struct stat st {};
+    if (::lstat(p.c_str(), &st) != 0) break;  // does not exist (yet): created by the rename
+    if (S_ISLNK(st.st_mode)) {
+      if (hops == 40) fail(path, "cannot write", ELOOP);
+      std::error_code ec;
+      fs::path next = fs::read_symlink(p, ec);
+      if (ec) fail(path, "cannot resolve the link", ec.value());
+      p = next.is_absolute() ? next : p.parent_path() / next;
+      if (fd_path(p.string()) >= 0) return classify(p.string());  // e.g. /dev/stdout -> /proc/self/fd/1
+      // Any other magic link of /proc (such as /proc/PID/fd/N) names no file that a rename could replace.
+      if (p.string().rfind("/proc/", 0) == 0) {
+        t.kind = Target::InPlace;
+        t.path = path;
+        return t;
+      }
+      continue;
+    }
+    t.exists = true;
+    t.mode = st.st_mode;
+    if (!S_ISREG(st.st_mode)) {
+      t.kind = Target::InPlace;
+      t.path = path;
+      return t;
+    }
+    break;
+  }
+  t.kind = Target::Replace;
+  t.path = p.string();
+  return t;
+}
+
+void write_in_place(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  // O_TRUNC is ignored by devices and FIFOs; a directory fails here with EISDIR.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  if (fd < 0) fail(path, "cannot open for writing", errno);
+  try {
+    write_fd(fd, path, write);
   } catch (...) {
-    out.exceptions(std::ios::goodbit);
-    out.close();
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
+    ::close(fd);
     throw;
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::error_code ignored;
-    std::filesystem::remove(tmp, ignored);
-    throw std::runtime_error(path + ": cannot rename " + tmp + " into place: " + ec.message());
+  close_checked(fd, path);
+}
+
+void write_replacing(const std::string& path, const Target& t,
+                     const std::function<void(std::ostream&)>& write) {
+  const std::string tmp = t.path + ".tmp-" + std::to_string(::getpid());
+  arm_temp(tmp);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0) {
+    const int err = errno;
+    disarm_temp();
+    fail(path, "cannot create " + tmp, err);
+  }
+  try {
+    // The new file keeps the old one's permissions (umask applies to a new one only).
+    if (t.exists && ::fchmod(fd, t.mode & 07777) != 0)
+      fail(path, "cannot set the permissions of " + tmp, errno);
+    write_fd(fd, path, write);
+    // Synced before the rename, so that a crash can leave the old file or the new one, never an empty one.
+    if (::fsync(fd) != 0 && errno != EINVAL) fail(path, "write failed (sync)", errno);
+  } catch (...) {
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    disarm_temp();
+    throw;
+  }
+  if (::close(fd) != 0 && errno != EINTR) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    disarm_temp();
+    fail(path, "write failed (close)", err);
+  }
+  if (::rename(tmp.c_str(), t.path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    disarm_temp();
+    fail(path, "cannot rename " + tmp + " into place", err);
+  }
+  disarm_temp();
+}
+
+}  // namespace
+
+bool is_special_output(const std::string& path) {
+  if (path == "-") return true;
+  return classify(path).kind != Target::Replace;
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  if (path == "-") {
+    std::cout.flush();
+    write_fd(1, "<stdout>", write);
+    return;
+  }
+  const Target t = classify(path);
+  switch (t.kind) {
+    case Target::Fd:
+      write_fd(t.fd, path, write);
+      return;
+    case Target::InPlace:
+      write_in_place(t.path, write);
+      return;
+    case Target::Replace:
+      write_replacing(path, t, write);
+      return;
   }
 }
 

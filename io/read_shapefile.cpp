@@ -1,19 +1,26 @@
 // Shapefile reader over shapelib: points and multipoints become vertices, polylines open constraint lines
 // (one per part), polygons closed rings (one per part, holes included). z comes from the DBF field named by
 // --z-field, else from the geometry (Z types), else 0. The .shp/.shx/.dbf sizes are checked against their
-// headers first, so a truncated file is reported as such instead of as a puzzling record.
+// headers first, so a truncated file is reported as such instead of as a puzzling record. Damage inside the
+// file is caught record by record (shapelib reads whatever bytes are there): every record header must agree
+// with its .shx entry, every coordinate must be finite and lie in the header's bounding box (and the record's
+// own box), and part indices must be in range. A shapefile with 100 bytes flipped used to triangulate without a
+// word, with points thousands of kilometres away.
 #include <shapefil.h>
 
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
@@ -134,16 +141,18 @@ struct ZField {
   }
 };
 
-// Opens the .dbf and finds the z field. Returns nothing when the field is unavailable and the geometry has
-// its own z (a Z shapefile without the field, such as footprints read along with contours); otherwise a
-// missing .dbf or field is an error listing what there is.
+// Opens the .dbf and finds the z field. Returns nothing, with the reason in why_not, when the field is
+// unavailable and the geometry has its own z (a Z shapefile without the field, such as footprints read along
+// with contours: read_inputs decides whether that is allowed); otherwise a missing .dbf or field is an error
+// listing what there is.
 std::optional<ZField> open_z_field(const std::string& shp, const fs::path& base, const std::string& name,
-                                   bool geometry_has_z, int shp_records) {
+                                   bool geometry_has_z, int shp_records, std::string& why_not) {
   SAHooks hooks = capturing_hooks();
   const std::optional<std::string> dbf_path = companion(base, ".dbf");
   if (!dbf_path) {
+    why_not = "no attribute file " + base.string() + ".dbf, needed for the z field " + name;
     if (geometry_has_z) return std::nullopt;
-    throw InputError(shp, 0, "no attribute file " + base.string() + ".dbf, needed for the z field " + name);
+    throw InputError(shp, 0, why_not);
   }
   ZField z;
   z.path = *dbf_path;
@@ -177,9 +186,9 @@ std::optional<ZField> open_z_field(const std::string& shp, const fs::path& base,
     z.field = i;
   }
   if (z.field >= 0) return z;
+  why_not = "no field " + name + " in " + z.path + " (fields: " + (fields.empty() ? "none" : fields) + ")";
   if (geometry_has_z) return std::nullopt;
-  throw InputError(
-      shp, 0, "no field " + name + " in " + z.path + " (fields: " + (fields.empty() ? "none" : fields) + ")");
+  throw InputError(shp, 0, why_not);
 }
 
 void check_parts(const SHPObject& o, const std::string& path, uint64_t record) {
@@ -196,21 +205,163 @@ void check_parts(const SHPObject& o, const std::string& path, uint64_t record) {
   }
 }
 
-void read_prj(const fs::path& base, InputSet& in) {
-  if (!in.source_crs_wkt.empty()) return;
+uint32_t be32(const unsigned char* p) {
+  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
+
+// The .shx, read directly: (offset, content length) of each record in 16-bit words, which shapelib trusts.
+// Each .shp record header (record number, content length) is compared with it, so a damaged offset or length
+// is caught instead of read as another record's bytes.
+class RecordIndex {
+ public:
+  RecordIndex(const std::string& shp, const std::string& shx) : shp_path_(shp), shx_path_(shx) {
+    std::ifstream f(shx, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    if (bytes.size() < 100) throw InputError(shx, 0, "truncated");
+    index_.assign(bytes.begin() + 100, bytes.end() - std::ptrdiff_t((bytes.size() - 100) % 8));
+    shp_size_ = file_size(shp);
+    shp_.open(shp, std::ios::binary);
+  }
+  size_t records() const { return index_.size() / 8; }
+
+  void check(int i) {
+    const uint64_t record = uint64_t(i) + 1;
+    const auto* e = reinterpret_cast<const unsigned char*>(index_.data()) + size_t(i) * 8;
+    const uint64_t offset = uint64_t(be32(e)) * 2, length = uint64_t(be32(e + 4)) * 2;
+    if (offset == 0 && length == 0) return;  // an unused entry, read by shapelib as a NULL shape
+    if (offset < 100 || offset + 8 + length > shp_size_)
+      throw InputError(shp_path_, record,
+                       "corrupt or unreadable record: the index " + shx_path_ + " places it at bytes " +
+                           std::to_string(offset) + " to " + std::to_string(offset + 8 + length) +
+                           ", outside the file (" + std::to_string(shp_size_) + " bytes)");
+    unsigned char h[8] = {};
+    shp_.seekg(std::streamoff(offset));
+    if (!shp_.read(reinterpret_cast<char*>(h), 8)) throw InputError(shp_path_, record, "cannot read the record");
+    if (be32(h) != record || uint64_t(be32(h + 4)) * 2 != length)
+      throw InputError(shp_path_, record,
+                       "corrupt record: its header (record " + std::to_string(be32(h)) + ", " +
+                           std::to_string(uint64_t(be32(h + 4)) * 2) + " bytes) disagrees with the index " +
+                           shx_path_ + " (record " + std::to_string(record) + ", " + std::to_string(length) +
+                           " bytes at byte " + std::to_string(offset) + ")");
+  }
+
+ private:
+  std::string shp_path_, shx_path_;
+  std::string index_;
+  uint64_t shp_size_ = 0;
+  std::ifstream shp_;
+};
+
+// A box with room for rounding: writers compute it from the same doubles, but some through float or text.
+struct Box {
+  double min[3], max[3];
+  bool valid[3];
+  static double slack(double lo, double hi) {
+    return 1e-7 * std::max({1.0, std::fabs(lo), std::fabs(hi), hi - lo});
+  }
+  bool holds(int axis, double v) const {
+    if (!valid[axis]) return true;
+    const double t = slack(min[axis], max[axis]);
+    return v >= min[axis] - t && v <= max[axis] + t;
+  }
+  std::string text(int axes) const {
+    std::string s;
+    for (int a = 0; a < axes; ++a)
+      s += (a ? " x " : "") + std::string("[") + number(min[a]) + ", " + number(max[a]) + "]";
+    return s;
+  }
+  static std::string number(double v) {
+    char buf[32];
+    auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+  }
+};
+
+// The header's box: x and y always; z for Z types unless the writer left it at 0 to 0 (some do).
+Box header_box(SHPInfo* shp, int type) {
+  double lo[4], hi[4];
+  SHPGetInfo(shp, nullptr, nullptr, lo, hi);
+  Box b{};
+  for (int a = 0; a < 3; ++a) {
+    b.min[a] = lo[a];
+    b.max[a] = hi[a];
+    b.valid[a] = std::isfinite(lo[a]) && std::isfinite(hi[a]) && lo[a] <= hi[a];
+  }
+  if (!has_z(type) || (lo[2] == 0 && hi[2] == 0)) b.valid[2] = false;
+  return b;
+}
+
+// Every coordinate finite and inside the header's box and, for lines and polygons, the record's own box.
+void check_coordinates(const SHPObject& o, const Box& file, bool z_from_geometry, const std::string& path,
+                       uint64_t record) {
+  Box own{{o.dfXMin, o.dfYMin, o.dfZMin}, {o.dfXMax, o.dfYMax, o.dfZMax}, {true, true, false}};
+  own.valid[0] = std::isfinite(o.dfXMin) && std::isfinite(o.dfXMax) && o.dfXMin <= o.dfXMax;
+  own.valid[1] = std::isfinite(o.dfYMin) && std::isfinite(o.dfYMax) && o.dfYMin <= o.dfYMax;
+  if (is_point_type(o.nSHPType)) own.valid[0] = own.valid[1] = false;  // shapelib derives it from the points
+  const int axes = z_from_geometry ? 3 : 2;
+  for (int k = 0; k < o.nVertices; ++k) {
+    const double v[3] = {o.padfX[k], o.padfY[k], z_from_geometry && o.padfZ ? o.padfZ[k] : 0.0};
+    for (int a = 0; a < axes; ++a)
+      if (!std::isfinite(v[a])) throw InputError(path, record, "coordinate is not a finite number");
+    auto where = [&] {
+      std::string s = "vertex " + std::to_string(k + 1) + " (" + Box::number(v[0]) + " " + Box::number(v[1]);
+      if (axes == 3) s += " " + Box::number(v[2]);
+      return s + ")";
+    };
+    for (int a = 0; a < axes; ++a) {
+      if (!file.holds(a, v[a]))
+        throw InputError(path, record,
+                         "corrupt record: " + where() + " lies outside the bounding box in the file's header " +
+                             file.text(axes));
+      if (a < 2 && !own.holds(a, v[a]))
+        throw InputError(path, record,
+                         "corrupt record: " + where() + " lies outside the record's bounding box " + own.text(2));
+    }
+  }
+}
+
+// The shapefile's own .prj (path, trimmed text); empty when there is none.
+std::pair<std::string, std::string> own_prj(const fs::path& base) {
   const std::optional<std::string> prj = companion(base, ".prj");
-  if (!prj) return;
+  if (!prj) return {};
   std::ifstream f(*prj, std::ios::binary);
   std::ostringstream text;
   text << f.rdbuf();
   std::string s = text.str();
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.pop_back();
-  in.source_crs_wkt = s;
+  return {*prj, s};
+}
+
+void read_prj(const fs::path& base, InputSet& in) {
+  if (!in.source_crs_wkt.empty()) return;
+  in.source_crs_wkt = own_prj(base).second;
+}
+
+// A .prj of WKT1 GEOGCS / WKT2 GEOGCRS: the coordinates are longitude and latitude in degrees.
+bool says_geographic(const std::string& wkt) {
+  const std::string w = upper(wkt.substr(0, 8));
+  return w.rfind("GEOGCS[", 0) == 0 || w.rfind("GEOGCRS[", 0) == 0;
+}
+
+// Under a geographic .prj, a latitude of -95 or a longitude of 200 is damage, not metres.
+void check_lon_lat(const SHPObject& o, const std::string& prj, const std::string& path, uint64_t record) {
+  for (int k = 0; k < o.nVertices; ++k)
+    if (!(o.padfX[k] >= -180 && o.padfX[k] <= 180 && o.padfY[k] >= -90 && o.padfY[k] <= 90))
+      throw InputError(path, record,
+                       "vertex " + std::to_string(k + 1) + " (" + Box::number(o.padfX[k]) + " " +
+                           Box::number(o.padfY[k]) + ") is not a longitude/latitude, and " + prj +
+                           " says the coordinates are geographic (longitude -180 to 180, latitude -90 to 90)");
 }
 
 }  // namespace
 
 void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in) {
+  ZFieldLookup lookup;
+  read_shapefile(path, options, in, &lookup);
+  if (!options.z_field.empty() && !lookup.found) throw InputError(path, 0, lookup.why_not);
+}
+
+void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in, ZFieldLookup* lookup) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "no such file");
   const fs::path base = fs::path(path).replace_extension();
@@ -229,14 +380,27 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
       !(type == SHPT_NULL && count == 0))
     throw InputError(path, 0, std::string("shape type ") + SHPTypeName(type) + " is not supported");
 
+  // shapelib counts the records from the .shx header's length, which check_main_header held to the file size.
+  RecordIndex index(path, *shx);
+  if (index.records() < size_t(count))
+    throw InputError(*shx, 0, "truncated: " + std::to_string(index.records()) + " entries for " +
+                                  std::to_string(count) + " records");
+  const Box box = header_box(shp.get(), type);
+  const auto [prj_path, prj_text] = own_prj(base);
+  const bool geographic = says_geographic(prj_text);
+
   std::optional<ZField> z_field;
-  if (!options.z_field.empty()) z_field = open_z_field(path, base, options.z_field, has_z(type), count);
+  if (!options.z_field.empty()) {
+    z_field = open_z_field(path, base, options.z_field, has_z(type), count, lookup->why_not);
+    lookup->found = z_field.has_value();
+  }
 
   in.sources.push_back(path);
   const uint32_t source = uint32_t(in.sources.size() - 1);
   const size_t before = in.points.size() + in.lines.size();
   for (int i = 0; i < count; ++i) {
     const uint64_t record = uint64_t(i) + 1;
+    index.check(i);
     take_error();
     std::unique_ptr<SHPObject, ObjectFree> o(SHPReadObject(shp.get(), i));
     if (!o) {
@@ -253,6 +417,8 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
                            " in a file of " + SHPTypeName(type));
     check_parts(*o, path, record);
     const bool z_from_geometry = !z_field && has_z(type) && o->padfZ;
+    check_coordinates(*o, box, z_from_geometry, path, record);
+    if (geographic) check_lon_lat(*o, prj_path, path, record);
     const double z_attribute = z_field ? z_field->read(i) : 0.0;
     auto vertex = [&](int k) {
       return Point3{o->padfX[k], o->padfY[k], z_from_geometry ? o->padfZ[k] : z_attribute};

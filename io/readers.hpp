@@ -3,6 +3,7 @@
 #include <istream>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/model.hpp"
 
@@ -16,7 +17,20 @@ struct ReadOptions {
 // Throws InputError naming the file and record/line for malformed or unknown input.
 void read_input(const std::string& path, const ReadOptions& options, InputSet& in);
 
+// Reads every input in order. A z field (ReadOptions::z_field) must be in the .dbf of at least one shapefile
+// input; a shapefile with z in its geometry but without the field keeps its geometry's z (logged), one without
+// z must have it. Throws InputError naming each shapefile and the fields it has when none has the field, and
+// UsageError when no input is a shapefile.
+void read_inputs(const std::vector<std::string>& paths, const ReadOptions& options, InputSet& in);
+
+// Alone, a shapefile must have the z field when one is asked for (InputError listing the fields it has).
 void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in);
+// For read_inputs: a Z shapefile without the z field is read with its geometry's z and reported here.
+struct ZFieldLookup {
+  bool found = false;
+  std::string why_not;  // no .dbf, or "no field F in X.dbf (fields: ...)"
+};
+void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in, ZFieldLookup* lookup);
 void read_wkt(std::istream& text, const std::string& name, InputSet& in);
 void read_xyz(std::istream& text, const std::string& name, InputSet& in);
 // The same on a whole text (a mapped file): parsed on all cores, with the same results and messages.

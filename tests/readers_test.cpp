@@ -386,10 +386,19 @@ TEST_F(Shapefile, ArcZTakesZFromGeometryOrFromTheZField) {
   for (const Point3& p : attr.lines[2].points) EXPECT_EQ(p.z, 200.25);
   EXPECT_EQ(attr.lines[2].points[0].x, 7.0);
 
-  // A Z shapefile without the field keeps its own z (footprints read along with contours).
-  InputSet fallback;
-  read_input(path("contours.shp"), {.z_field = "HEIGHT"}, fallback);
-  EXPECT_EQ(fallback.lines[0].points[0].z, 1.0);
+  // Alone, a Z shapefile without the field is an error listing its fields (it used to keep its z silently)...
+  InputSet alone;
+  expect_input_error([&] { read_input(path("contours.shp"), {.z_field = "HEIGHT"}, alone); },
+                     "no field HEIGHT in " + path("contours.dbf") + " (fields: ID, ELEV)", 0);
+  // ... read along with a shapefile that has the field, it keeps its own z (footprints read with contours).
+  write_shapefile(path("roofz"), SHPT_ARCZ, {Shape{{0}, {20, 21}, {0, 0}, {7, 7}}});  // no .dbf
+  InputSet both;
+  read_inputs({path("contours.shp"), path("roofz.shp")}, {.z_field = "ELEV"}, both);
+  EXPECT_EQ(both.lines.front().points[0].z, 100.5);
+  EXPECT_EQ(both.lines.back().points[0].z, 7.0);
+  InputSet neither;
+  expect_input_error([&] { read_inputs({path("contours.shp"), path("roofz.shp")}, {.z_field = "HEIGHT"}, neither); },
+                     "no input shapefile has the z field HEIGHT", 0);
 }
 
 TEST_F(Shapefile, MissingZFieldListsTheFields) {

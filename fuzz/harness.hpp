@@ -1,0 +1,127 @@
+// One entry per reader for the libFuzzer targets (fuzz_*.cpp) and for tests/fuzz_regression_test.cpp, which
+// replays the crashes found. Bad input must end in InputError (exit code 2 in the CLI); any other exception,
+// a crash or a sanitizer report is a bug.
+//
+//   fuzz_wkt(data, size);        // read_wkt on the bytes
+//   fuzz_shapefile(data, size);  // [flags][shp length u32][shx length u32] shp shx dbf, via temp files
+#pragma once
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <string_view>
+
+#include "core/error.hpp"
+#include "io/readers.hpp"
+#include "io/writers.hpp"
+
+namespace cdtgpu::fuzz {
+
+// Runs f; InputError is the expected outcome for bad bytes.
+template <class F>
+void expect_only_input_errors(F&& f) {
+  try {
+    f();
+  } catch (const InputError&) {
+  }
+}
+
+inline std::istringstream stream(const uint8_t* data, size_t size) {
+  return std::istringstream(std::string(reinterpret_cast<const char*>(data), size));
+}
+
+inline void fuzz_wkt(const uint8_t* data, size_t size) {
+  expect_only_input_errors([&] {
+    InputSet in;
+    auto s = stream(data, size);
+    read_wkt(s, "fuzz.wkt", in);
+  });
+}
+
+inline void fuzz_xyz(const uint8_t* data, size_t size) {
+  expect_only_input_errors([&] {
+    InputSet in;
+    auto s = stream(data, size);
+    read_xyz(s, "fuzz.xyz", in);
+  });
+}
+
+inline void fuzz_ascii_grid(const uint8_t* data, size_t size) {
+  expect_only_input_errors([&] {
+    InputSet in;
+    auto s = stream(data, size);
+    read_ascii_grid(s, "fuzz.asc", in);
+  });
+}
+
+// A folder of this process's own for the file-based readers, removed at exit. In /dev/shm where there is one:
+// rewriting a file on ext4 (auto_da_alloc) waits for the disk, which held the targets to ~180 runs a second.
+inline const std::filesystem::path& scratch() {
+  static const struct Dir {
+    std::filesystem::path path;
+    Dir()
+        : path((std::filesystem::is_directory("/dev/shm") ? std::filesystem::path("/dev/shm")
+                                                          : std::filesystem::temp_directory_path()) /
+               ("cdtgpu-fuzz-" + std::to_string(::getpid()))) {
+      std::filesystem::create_directories(path);
+    }
+    ~Dir() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  } dir;
+  return dir.path;
+}
+
+inline void put(const std::filesystem::path& p, const uint8_t* data, size_t size) {
+  std::ofstream(p, std::ios::binary | std::ios::trunc)
+      .write(reinterpret_cast<const char*>(data), std::streamsize(size));
+}
+
+// The first byte picks the format (obj, ply, wkt); the rest is the file.
+inline void fuzz_mesh(const uint8_t* data, size_t size) {
+  if (size < 1) return;
+  static const char* const ext[] = {".obj", ".ply", ".wkt"};
+  const std::filesystem::path p = scratch() / (std::string("mesh") + ext[data[0] % 3]);
+  put(p, data + 1, size - 1);
+  expect_only_input_errors([&] { read_mesh_file(p.string()); });
+}
+
+inline uint32_t le32(const uint8_t* p) {
+  return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
+
+// [flags][shp length][shx length] shp shx dbf. Flags: bit 0 reads z from the DBF field ELEV, bit 1 leaves the
+// .dbf out, bit 2 adds a geographic .prj.
+inline void fuzz_shapefile(const uint8_t* data, size_t size) {
+  if (size < 9) return;
+  const uint8_t flags = data[0];
+  size_t shp = le32(data + 1), shx = le32(data + 5);
+  data += 9;
+  size -= 9;
+  shp = std::min(shp, size);
+  shx = std::min(shx, size - shp);
+  const std::filesystem::path base = scratch() / "f";
+  put(base.string() + ".shp", data, shp);
+  put(base.string() + ".shx", data + shp, shx);
+  std::error_code ec;
+  std::filesystem::remove(base.string() + ".dbf", ec);
+  std::filesystem::remove(base.string() + ".prj", ec);
+  if (!(flags & 2)) put(base.string() + ".dbf", data + shp + shx, size - shp - shx);
+  if (flags & 4) {
+    static const char prj[] = "GEOGCS[\"GCS_WGS_1984\"]";
+    put(base.string() + ".prj", reinterpret_cast<const uint8_t*>(prj), sizeof prj - 1);
+  }
+  expect_only_input_errors([&] {
+    InputSet in;
+    ReadOptions o;
+    if (flags & 1) o.z_field = "ELEV";
+    read_shapefile(base.string() + ".shp", o, in);
+  });
+}
+
+}  // namespace cdtgpu::fuzz
