@@ -14,6 +14,7 @@
 #include "core/verify.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
+#include "io/gis_writers.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -98,7 +99,7 @@ int run_triangulate(const TriangulateOptions& options) {
   if (!options.format.empty())
     write.format = parse_format(options.format);
   else if (options.output == "-")
-    throw UsageError("writing to stdout needs --format (obj, ply or wkt)");
+    throw UsageError("writing to stdout needs --format (obj, ply, wkt, landxml or 2dm)");
   else
     write.format = format_from_extension(options.output);
   if (options.backend != "gpu" && options.backend != "cgal")
@@ -138,6 +139,12 @@ int run_triangulate(const TriangulateOptions& options) {
   if (result.mesh.triangles.empty())
     spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
   timed(stats, "write", [&] { write_mesh_file(result.mesh, l.crs, write, options.output); });
+  if (!options.grid_out.empty())
+    timed(stats, "grid", [&] { write_ascii_grid_file(rasterise(result.mesh, options.cell), l.crs, options.grid_out); });
+  if (!options.contours_out.empty())
+    timed(stats, "contours", [&] {
+      write_contours_wkt_file(contour_lines(result.mesh, options.interval), l.crs, options.contours_out);
+    });
 
   stats.counts["steiner_points"] = result.steiner_points;
   stats.counts["vertices"] = result.mesh.vertices.size();

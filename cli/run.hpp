@@ -23,6 +23,10 @@ struct TriangulateOptions {
   std::string backend = "gpu";  // gpu (default) or cgal (the CPU reference)
   std::string device;           // Vulkan device override for the gpu backend
   std::string stats_path;    // empty: none
+  std::string grid_out;      // ESRI ASCII grid of the TIN (core/raster.hpp); empty: none
+  double cell = 1.0;         // its cell size
+  std::string contours_out;  // contour lines as WKT (core/contours.hpp); empty: none
+  double interval = 10.0;    // their interval
 };
 
 // Returns the process exit code; throws InputError / UsageError for bad input.

@@ -1,0 +1,131 @@
+// Marching triangles, then chaining (rules in contours.hpp). Levels are independent and run in parallel;
+// each level visits the triangles whose z range holds it. Chaining goes through edge keys (the two vertex
+// indices), never through coordinates, so equal-looking points never join lines that do not meet.
+// Cost per level: O(triangles) for the scan, O(segments) for the chaining with a hash map.
+#include "core/contours.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <execution>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+
+#include "core/error.hpp"
+
+namespace cdtgpu {
+
+namespace {
+
+uint64_t edge_key(uint32_t a, uint32_t b) {
+  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
+}
+
+Point3 crossing(const Point3& u, const Point3& v, double level) {  // u below, v above
+  if (v.z == level) return {v.x, v.y, level};
+  const double t = (level - u.z) / (v.z - u.z);
+  return {u.x + t * (v.x - u.x), u.y + t * (v.y - u.y), level};
+}
+
+struct Segment {
+  uint64_t from, to;  // edge keys
+  Point3 p, q;
+};
+
+std::vector<Contour> lines_at(const Mesh& mesh, double level) {
+  std::vector<Segment> segs;
+  for (const Triangle& tri : mesh.triangles) {
+    const Point3* p[3] = {&mesh.vertices[tri[0]], &mesh.vertices[tri[1]], &mesh.vertices[tri[2]]};
+    const bool above[3] = {p[0]->z >= level, p[1]->z >= level, p[2]->z >= level};
+    if (above[0] == above[1] && above[1] == above[2]) continue;
+    // Walking the triangle counter-clockwise, the edge going from above to below ("falling") and the one
+    // going from below to above ("rising"); falling -> rising keeps the above corner on the left.
+    int falling = -1, rising = -1;
+    for (int e = 0; e < 3; ++e) {
+      const int f = (e + 1) % 3;
+      if (above[e] && !above[f]) falling = e;
+      if (!above[e] && above[f]) rising = e;
+    }
+    const auto point = [&](int e) {
+      const int f = (e + 1) % 3;
+      return above[e] ? crossing(*p[f], *p[e], level) : crossing(*p[e], *p[f], level);
+    };
+    const auto key = [&](int e) { return edge_key(tri[e], tri[(e + 1) % 3]); };
+    Segment s{key(falling), key(rising), point(falling), point(rising)};
+    // A clockwise triangle (never in a canonical mesh) walks the other way round.
+    const Point3 &a = *p[0], &b = *p[1], &c = *p[2];
+    if ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x) < 0) {
+      std::swap(s.from, s.to);
+      std::swap(s.p, s.q);
+    }
+    segs.push_back(s);
+  }
+
+  std::unordered_map<uint64_t, uint32_t> starting, ending;  // edge key -> segment
+  starting.reserve(segs.size());
+  ending.reserve(segs.size());
+  for (uint32_t i = 0; i < segs.size(); ++i) {
+    starting.emplace(segs[i].from, i);
+    ending.emplace(segs[i].to, i);
+  }
+  std::vector<bool> used(segs.size(), false);
+  std::vector<Contour> out;
+  const auto chain = [&](uint32_t first, bool closed) {
+    Contour c;
+    c.level = level;
+    c.closed = closed;
+    c.points.push_back(segs[first].p);
+    for (uint32_t i = first;;) {
+      used[i] = true;
+      c.points.push_back(segs[i].q);
+      auto next = starting.find(segs[i].to);
+      if (next == starting.end() || used[next->second]) break;
+      i = next->second;
+    }
+    c.points.erase(std::unique(c.points.begin(), c.points.end()), c.points.end());
+    const size_t distinct = c.points.size() - (closed ? 1 : 0);
+    if (distinct >= 2) out.push_back(std::move(c));
+  };
+  // Open lines start where no segment ends (the mesh boundary; or, in a mesh that is not a manifold, where
+  // two segments start); what is left are rings.
+  for (uint32_t i = 0; i < segs.size(); ++i)
+    if (!used[i] && (!ending.contains(segs[i].from) || starting.at(segs[i].from) != i)) chain(i, false);
+  for (uint32_t i = 0; i < segs.size(); ++i)
+    if (!used[i]) chain(i, true);
+  return out;
+}
+
+}  // namespace
+
+std::vector<Contour> contour_lines(const Mesh& mesh, double interval, uint64_t max_levels) {
+  if (!(interval > 0) || !std::isfinite(interval))
+    throw UsageError("the contour interval must be a positive number, not " + std::to_string(interval));
+  if (mesh.triangles.empty()) return {};
+  double z0 = INFINITY, z1 = -INFINITY;
+  for (const Triangle& t : mesh.triangles)
+    for (uint32_t v : t) {
+      z0 = std::min(z0, mesh.vertices.at(v).z);
+      z1 = std::max(z1, mesh.vertices.at(v).z);
+    }
+  if (std::fabs(z0 / interval) > 9e15 || std::fabs(z1 / interval) > 9e15 || (z1 - z0) / interval > double(max_levels))
+    throw UsageError("contour interval " + std::to_string(interval) + " gives more than " +
+                     std::to_string(max_levels) + " levels between " + std::to_string(z0) + " and " +
+                     std::to_string(z1) + ": choose a larger --interval");
+  auto k0 = int64_t(std::ceil(z0 / interval)), k1 = int64_t(std::floor(z1 / interval));
+  while (double(k0) * interval < z0) ++k0;
+  while (double(k0 - 1) * interval >= z0) --k0;
+  while (double(k1) * interval > z1) --k1;
+  while (double(k1 + 1) * interval <= z1) ++k1;
+  if (k1 < k0) return {};
+  std::vector<int64_t> ks(size_t(k1 - k0 + 1));
+  std::iota(ks.begin(), ks.end(), k0);
+  std::vector<std::vector<Contour>> per(ks.size());
+  std::transform(std::execution::par, ks.begin(), ks.end(), per.begin(),
+                 [&](int64_t k) { return lines_at(mesh, double(k) * interval); });
+  std::vector<Contour> all;
+  for (auto& v : per)
+    for (Contour& c : v) all.push_back(std::move(c));
+  return all;
+}
+
+}  // namespace cdtgpu
