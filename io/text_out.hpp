@@ -1,7 +1,8 @@
 // A text buffer for the GIS writers (LandXML, 2DM, ASCII grid, contours): numbers with std::to_chars (the
-// shortest text that reads back to the same double), handed to the stream in 1 MiB blocks.
+// shortest digits that read back to the same double), handed to the stream in 1 MiB blocks.
 #pragma once
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <ostream>
@@ -38,8 +39,19 @@ class TextOut {
     buf_[n_++] = c;
     return *this;
   }
-  // Shortest round-trip text: at most 24 characters for a double.
-  TextOut& number(double v) { return chars(v); }
+  // Shortest round-trip text. Plain std::to_chars picks scientific whenever it is shorter ("5e+05" for
+  // 500000); civil and hydraulic tools expect coordinates in fixed notation, so magnitudes from 1e-4 to 1e16
+  // are written fixed (still the shortest digits that read back exactly), others as to_chars chooses.
+  TextOut& number(double v) {
+    const double a = std::fabs(v);
+    if (a >= 1e-4 && a < 1e16) {
+      if (n_ + 48 > buf_.size()) flush();
+      n_ = size_t(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v, std::chars_format::fixed).ptr -
+                  buf_.data());
+      return *this;
+    }
+    return chars(v);
+  }
   TextOut& number(uint64_t v) { return chars(v); }
   TextOut& number(int64_t v) { return chars(v); }
 
