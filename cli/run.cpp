@@ -138,13 +138,17 @@ int run_triangulate(const TriangulateOptions& options) {
   });
   if (result.mesh.triangles.empty())
     spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
-  timed(stats, "write", [&] { write_mesh_file(result.mesh, l.crs, write, options.output); });
-  if (!options.grid_out.empty())
-    timed(stats, "grid", [&] { write_ascii_grid_file(rasterise(result.mesh, options.cell), l.crs, options.grid_out); });
+  // The derived outputs are computed before anything is written, so a grid that cannot be made writes nothing.
+  std::optional<Raster> grid;
+  std::vector<Contour> contours;
+  if (!options.grid_out.empty()) grid = timed(stats, "grid", [&] { return rasterise(result.mesh, options.cell); });
   if (!options.contours_out.empty())
-    timed(stats, "contours", [&] {
-      write_contours_wkt_file(contour_lines(result.mesh, options.interval), l.crs, options.contours_out);
-    });
+    contours = timed(stats, "contours", [&] { return contour_lines(result.mesh, options.interval); });
+  timed(stats, "write", [&] {
+    write_mesh_file(result.mesh, l.crs, write, options.output);
+    if (grid) write_ascii_grid_file(*grid, l.crs, options.grid_out);
+    if (!options.contours_out.empty()) write_contours_wkt_file(contours, l.crs, options.contours_out);
+  });
 
   stats.counts["steiner_points"] = result.steiner_points;
   stats.counts["vertices"] = result.mesh.vertices.size();

@@ -39,7 +39,7 @@ int64_t floor_index(double v, double cell) {
 GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells) {
   if (!(cell > 0) || !std::isfinite(cell))
     throw UsageError("the grid cell size must be a positive number, not " + std::to_string(cell));
-  if (mesh.triangles.empty()) throw std::runtime_error("the mesh has no triangles: no grid to rasterise");
+  if (mesh.triangles.empty()) throw UsageError("the mesh has no triangles: there is no surface to rasterise into a grid");
   double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
   for (const Triangle& t : mesh.triangles)
     for (uint32_t v : t) {

@@ -37,8 +37,7 @@ struct Raster {
 };
 
 // The grid that covers the mesh's vertices with centres at multiples of cell. Throws UsageError for a cell
-// that is not a positive finite number or a grid of more than max_cells cells, std::runtime_error for a
-// mesh without triangles.
+// that is not a positive finite number, a grid of more than max_cells cells, or a mesh without triangles.
 GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells = uint64_t(1) << 31);
 
 // The value at (x, y) of the plane through a, b, c:
