@@ -76,6 +76,7 @@ int main(int argc, char** argv) {
   t->add_option("--interval", tri.interval, "contour interval; levels at its multiples")
       ->default_val(10.0)
       ->check(CLI::PositiveNumber);
+  t->add_option("--preview", tri.preview, "also write a hillshaded picture of the TIN (PNG, about 1000 px wide)");
   t->add_option("--stats", tri.stats_path, "write counts, CRS and stage times as JSON to this file");
   add_input_options(t, tri.input, crs, utm_zone, epsg);
 

@@ -14,7 +14,9 @@
 #include "core/verify.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
+#include "core/hillshade.hpp"
 #include "io/gis_writers.hpp"
+#include "io/write_png.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -144,10 +146,14 @@ int run_triangulate(const TriangulateOptions& options) {
   if (!options.grid_out.empty()) grid = timed(stats, "grid", [&] { return rasterise(result.mesh, options.cell); });
   if (!options.contours_out.empty())
     contours = timed(stats, "contours", [&] { return contour_lines(result.mesh, options.interval); });
+  std::optional<Raster> preview;
+  if (!options.preview.empty())
+    preview = timed(stats, "preview", [&] { return rasterise(result.mesh, preview_cell(result.mesh, 1000)); });
   timed(stats, "write", [&] {
     write_mesh_file(result.mesh, l.crs, write, options.output);
     if (grid) write_ascii_grid_file(*grid, l.crs, options.grid_out);
     if (!options.contours_out.empty()) write_contours_wkt_file(contours, l.crs, options.contours_out);
+    if (preview) write_png_file(options.preview, preview->spec.ncols, preview->spec.nrows, hillshade_rgba(*preview));
   });
 
   stats.counts["steiner_points"] = result.steiner_points;

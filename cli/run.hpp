@@ -27,6 +27,7 @@ struct TriangulateOptions {
   double cell = 1.0;         // its cell size
   std::string contours_out;  // contour lines as WKT (core/contours.hpp); empty: none
   double interval = 10.0;    // their interval
+  std::string preview;       // hillshaded PNG of the TIN (core/hillshade.hpp); empty: none
 };
 
 // Returns the process exit code; throws InputError / UsageError for bad input.

@@ -1,5 +1,5 @@
-// Contour lines as WKT, one LINESTRING Z per line (QGIS opens a .wkt file of one geometry per line as a
-// delimited-text layer; GDAL's CSV driver reads it too).
+// Contour lines as WKT, one LINESTRING Z per line (QGIS opens it as a delimited-text layer with "no field names"
+// and the WKT in field 1).
 #include "io/atomic_file.hpp"
 #include "io/gis_writers.hpp"
 #include "io/text_out.hpp"

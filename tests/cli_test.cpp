@@ -241,14 +241,16 @@ TEST_F(Cli, LandXmlAnd2dmAreWrittenAndPassVerify) {
   EXPECT_NE(slurp(path("b.xml")).find("date=\"2023-11-14\" time=\"22:13:20\""), std::string::npos);
 }
 
-TEST_F(Cli, GridAndContoursComeWithTheMeshInOneRun) {
+TEST_F(Cli, GridContoursAndPreviewComeWithTheMeshInOneRun) {
   // Lon/lat input, so the CRS has a WKT and every output gets its .prj.
   write("ll.xyz", "150.30 -33.70 1000\n150.32 -33.70 1010\n150.31 -33.72 1005\n150.31 -33.69 990\n150.305 -33.705 1021\n");
   Result r = run("triangulate " + path("ll.xyz") + " --backend cgal -q -o " + path("tin.ply") + " --grid-out " +
-                 path("dem.asc") + " --cell 50 --contours-out " + path("lines.wkt") + " --interval 5");
+                 path("dem.asc") + " --cell 50 --contours-out " + path("lines.wkt") + " --interval 5 --preview " +
+                 path("tin.png"));
   ASSERT_EQ(r.code, 0) << r.err;
-  for (const char* f : {"tin.ply", "tin.prj", "dem.asc", "dem.prj", "lines.wkt", "lines.prj"})
+  for (const char* f : {"tin.ply", "tin.prj", "dem.asc", "dem.prj", "lines.wkt", "lines.prj", "tin.png"})
     EXPECT_TRUE(fs::exists(path(f))) << f;
+  EXPECT_EQ(slurp(path("tin.png")).rfind("\x89PNG\r\n\x1a\n", 0), 0u);
   const std::string asc = slurp(path("dem.asc"));
   EXPECT_EQ(asc.rfind("ncols ", 0), 0u) << asc.substr(0, 200);
   EXPECT_NE(asc.find("\ncellsize 50\nNODATA_value -9999\n"), std::string::npos) << asc.substr(0, 200);
