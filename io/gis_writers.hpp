@@ -22,6 +22,10 @@ void write_ascii_grid_file(const Raster& raster, const Crs& crs, const std::stri
 
 // One "LINESTRING Z (x y z, ...)" line per contour, in the order given; a closed contour repeats its first point.
 void write_contours_wkt(const std::vector<Contour>& lines, std::ostream& out);
+// A GeoJSON FeatureCollection: one LineString feature per contour with properties "level" and "closed", and
+// (GeoJSON 2008 style, which GDAL and QGIS honour) a "crs" member naming the EPSG code when there is one.
+void write_contours_geojson(const std::vector<Contour>& lines, const Crs& crs, std::ostream& out);
+// By extension: .geojson / .json GeoJSON, anything else WKT lines.
 void write_contours_wkt_file(const std::vector<Contour>& lines, const Crs& crs, const std::string& path);
 
 // The .prj beside path (path with its extension replaced), when the CRS has a WKT and path is not "-".

@@ -11,7 +11,10 @@
 #include "core/contours.hpp"
 #include "core/error.hpp"
 #include "core/prepare.hpp"
+#include "core/projection.hpp"
 #include "io/gis_writers.hpp"
+
+#include <nlohmann/json.hpp>
 
 namespace cdtgpu {
 namespace {
@@ -150,6 +153,33 @@ TEST(Contours, AFlatMeshAndAnIsolatedPeakAtTheLevelGiveNoLines) {
   p.triangles = {{0, 1, 2}, {1, 3, 2}, {3, 0, 2}};
   const std::vector<Contour> lines = contour_lines(p, 10);
   EXPECT_TRUE(lines.empty());
+}
+
+TEST(Contours, GeoJsonCarriesTheLevelsTheLinesAndTheEpsgCode) {
+  const std::vector<Contour> lines = contour_lines(cone(12), 0.5);
+  Crs crs;
+  crs.epsg = 7855;
+  std::ostringstream out;
+  write_contours_geojson(lines, crs, out);
+  const nlohmann::json j = nlohmann::json::parse(out.str());
+  EXPECT_EQ(j["type"], "FeatureCollection");
+  EXPECT_EQ(j["crs"]["properties"]["name"], "urn:ogc:def:crs:EPSG::7855");
+  ASSERT_EQ(j["features"].size(), lines.size());
+  for (size_t k = 0; k < lines.size(); ++k) {
+    const auto& f = j["features"][k];
+    EXPECT_EQ(f["properties"]["level"].get<double>(), lines[k].level);
+    EXPECT_EQ(f["properties"]["closed"].get<bool>(), lines[k].closed);
+    EXPECT_EQ(f["geometry"]["type"], "LineString");
+    const auto& xyz = f["geometry"]["coordinates"];
+    ASSERT_EQ(xyz.size(), lines[k].points.size());
+    for (size_t i = 0; i < xyz.size(); ++i)
+      EXPECT_EQ((Point3{xyz[i][0].get<double>(), xyz[i][1].get<double>(), xyz[i][2].get<double>()}),
+                lines[k].points[i]);
+  }
+  std::ostringstream none;
+  write_contours_geojson({}, Crs{}, none);
+  EXPECT_EQ(nlohmann::json::parse(none.str())["features"].size(), 0u);
+  EXPECT_FALSE(nlohmann::json::parse(none.str()).contains("crs"));
 }
 
 TEST(Contours, BadIntervalsAreRefused) {
