@@ -1,13 +1,14 @@
-// Marching triangles, then chaining (rules in contours.hpp). Levels are independent and run in parallel;
-// each level visits the triangles whose z range holds it. Chaining goes through edge keys (the two vertex
+// Marching triangles, then chaining (rules in contours.hpp). Triangles are bucketed by the levels they cross
+// (a CSR list, each level's triangles in mesh order); levels are independent and run in parallel. Chaining goes through edge keys (the two vertex
 // indices), never through coordinates, so equal-looking points never join lines that do not meet.
-// Cost per level: O(triangles) for the scan, O(segments) for the chaining with a hash map.
+// Cost: O(triangles + segments), the chaining through a hash map per level.
 #include "core/contours.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <execution>
 #include <numeric>
+#include <span>
 #include <string>
 #include <unordered_map>
 
@@ -32,9 +33,11 @@ struct Segment {
   Point3 p, q;
 };
 
-std::vector<Contour> lines_at(const Mesh& mesh, double level) {
+// `tris`: the triangles, in mesh order, with a vertex below the level and one at or above it.
+std::vector<Contour> lines_at(const Mesh& mesh, double level, std::span<const uint32_t> tris) {
   std::vector<Segment> segs;
-  for (const Triangle& tri : mesh.triangles) {
+  for (uint32_t t : tris) {
+    const Triangle& tri = mesh.triangles[t];
     const Point3* p[3] = {&mesh.vertices[tri[0]], &mesh.vertices[tri[1]], &mesh.vertices[tri[2]]};
     const bool above[3] = {p[0]->z >= level, p[1]->z >= level, p[2]->z >= level};
     if (above[0] == above[1] && above[1] == above[2]) continue;
@@ -111,17 +114,47 @@ std::vector<Contour> contour_lines(const Mesh& mesh, double interval, uint64_t m
     throw UsageError("contour interval " + std::to_string(interval) + " gives more than " +
                      std::to_string(max_levels) + " levels between " + std::to_string(z0) + " and " +
                      std::to_string(z1) + ": choose a larger --interval");
-  auto k0 = int64_t(std::ceil(z0 / interval)), k1 = int64_t(std::floor(z1 / interval));
-  while (double(k0) * interval < z0) ++k0;
-  while (double(k0 - 1) * interval >= z0) --k0;
-  while (double(k1) * interval > z1) --k1;
-  while (double(k1 + 1) * interval <= z1) ++k1;
+  // Level k is at k * interval; a triangle crosses it when its lowest z < level <= its highest z.
+  auto first_above = [&](double z) {  // smallest k with k * interval > z
+    auto k = int64_t(std::floor(z / interval)) + 1;
+    while (double(k - 1) * interval > z) --k;
+    while (double(k) * interval <= z) ++k;
+    return k;
+  };
+  auto last_at_or_below = [&](double z) {  // largest k with k * interval <= z
+    auto k = int64_t(std::floor(z / interval));
+    while (double(k) * interval > z) --k;
+    while (double(k + 1) * interval <= z) ++k;
+    return k;
+  };
+  const int64_t k0 = first_above(z0), k1 = last_at_or_below(z1);
   if (k1 < k0) return {};
-  std::vector<int64_t> ks(size_t(k1 - k0 + 1));
-  std::iota(ks.begin(), ks.end(), k0);
-  std::vector<std::vector<Contour>> per(ks.size());
-  std::transform(std::execution::par, ks.begin(), ks.end(), per.begin(),
-                 [&](int64_t k) { return lines_at(mesh, double(k) * interval); });
+  const size_t levels = size_t(k1 - k0 + 1);
+  // The triangles of each level, in mesh order (a CSR list).
+  const size_t nt = mesh.triangles.size();
+  std::vector<std::pair<int64_t, int64_t>> range(nt);
+  std::vector<uint64_t> start(levels + 1, 0);
+  for (size_t t = 0; t < nt; ++t) {
+    const Triangle& tri = mesh.triangles[t];
+    const double lo = std::min({mesh.vertices[tri[0]].z, mesh.vertices[tri[1]].z, mesh.vertices[tri[2]].z});
+    const double hi = std::max({mesh.vertices[tri[0]].z, mesh.vertices[tri[1]].z, mesh.vertices[tri[2]].z});
+    range[t] = {first_above(lo) - k0, last_at_or_below(hi) - k0};
+    for (int64_t k = range[t].first; k <= range[t].second; ++k) ++start[size_t(k) + 1];
+  }
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<uint32_t> list(start.back());
+  {
+    std::vector<uint64_t> fill(start.begin(), start.end() - 1);
+    for (size_t t = 0; t < nt; ++t)
+      for (int64_t k = range[t].first; k <= range[t].second; ++k) list[fill[size_t(k)]++] = uint32_t(t);
+  }
+  std::vector<size_t> ks(levels);
+  std::iota(ks.begin(), ks.end(), size_t(0));
+  std::vector<std::vector<Contour>> per(levels);
+  std::transform(std::execution::par, ks.begin(), ks.end(), per.begin(), [&](size_t k) {
+    const std::span<const uint32_t> tris(list.data() + start[k], start[k + 1] - start[k]);
+    return lines_at(mesh, double(k0 + int64_t(k)) * interval, tris);
+  });
   std::vector<Contour> all;
   for (auto& v : per)
     for (Contour& c : v) all.push_back(std::move(c));
