@@ -153,7 +153,11 @@ int run_triangulate(const TriangulateOptions& options) {
     write_mesh_file(result.mesh, l.crs, write, options.output);
     if (grid) write_ascii_grid_file(*grid, l.crs, options.grid_out);
     if (!options.contours_out.empty()) write_contours_wkt_file(contours, l.crs, options.contours_out);
-    if (preview) write_png_file(options.preview, preview->spec.ncols, preview->spec.nrows, hillshade_rgba(*preview));
+    if (preview) {
+      std::vector<uint8_t> rgba = hillshade_rgba(*preview);
+      draw_edges(rgba, preview->spec, l.prepared.vertices, l.prepared.constraints);
+      write_png_file(options.preview, preview->spec.ncols, preview->spec.nrows, rgba);
+    }
   });
 
   stats.counts["steiner_points"] = result.steiner_points;

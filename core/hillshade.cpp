@@ -81,4 +81,41 @@ std::vector<uint8_t> hillshade_rgba(const Raster& dem) {
   return rgba;
 }
 
+void draw_edges(std::vector<uint8_t>& rgba, const GridSpec& g, const std::vector<Point3>& vertices,
+                const std::vector<Edge>& edges) {
+  // Pixel (col, row) covers the cell centred at (g.x(col), g.y(row)).
+  const double left = double(g.ix0) * g.cell, top = double(g.iy0 + int64_t(g.nrows) - 1) * g.cell;
+  auto plot = [&](double x, double y) {
+    const double c = std::floor((x - left) / g.cell + 0.5), r = std::floor((top - y) / g.cell + 0.5);
+    if (c < 0 || r < 0 || c >= double(g.ncols) || r >= double(g.nrows)) return;
+    uint8_t* p = rgba.data() + (uint64_t(r) * g.ncols + uint64_t(c)) * 4;
+    p[0] = 25, p[1] = 35, p[2] = 90, p[3] = 255;
+  };
+  const double right = double(g.ix0 + int64_t(g.ncols) - 1) * g.cell, bottom = double(g.iy0) * g.cell;
+  for (const Edge& e : edges) {
+    const Point3 &a = vertices.at(e[0]), &b = vertices.at(e[1]);
+    // The part of a + t (b - a) inside the picture (one cell of margin): t0 .. t1.
+    double t0 = 0, t1 = 1;
+    auto clip = [&](double p, double d, double lo, double hi) {
+      if (d == 0) {
+        if (p < lo || p > hi) t1 = -1;
+        return;
+      }
+      double u = (lo - p) / d, w = (hi - p) / d;
+      if (u > w) std::swap(u, w);
+      t0 = std::max(t0, u), t1 = std::min(t1, w);
+    };
+    clip(a.x, b.x - a.x, left - g.cell, right + g.cell);
+    clip(a.y, b.y - a.y, bottom - g.cell, top + g.cell);
+    if (t0 > t1) continue;
+    // At most half a pixel per step.
+    const double len = (t1 - t0) * std::max(std::fabs(b.x - a.x), std::fabs(b.y - a.y)) / g.cell;
+    const double steps = std::ceil(len * 2);
+    for (double i = 0; i <= steps; ++i) {
+      const double t = steps > 0 ? t0 + (t1 - t0) * (i / steps) : t0;
+      plot(a.x + t * (b.x - a.x), a.y + t * (b.y - a.y));
+    }
+  }
+}
+
 }  // namespace cdtgpu

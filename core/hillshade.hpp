@@ -3,6 +3,7 @@
 // Usage:
 //   Raster dem = rasterise(mesh, preview_cell(mesh, 1000));   // about 1000 cells on the long side
 //   std::vector<uint8_t> rgba = hillshade_rgba(dem);           // nrows x ncols x 4, row 0 north
+//   draw_edges(rgba, dem.spec, prepared.vertices, prepared.constraints);   // the constraint lines on top
 //   write_png_file("tin.png", dem.spec.ncols, dem.spec.nrows, rgba);   // io/write_png.hpp
 #pragma once
 #include <cstdint>
@@ -22,5 +23,10 @@ std::vector<float> hillshade(const Raster& dem);
 
 // RGBA bytes, row 0 north: elevation tint (green, brown, white from low to high) times 0.3 + 0.7 * shade.
 std::vector<uint8_t> hillshade_rgba(const Raster& dem);
+
+// Draws each edge (a, b) of `vertices` as a one-pixel dark line onto an image of dem's grid (pixel = cell);
+// parts outside the grid are clipped.
+void draw_edges(std::vector<uint8_t>& rgba, const GridSpec& grid, const std::vector<Point3>& vertices,
+                const std::vector<Edge>& edges);
 
 }  // namespace cdtgpu

@@ -82,6 +82,23 @@ TEST(Hillshade, TheSamplePreviewReadsBackThroughLibpng) {
   EXPECT_LT(transparent, dem.z.size() / 5);
 }
 
+TEST(Hillshade, EdgesAreDrawnOnTheirPixelsAndClipped) {
+  const Raster dem = rasterise(plane_mesh(0.1, 0.1), 1);  // centres 0 .. 100 both ways, row 0 at y = 100
+  std::vector<uint8_t> rgba = hillshade_rgba(dem);
+  const std::vector<uint8_t> before = rgba;
+  const std::vector<Point3> v = {{10, 20, 0}, {30, 20, 0}, {50, -500, 0}, {50, 500, 0}, {-9, -9, 0}, {-5, -1, 0}};
+  draw_edges(rgba, dem.spec, v, {{0, 1}, {2, 3}, {4, 5}});
+  const uint64_t w = dem.spec.ncols;
+  auto dark = [&](uint64_t row, uint64_t col) { return rgba[(row * w + col) * 4 + 2] == 90; };
+  for (uint64_t col = 10; col <= 30; ++col) EXPECT_TRUE(dark(80, col)) << col;  // y = 20 is row 80
+  EXPECT_FALSE(dark(80, 9));
+  EXPECT_FALSE(dark(80, 31));
+  for (uint64_t row = 0; row < dem.spec.nrows; ++row) EXPECT_TRUE(dark(row, 50)) << row;  // clipped, whole column
+  size_t changed = 0;
+  for (size_t i = 0; i < rgba.size(); i += 4) changed += rgba[i + 2] != before[i + 2];
+  EXPECT_EQ(changed, 21u + dem.spec.nrows - 1);  // the two lines cross once; the third is off the picture
+}
+
 TEST(Hillshade, ABadPictureSizeIsRefused) {
   EXPECT_THROW(write_png_file("/nonexistent/x.png", 0, 1, {}), std::runtime_error);
   EXPECT_THROW(write_png_file("/nonexistent/x.png", 2, 2, std::vector<uint8_t>(3)), std::runtime_error);
