@@ -37,8 +37,9 @@ struct Raster {
 };
 
 // The grid that covers the mesh's vertices with centres at multiples of cell. Throws UsageError for a cell
-// that is not a positive finite number, a grid of more than max_cells cells, or a mesh without triangles.
-GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells = uint64_t(1) << 31);
+// that is not a positive finite number, a grid of more than max_cells cells (2^28 doubles: 2 GiB), or a mesh
+// without triangles.
+GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells = uint64_t(1) << 28);
 
 // The value at (x, y) of the plane through a, b, c:
 //   d = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x)

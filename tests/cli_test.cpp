@@ -262,6 +262,16 @@ TEST_F(Cli, GridContoursAndPreviewComeWithTheMeshInOneRun) {
   EXPECT_EQ(again.code, 0) << again.err;
 }
 
+TEST_F(Cli, LandXmlAnd2dmGoToStdout) {
+  write("pts.wkt", "MULTIPOINT ((0 0), (1 0), (0 1), (1 1))\n");
+  Result r = run("triangulate " + path("pts.wkt") + " --crs none --backend cgal -q --format landxml -o -", path("o.xml"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(path("o.xml")).find("<P id=\"4\">1 1 0</P>"), std::string::npos) << slurp(path("o.xml"));
+  r = run("triangulate " + path("pts.wkt") + " --crs none --backend cgal -q --format 2dm -o -", path("o.2dm"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(path("o.2dm")).find("\nND 4 1 1 0\nE3T 1 "), std::string::npos) << slurp(path("o.2dm"));
+}
+
 TEST_F(Cli, AGridTooFineOrABadCellIsAUsageErrorAndWritesNothing) {
   write_terrain();
   for (std::string bad : {"--cell 0", "--cell -2", "--cell 0.0001", "--cell x"}) {
