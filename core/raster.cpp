@@ -65,6 +65,12 @@ GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells) {
 }
 
 double interpolate(const Point3& a, const Point3& b, const Point3& c, double x, double y) {
+  // At a vertex the formula gives b.z or c.z only up to rounding (a.z + (b.z - a.z) need not be b.z when the
+  // two differ in sign or by more than a factor of two): take the vertex's own z, so a DEM read from a grid
+  // comes back unchanged when rasterised at its own cells.
+  if (x == a.x && y == a.y) return a.z;
+  if (x == b.x && y == b.y) return b.z;
+  if (x == c.x && y == c.y) return c.z;
   const double d = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
   const double s = ((x - a.x) * (c.y - a.y) - (y - a.y) * (c.x - a.x)) / d;
   const double t = ((b.x - a.x) * (y - a.y) - (b.y - a.y) * (x - a.x)) / d;

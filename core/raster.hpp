@@ -12,7 +12,8 @@
 //   by exact orient2d): a centre on an edge or a vertex shared by several triangles takes the one with the
 //   smallest index. Centres in no triangle get Raster::nodata.
 // - Its value is interpolate(a, b, c, x, y) over that triangle's vertices in the stored order: the one formula
-//   below, evaluated left to right in double without fused multiply-add (the build sets -ffp-contract=off).
+//   below, evaluated left to right in double without fused multiply-add (the build sets -ffp-contract=off);
+//   a centre exactly at a vertex takes that vertex's z, so a grid DEM comes back unchanged at its own cells.
 #pragma once
 #include <cstdint>
 #include <vector>
@@ -41,7 +42,7 @@ struct Raster {
 // without triangles.
 GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells = uint64_t(1) << 28);
 
-// The value at (x, y) of the plane through a, b, c:
+// The value at (x, y) of the plane through a, b, c: the vertex's own z when (x, y) is one of a, b, c, else
 //   d = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x)
 //   s = ((x - a.x) * (c.y - a.y) - (y - a.y) * (c.x - a.x)) / d
 //   t = ((b.x - a.x) * (y - a.y) - (b.y - a.y) * (x - a.x)) / d

@@ -7,6 +7,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <bit>
+#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -37,6 +38,8 @@ Mesh katoomba() {
 
 // The formula of raster.hpp, written out again.
 double plane_through(const Point3& a, const Point3& b, const Point3& c, double x, double y) {
+  for (const Point3* v : {&a, &b, &c})
+    if (x == v->x && y == v->y) return v->z;
   const double d = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
   const double s = ((x - a.x) * (c.y - a.y) - (y - a.y) * (c.x - a.x)) / d;
   const double t = ((b.x - a.x) * (y - a.y) - (b.y - a.y) * (x - a.x)) / d;
@@ -104,6 +107,38 @@ TEST(Raster, TheSampleEqualsBruteForceInterpolationAtEveryCell) {
     }
   EXPECT_GT(filled, 5000u);
   EXPECT_GT(empty, 100u);  // the sample's hull is not a rectangle
+}
+
+TEST(Raster, AGridDemComesBackUnchangedAtItsOwnCells) {
+  // Values of both signs and very different sizes, where a.z + (b.z - a.z) is not always b.z; a NODATA hole.
+  std::ostringstream asc;
+  asc << "ncols 40\nnrows 30\nxllcenter 300000\nyllcenter 6200000\ncellsize 2\nNODATA_value -9999\n";
+  uint64_t s = 77;
+  std::vector<double> want;
+  for (int r = 0; r < 30; ++r) {
+    for (int c = 0; c < 40; ++c) {
+      s = s * 6364136223846793005ull + 1442695040888963407ull;
+      double z = double(int64_t(s >> 33) % 200001 - 100000) / 997;
+      if (c % 7 == 3) z *= 1e-9;
+      if (r >= 10 && r < 13 && c >= 20 && c < 24) z = Raster::nodata;
+      want.push_back(z);
+      char buf[32];
+      asc << (c ? " " : "") << std::string(buf, std::to_chars(buf, buf + sizeof buf, z).ptr);
+    }
+    asc << "\n";
+  }
+  std::istringstream in(asc.str());
+  InputSet dem;
+  read_ascii_grid(in, "dem.asc", dem);
+  const Raster r = rasterise(triangulate(dem), 2);
+  ASSERT_EQ(r.spec.ncols, 40u);
+  ASSERT_EQ(r.spec.nrows, 30u);
+  EXPECT_EQ(r.spec.x(0), 300000);
+  EXPECT_EQ(r.spec.y(29), 6200000);
+  for (size_t i = 0; i < want.size(); ++i) {
+    if (want[i] == Raster::nodata) continue;  // the hole is triangulated over: interpolated, not NODATA
+    EXPECT_EQ(std::bit_cast<uint64_t>(r.z[i]), std::bit_cast<uint64_t>(want[i])) << i << ": " << r.z[i] << " vs " << want[i];
+  }
 }
 
 TEST(Raster, TheGridIsTheBoundingBoxSnappedOutward) {
