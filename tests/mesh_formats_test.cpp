@@ -190,6 +190,24 @@ TEST_F(MeshFormatsTest, LandXmlIsWellFormed) {
   std::ofstream(path("tin.xml")) << landxml_text(awkward_mesh(), odd);
   const std::string cmd = "xmllint --noout " + path("tin.xml") + " 2>" + path("err.txt");
   EXPECT_EQ(std::system(cmd.c_str()), 0) << slurp(path("err.txt"));
+  // The structure, through libxml2's XPath: one Surface of type TIN with the points and faces, in the
+  // LandXML 1.2 namespace.
+  const Mesh m = random_mesh(300, 5);
+  std::ofstream(path("big.xml")) << landxml_text(m, mga56());
+  auto xpath = [&](const std::string& expr) {
+    const std::string c = "xmllint --xpath \"" + expr + "\" " + path("big.xml") + " >" + path("out.txt") + " 2>&1";
+    EXPECT_EQ(std::system(c.c_str()), 0) << expr << ": " << slurp(path("out.txt"));
+    std::string r = slurp(path("out.txt"));
+    while (!r.empty() && r.back() == '\n') r.pop_back();
+    return r;
+  };
+  const std::string ns = "[namespace-uri()='http://www.landxml.org/schema/LandXML-1.2']";
+  EXPECT_EQ(xpath("count(/*[local-name()='LandXML']" + ns + "/*[local-name()='Surfaces']/*[local-name()='Surface'])"), "1");
+  EXPECT_EQ(xpath("string(//*[local-name()='Definition']/@surfType)"), "TIN");
+  EXPECT_EQ(xpath("count(//*[local-name()='Pnts']/*[local-name()='P'])"), std::to_string(m.vertices.size()));
+  EXPECT_EQ(xpath("count(//*[local-name()='Faces']/*[local-name()='F'])"), std::to_string(m.triangles.size()));
+  EXPECT_EQ(xpath("string(//*[local-name()='CoordinateSystem']/@epsgCode)"), "7856");
+  EXPECT_EQ(xpath("string(//*[local-name()='Metric']/@linearUnit)"), "meter");
 }
 
 TEST_F(MeshFormatsTest, SourceDateEpochFixesTheStamp) {
