@@ -3,7 +3,9 @@
 // level is a ring's height; vertices exactly at a level count as above; the WKT text is exact.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <sstream>
 
@@ -12,6 +14,7 @@
 #include "core/error.hpp"
 #include "core/prepare.hpp"
 #include "core/projection.hpp"
+#include "io/readers.hpp"
 #include "io/gis_writers.hpp"
 
 #include <nlohmann/json.hpp>
@@ -118,8 +121,11 @@ TEST(Contours, BetweenRingsTheLineCrossesEveryEdgeOnce) {
       const double r = std::hypot(c.points[i].x, c.points[i].y);
       // Radial edges (every other point, from the first) cross at radius exactly the level; diagonal ones
       // a little inside it.
-      if (!half || i % 2 == 0) EXPECT_NEAR(r, c.level, 1e-13 * c.level) << c.level << " " << i;
-      else EXPECT_LT(r, c.level) << c.level << " " << i;
+      if (!half || i % 2 == 0) {
+        EXPECT_NEAR(r, c.level, 1e-13 * c.level) << c.level << " " << i;
+      } else {
+        EXPECT_LT(r, c.level) << c.level << " " << i;
+      }
     }
   }
 }
@@ -180,6 +186,55 @@ TEST(Contours, GeoJsonCarriesTheLevelsTheLinesAndTheEpsgCode) {
   write_contours_geojson({}, Crs{}, none);
   EXPECT_EQ(nlohmann::json::parse(none.str())["features"].size(), 0u);
   EXPECT_FALSE(nlohmann::json::parse(none.str()).contains("crs"));
+}
+
+// The sample has its contour lines' vertices exactly at multiples of 10: many vertices sit on the levels.
+TEST(Contours, OnTheSampleLinesEndOnlyOnTheMeshBoundaryAndRingsClose) {
+  InputSet in;
+  ReadOptions ro;
+  ro.z_field = "ELEV";
+  const std::string dir = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
+  for (const char* f : {"contours.shp", "dem.xyz", "buildings.shp"}) read_input(dir + f, ro, in);
+  project(in, choose_crs(in, parse_crs("auto")));
+  const Mesh m = triangulate_cgal(prepare(in)).mesh;
+  // Boundary edges: those of one triangle only.
+  std::map<std::pair<uint32_t, uint32_t>, int> uses;
+  for (const Triangle& t : m.triangles)
+    for (int e = 0; e < 3; ++e) ++uses[std::minmax(t[e], t[(e + 1) % 3])];
+  std::vector<std::pair<Point3, Point3>> boundary;
+  for (const auto& [e, n] : uses)
+    if (n == 1) boundary.push_back({m.vertices[e.first], m.vertices[e.second]});
+  auto distance_to_boundary = [&](const Point3& p) {
+    double best = INFINITY;
+    for (const auto& [a, b] : boundary) {
+      const double dx = b.x - a.x, dy = b.y - a.y;
+      const double t = std::clamp(((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
+      best = std::min(best, std::hypot(p.x - a.x - t * dx, p.y - a.y - t * dy));
+    }
+    return best;
+  };
+  for (double interval : {10.0, 5.0, 2.5}) {
+    const std::vector<Contour> lines = contour_lines(m, interval);
+    ASSERT_FALSE(lines.empty());
+    size_t open = 0, closed = 0;
+    for (size_t k = 0; k < lines.size(); ++k) {
+      const Contour& c = lines[k];
+      if (k) {
+        EXPECT_LE(lines[k - 1].level, c.level);
+      }
+      for (size_t i = 1; i < c.points.size(); ++i) EXPECT_NE(c.points[i], c.points[i - 1]);
+      if (c.closed) {
+        ++closed;
+        EXPECT_EQ(c.points.front(), c.points.back());
+      } else {
+        ++open;
+        EXPECT_LT(distance_to_boundary(c.points.front()), 1e-6) << "level " << c.level << " starts inside";
+        EXPECT_LT(distance_to_boundary(c.points.back()), 1e-6) << "level " << c.level << " ends inside";
+      }
+    }
+    EXPECT_GT(open, 10u);
+    EXPECT_GT(closed, 2u);
+  }
 }
 
 TEST(Contours, BadIntervalsAreRefused) {
