@@ -72,7 +72,8 @@ int main(int argc, char** argv) {
   t->add_option("--cell", tri.cell, "grid cell size; cell centres at its multiples")
       ->default_val(1.0)
       ->check(CLI::PositiveNumber);
-  t->add_option("--contours-out", tri.contours_out, "also write contour lines: WKT LINESTRING Z, one per line (.geojson: GeoJSON)");
+  t->add_option("--contours-out", tri.contours_out,
+                "also write contour lines: WKT LINESTRING Z, one per line (.geojson: GeoJSON)");
   t->add_option("--interval", tri.interval, "contour interval; levels at its multiples")
       ->default_val(10.0)
       ->check(CLI::PositiveNumber);

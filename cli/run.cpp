@@ -9,12 +9,12 @@
 
 #include "core/cdt_cgal.hpp"
 #include "core/error.hpp"
+#include "core/hillshade.hpp"
 #include "core/prepare.hpp"
 #include "core/stats.hpp"
 #include "core/verify.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
-#include "core/hillshade.hpp"
 #include "io/gis_writers.hpp"
 #include "io/write_png.hpp"
 
@@ -140,15 +140,17 @@ int run_triangulate(const TriangulateOptions& options) {
   });
   if (result.mesh.triangles.empty())
     spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
-  // The derived outputs are computed before anything is written, so a grid that cannot be made writes nothing.
+  // Derived outputs are computed before anything is written: a grid that cannot be made writes nothing.
   std::optional<Raster> grid;
   std::vector<Contour> contours;
-  if (!options.grid_out.empty()) grid = timed(stats, "grid", [&] { return rasterise(result.mesh, options.cell); });
+  if (!options.grid_out.empty())
+    grid = timed(stats, "grid", [&] { return rasterise(result.mesh, options.cell); });
   if (!options.contours_out.empty())
     contours = timed(stats, "contours", [&] { return contour_lines(result.mesh, options.interval); });
   std::optional<Raster> preview;
   if (!options.preview.empty())
-    preview = timed(stats, "preview", [&] { return rasterise(result.mesh, preview_cell(result.mesh, 1000)); });
+    preview =
+        timed(stats, "preview", [&] { return rasterise(result.mesh, preview_cell(result.mesh, 1000)); });
   timed(stats, "write", [&] {
     write_mesh_file(result.mesh, l.crs, write, options.output);
     if (grid) write_ascii_grid_file(*grid, l.crs, options.grid_out);

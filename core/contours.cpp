@@ -1,7 +1,7 @@
 // Marching triangles, then chaining (rules in contours.hpp). Triangles are bucketed by the levels they cross
-// (a CSR list, each level's triangles in mesh order); levels are independent and run in parallel. Chaining goes through edge keys (the two vertex
-// indices), never through coordinates, so equal-looking points never join lines that do not meet.
-// Cost: O(triangles + segments), the chaining through a hash map per level.
+// (a CSR list, each level's triangles in mesh order); levels are independent and run in parallel. Chaining
+// goes through edge keys (the two vertex indices), never through coordinates, so equal-looking points never
+// join lines that do not meet. Cost: O(triangles + segments), the chaining through a hash map per level.
 #include "core/contours.hpp"
 
 #include <algorithm>
@@ -110,7 +110,8 @@ std::vector<Contour> contour_lines(const Mesh& mesh, double interval, uint64_t m
       z0 = std::min(z0, mesh.vertices.at(v).z);
       z1 = std::max(z1, mesh.vertices.at(v).z);
     }
-  if (std::fabs(z0 / interval) > 9e15 || std::fabs(z1 / interval) > 9e15 || (z1 - z0) / interval > double(max_levels))
+  if (std::fabs(z0 / interval) > 9e15 || std::fabs(z1 / interval) > 9e15 ||
+      (z1 - z0) / interval > double(max_levels))
     throw UsageError("contour interval " + std::to_string(interval) + " gives more than " +
                      std::to_string(max_levels) + " levels between " + std::to_string(z0) + " and " +
                      std::to_string(z1) + ": choose a larger --interval");

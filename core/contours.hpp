@@ -8,12 +8,12 @@
 // - A vertex with z >= level is above, z < level below: a vertex exactly at the level counts as above. A
 //   triangle with both kinds gives one segment between the two edges that join an above and a below vertex.
 // - The point on such an edge u (below) - v (above): v itself when v.z == level, else u + t * (v - u) with
-//   t = (level - u.z) / (v.z - u.z), computed from (u, v) in that order, so both triangles of the edge get the
-//   same double. Its z is the level.
+//   t = (level - u.z) / (v.z - u.z), computed from (u, v) in that order, so both triangles of the edge get
+//   the same double. Its z is the level.
 // - Segments are oriented with higher ground on the left (counter-clockwise around hills) and joined through
-//   shared edges: a line that reaches the mesh boundary is open, one that comes back is closed (its last point
-//   repeats its first). Consecutive equal points (where a vertex lies on the level) are written once; a line
-//   left with fewer than two distinct points is dropped.
+//   shared edges: a line that reaches the mesh boundary is open, one that comes back is closed (its last
+//   point repeats its first). Consecutive equal points (where a vertex lies on the level) are written once; a
+//   line left with fewer than two distinct points is dropped.
 // - Order: by level, then open lines before closed ones, each by the mesh index of the triangle of its first
 //   segment (a closed line starts in the first triangle it crosses).
 #pragma once

@@ -49,8 +49,10 @@ std::vector<float> hillshade(const Raster& dem) {
         return dr && dc ? axis(dr, 0) + axis(0, dc) - e : e;
       };
       // Row 0 is north: dz/dy (north positive) is the upper row minus the lower one.
-      const double dzdx = ((z(-1, 1) + 2 * z(0, 1) + z(1, 1)) - (z(-1, -1) + 2 * z(0, -1) + z(1, -1))) / (8 * g.cell);
-      const double dzdy = ((z(-1, -1) + 2 * z(-1, 0) + z(-1, 1)) - (z(1, -1) + 2 * z(1, 0) + z(1, 1))) / (8 * g.cell);
+      const double dzdx =
+          ((z(-1, 1) + 2 * z(0, 1) + z(1, 1)) - (z(-1, -1) + 2 * z(0, -1) + z(1, -1))) / (8 * g.cell);
+      const double dzdy =
+          ((z(-1, -1) + 2 * z(-1, 0) + z(-1, 1)) - (z(1, -1) + 2 * z(1, 0) + z(1, 1))) / (8 * g.cell);
       const double n = std::sqrt(dzdx * dzdx + dzdy * dzdy + 1);
       shade[row * g.ncols + col] = float(std::max(0.0, (-dzdx * lx - dzdy * ly + lz) / n));
     }

@@ -1,6 +1,6 @@
 // TIN to DEM grid (rules in raster.hpp). Triangles are bucketed by the rows their bounding box spans (a CSR
-// list, each row's triangles in mesh order), then rows are filled in parallel: each row walks its triangles in
-// order and claims the centres inside each one that no earlier triangle claimed. Cost: O(triangles + rows
+// list, each row's triangles in mesh order), then rows are filled in parallel: each row walks its triangles
+// in order and claims the centres inside each one that no earlier triangle claimed. Cost: O(triangles + rows
 // spanned + centres tested), centres tested being about twice the covered cells (bounding boxes, not
 // triangles); memory: the grid plus one index per (triangle, row) pair.
 #include "core/raster.hpp"
@@ -39,7 +39,8 @@ int64_t floor_index(double v, double cell) {
 GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells) {
   if (!(cell > 0) || !std::isfinite(cell))
     throw UsageError("the grid cell size must be a positive number, not " + std::to_string(cell));
-  if (mesh.triangles.empty()) throw UsageError("the mesh has no triangles: there is no surface to rasterise into a grid");
+  if (mesh.triangles.empty())
+    throw UsageError("the mesh has no triangles: there is no surface to rasterise into a grid");
   double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
   for (const Triangle& t : mesh.triangles)
     for (uint32_t v : t) {
@@ -50,7 +51,8 @@ GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells) {
   const double limit = 9e15;  // integer cell indices stay exact in double
   if (std::fabs(x0 / cell) > limit || std::fabs(x1 / cell) > limit || std::fabs(y0 / cell) > limit ||
       std::fabs(y1 / cell) > limit)
-    throw UsageError("the grid cell size " + std::to_string(cell) + " is too small for coordinates this large");
+    throw UsageError("the grid cell size " + std::to_string(cell) +
+                     " is too small for coordinates this large");
   GridSpec g;
   g.cell = cell;
   g.ix0 = floor_index(x0, cell);
@@ -58,9 +60,9 @@ GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells) {
   g.ncols = uint64_t(ceil_index(x1, cell) - g.ix0 + 1);
   g.nrows = uint64_t(ceil_index(y1, cell) - g.iy0 + 1);
   if (double(g.ncols) * double(g.nrows) > double(max_cells))
-    throw UsageError("a grid of cell size " + std::to_string(cell) + " would have " + std::to_string(g.ncols) +
-                     " x " + std::to_string(g.nrows) + " cells (at most " + std::to_string(max_cells) +
-                     "): choose a larger --cell");
+    throw UsageError("a grid of cell size " + std::to_string(cell) + " would have " +
+                     std::to_string(g.ncols) + " x " + std::to_string(g.nrows) + " cells (at most " +
+                     std::to_string(max_cells) + "): choose a larger --cell");
   return g;
 }
 
@@ -94,7 +96,8 @@ Raster rasterise(const Mesh& mesh, const GridSpec& g) {
     const Triangle& tri = mesh.triangles[t];
     const Point3 &a = mesh.vertices.at(tri[0]), &b = mesh.vertices.at(tri[1]), &c = mesh.vertices.at(tri[2]);
     const int64_t ix0 = std::max(ceil_index(std::min({a.x, b.x, c.x}), g.cell), g.ix0);
-    const int64_t ix1 = std::min(floor_index(std::max({a.x, b.x, c.x}), g.cell), g.ix0 + int64_t(g.ncols) - 1);
+    const int64_t ix1 =
+        std::min(floor_index(std::max({a.x, b.x, c.x}), g.cell), g.ix0 + int64_t(g.ncols) - 1);
     const int64_t iy0 = std::max(ceil_index(std::min({a.y, b.y, c.y}), g.cell), g.iy0);
     const int64_t iy1 = std::min(floor_index(std::max({a.y, b.y, c.y}), g.cell), top);
     if (ix0 > ix1 || iy0 > iy1) continue;
@@ -127,7 +130,8 @@ Raster rasterise(const Mesh& mesh, const GridSpec& g) {
       for (uint64_t col = span[t].c0; col <= span[t].c1; ++col) {
         if (claimed[col]) continue;
         const pred::XY p{g.x(col), y};
-        if (pred::orient2d({a.x, a.y}, {b.x, b.y}, p) * o < 0 || pred::orient2d({b.x, b.y}, {c.x, c.y}, p) * o < 0 ||
+        if (pred::orient2d({a.x, a.y}, {b.x, b.y}, p) * o < 0 ||
+            pred::orient2d({b.x, b.y}, {c.x, c.y}, p) * o < 0 ||
             pred::orient2d({c.x, c.y}, {a.x, a.y}, p) * o < 0)
           continue;
         claimed[col] = true;

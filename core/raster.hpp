@@ -8,10 +8,12 @@
 // - Cell centres lie at integer multiples of the cell size: column c is x = (ix0 + c) * cell, row r (0 = the
 //   northmost) is y = (iy0 + nrows - 1 - r) * cell, each one product in double. The grid covers the mesh's
 //   bounding box, snapped outward to the next multiples.
-// - A centre belongs to the first triangle, in the mesh's order, that contains it (its closed triangle, decided
+// - A centre belongs to the first triangle, in the mesh's order, that contains it (its closed triangle,
+// decided
 //   by exact orient2d): a centre on an edge or a vertex shared by several triangles takes the one with the
 //   smallest index. Centres in no triangle get Raster::nodata.
-// - Its value is interpolate(a, b, c, x, y) over that triangle's vertices in the stored order: the one formula
+// - Its value is interpolate(a, b, c, x, y) over that triangle's vertices in the stored order: the one
+// formula
 //   below, evaluated left to right in double without fused multiply-add (the build sets -ffp-contract=off);
 //   a centre exactly at a vertex takes that vertex's z, so a grid DEM comes back unchanged at its own cells.
 #pragma once

@@ -20,7 +20,8 @@ namespace cdtgpu {
 void write_ascii_grid(const Raster& raster, std::ostream& out);
 void write_ascii_grid_file(const Raster& raster, const Crs& crs, const std::string& path);
 
-// One "LINESTRING Z (x y z, ...)" line per contour, in the order given; a closed contour repeats its first point.
+// One "LINESTRING Z (x y z, ...)" line per contour, in the order given; a closed contour repeats its first
+// point.
 void write_contours_wkt(const std::vector<Contour>& lines, std::ostream& out);
 // A GeoJSON FeatureCollection: one LineString feature per contour with properties "level" and "closed", and
 // (GeoJSON 2008 style, which GDAL and QGIS honour) a "crs" member naming the EPSG code when there is one.

@@ -3,7 +3,8 @@
 //   SMS 2DM (QGIS mesh layers through MDAL, hydraulic models such as TUFLOW and HEC-RAS 2D).
 // Usage: write_mesh / write_mesh_file dispatch here for .xml and .2dm; read_mesh_file reads both back.
 //   std::ofstream f("tin.xml");
-//   write_landxml(mesh, crs, std::time(nullptr), f);   // <P id="1">northing easting elevation</P>, <F>1 2 3</F>
+//   write_landxml(mesh, crs, std::time(nullptr), f);   // <P id="1">northing easting elevation</P>, <F>1 2
+//   3</F>
 #pragma once
 #include <ctime>
 #include <ostream>
@@ -34,7 +35,8 @@ void write_2dm(const Mesh& mesh, const Crs& crs, std::ostream& out);
 Mesh read_landxml(const std::string& path, std::string_view text);
 Mesh read_2dm(const std::string& path, std::string_view text);
 
-// mesh.triangles[t], after checking its indices: a bad mesh throws part way and the atomic write leaves no file.
+// mesh.triangles[t], after checking its indices: a bad mesh throws part way and the atomic write leaves no
+// file.
 inline const Triangle& checked_triangle(const Mesh& mesh, size_t t) {
   const Triangle& tri = mesh.triangles[t];
   for (uint32_t v : tri)

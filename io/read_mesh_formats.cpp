@@ -63,8 +63,11 @@ struct Ids {
 // The text of each <tag ...>text</tag> inside [from, to), with the position of its start.
 template <class F>
 void for_elements(std::string_view text, std::string_view tag, size_t from, size_t to, F&& f) {
-  const std::string open = "<" + std::string(tag);
-  const std::string close = "</" + std::string(tag) + ">";
+  // Built with += : GCC 12 gives a false -Wrestrict warning on "<" + std::string(...) here.
+  std::string open = "<", close = "</";
+  open += tag;
+  close += tag;
+  close += '>';
   size_t pos = from;
   while ((pos = text.find(open, pos)) != std::string_view::npos && pos < to) {
     const size_t after = pos + open.size();
@@ -85,7 +88,8 @@ void for_elements(std::string_view text, std::string_view tag, size_t from, size
 Mesh read_landxml(const std::string& path, std::string_view text) {
   Mesh mesh;
   const size_t pnts = text.find("<Pnts");
-  if (pnts == std::string_view::npos) throw InputError(path, 0, "no <Pnts> element (not a LandXML TIN surface)");
+  if (pnts == std::string_view::npos)
+    throw InputError(path, 0, "no <Pnts> element (not a LandXML TIN surface)");
   const size_t pnts_end = text.find("</Pnts>", pnts);
   if (pnts_end == std::string_view::npos) throw InputError(path, line_of(text, pnts), "<Pnts> is not closed");
   Ids ids;
@@ -99,7 +103,8 @@ Mesh read_landxml(const std::string& path, std::string_view text) {
       Tokens tk{body};
       double n = 0, e = 0, z = 0;
       if (!parse(tk.next(), n) || !parse(tk.next(), e) || !parse(tk.next(), z) || !tk.done())
-        throw InputError(path, line_of(text, at), "<P> must hold three finite numbers: northing easting elevation");
+        throw InputError(path, line_of(text, at),
+                         "<P> must hold three finite numbers: northing easting elevation");
       if (!ids.add(id, uint32_t(mesh.vertices.size())))
         throw InputError(path, line_of(text, at), "point id " + std::to_string(id) + " given twice");
       mesh.vertices.push_back({e, n, z});
@@ -107,14 +112,17 @@ Mesh read_landxml(const std::string& path, std::string_view text) {
     const size_t faces = text.find("<Faces", pnts_end);
     if (faces == std::string_view::npos) return mesh;
     const size_t faces_end = text.find("</Faces>", faces);
-    if (faces_end == std::string_view::npos) throw InputError(path, line_of(text, faces), "<Faces> is not closed");
+    if (faces_end == std::string_view::npos)
+      throw InputError(path, line_of(text, faces), "<Faces> is not closed");
     for_elements(text, "F", faces, faces_end, [&](std::string_view, std::string_view body, size_t at) {
       Tokens tk{body};
       Triangle tri{};
       for (uint32_t& v : tri) {
         uint64_t id = 0;
         if (!parse(tk.next(), id)) throw InputError(path, line_of(text, at), "<F> must hold three point ids");
-        if (!ids.find(id, v)) throw InputError(path, line_of(text, at), "<F> names point id " + std::to_string(id) + ", which is not in <Pnts>");
+        if (!ids.find(id, v))
+          throw InputError(path, line_of(text, at),
+                           "<F> names point id " + std::to_string(id) + ", which is not in <Pnts>");
       }
       if (!tk.done()) throw InputError(path, line_of(text, at), "<F> must hold three point ids");
       mesh.triangles.push_back(tri);
@@ -168,7 +176,8 @@ Mesh read_2dm(const std::string& path, std::string_view text) {
         throw InputError(path, line_no, "E3T must be followed by id n1 n2 n3");
       faces.push_back(f);
     } else if (card[0] == 'E' && card.size() == 3 && card != "E2L") {
-      throw InputError(path, line_no, "element " + std::string(card) + " is not a triangle (only E3T is read)");
+      throw InputError(path, line_no,
+                       "element " + std::string(card) + " is not a triangle (only E3T is read)");
     }
   }
   if (!header) throw InputError(path, 0, "empty file (a 2DM mesh starts with MESH2D)");
@@ -176,7 +185,8 @@ Mesh read_2dm(const std::string& path, std::string_view text) {
     Triangle tri{};
     for (int k = 0; k < 3; ++k)
       if (!ids.find(f.id[k], tri[k]))
-        throw InputError(path, f.line, "E3T names node " + std::to_string(f.id[k]) + ", which has no ND card");
+        throw InputError(path, f.line,
+                         "E3T names node " + std::to_string(f.id[k]) + ", which has no ND card");
     mesh.triangles.push_back(tri);
   }
   return mesh;

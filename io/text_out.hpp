@@ -46,8 +46,9 @@ class TextOut {
     const double a = std::fabs(v);
     if (a >= 1e-4 && a < 1e16) {
       if (n_ + 48 > buf_.size()) flush();
-      n_ = size_t(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v, std::chars_format::fixed).ptr -
-                  buf_.data());
+      n_ =
+          size_t(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v, std::chars_format::fixed).ptr -
+                 buf_.data());
       return *this;
     }
     return chars(v);

@@ -20,7 +20,15 @@ void write_2dm(const Mesh& mesh, const Crs& crs, std::ostream& out) {
   o.text("NUM_MATERIALS_PER_ELEM 1\n");
   for (size_t v = 0; v < mesh.vertices.size(); ++v) {
     const Point3& p = mesh.vertices[v];
-    o.text("ND ").number(uint64_t(v) + 1).ch(' ').number(p.x).ch(' ').number(p.y).ch(' ').number(p.z).ch('\n');
+    o.text("ND ")
+        .number(uint64_t(v) + 1)
+        .ch(' ')
+        .number(p.x)
+        .ch(' ')
+        .number(p.y)
+        .ch(' ')
+        .number(p.z)
+        .ch('\n');
   }
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const Triangle& tri = checked_triangle(mesh, t);

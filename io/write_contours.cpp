@@ -1,6 +1,6 @@
-// Contour lines as WKT, one LINESTRING Z per line (QGIS opens it as a delimited-text layer with "no field names"
-// and the WKT in field 1), or as GeoJSON (GDAL, QGIS and web maps open it directly, with the level as an
-// attribute).
+// Contour lines as WKT, one LINESTRING Z per line (QGIS opens it as a delimited-text layer with "no field
+// names" and the WKT in field 1), or as GeoJSON (GDAL, QGIS and web maps open it directly, with the level as
+// an attribute).
 #include <cctype>
 #include <filesystem>
 
@@ -52,8 +52,10 @@ void write_contours_wkt_file(const std::vector<Contour>& lines, const Crs& crs, 
   for (char& ch : ext) ch = char(std::tolower(static_cast<unsigned char>(ch)));
   const bool geojson = ext == ".geojson" || ext == ".json";
   write_file_atomically(path, [&](std::ostream& out) {
-    if (geojson) write_contours_geojson(lines, crs, out);
-    else write_contours_wkt(lines, out);
+    if (geojson)
+      write_contours_geojson(lines, crs, out);
+    else
+      write_contours_wkt(lines, out);
   });
   write_prj_beside(path, crs);
 }

@@ -18,14 +18,29 @@ std::string xml_attribute(const std::string& s) {
   r.reserve(s.size());
   for (char c : s) {
     switch (c) {
-      case '&': r += "&amp;"; break;
-      case '<': r += "&lt;"; break;
-      case '>': r += "&gt;"; break;
-      case '"': r += "&quot;"; break;
-      case '\n': r += "&#10;"; break;
-      case '\r': r += "&#13;"; break;
-      case '\t': r += "&#9;"; break;
-      default: r += c;
+      case '&':
+        r += "&amp;";
+        break;
+      case '<':
+        r += "&lt;";
+        break;
+      case '>':
+        r += "&gt;";
+        break;
+      case '"':
+        r += "&quot;";
+        break;
+      case '\n':
+        r += "&#10;";
+        break;
+      case '\r':
+        r += "&#13;";
+        break;
+      case '\t':
+        r += "&#9;";
+        break;
+      default:
+        r += c;
     }
   }
   return r;
@@ -51,17 +66,19 @@ void write_landxml(const Mesh& mesh, const Crs& crs, std::time_t stamp, std::ost
 
   TextOut o(out);
   o.text("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-  o.text("<LandXML xmlns=\"http://www.landxml.org/schema/LandXML-1.2\" "
-         "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
-         "xsi:schemaLocation=\"http://www.landxml.org/schema/LandXML-1.2 "
-         "http://www.landxml.org/schema/LandXML-1.2/LandXML-1.2.xsd\" version=\"1.2\" date=\"")
+  o.text(
+       "<LandXML xmlns=\"http://www.landxml.org/schema/LandXML-1.2\" "
+       "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
+       "xsi:schemaLocation=\"http://www.landxml.org/schema/LandXML-1.2 "
+       "http://www.landxml.org/schema/LandXML-1.2/LandXML-1.2.xsd\" version=\"1.2\" date=\"")
       .text(date)
       .text("\" time=\"")
       .text(time)
       .text("\">\n");
-  o.text("  <Units>\n    <Metric areaUnit=\"squareMeter\" linearUnit=\"meter\" volumeUnit=\"cubicMeter\" "
-         "temperatureUnit=\"celsius\" pressureUnit=\"milliBars\" angularUnit=\"decimal degrees\" "
-         "directionUnit=\"decimal degrees\"/>\n  </Units>\n");
+  o.text(
+      "  <Units>\n    <Metric areaUnit=\"squareMeter\" linearUnit=\"meter\" volumeUnit=\"cubicMeter\" "
+      "temperatureUnit=\"celsius\" pressureUnit=\"milliBars\" angularUnit=\"decimal degrees\" "
+      "directionUnit=\"decimal degrees\"/>\n  </Units>\n");
   if (crs.projected || crs.epsg || !crs.wkt.empty()) {
     o.text("  <CoordinateSystem");
     if (!crs.name.empty()) o.text(" name=\"").text(xml_attribute(crs.name)).ch('"');

@@ -24,8 +24,8 @@ const char* encode(png_structp png, png_infop info, uint64_t width, uint64_t hei
                    std::ostream* out) {
   if (setjmp(png_jmpbuf(png))) return "libpng failed to encode the image";
   png_set_write_fn(png, out, on_write, on_flush);
-  png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), 8, PNG_COLOR_TYPE_RGB_ALPHA, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), 8, PNG_COLOR_TYPE_RGB_ALPHA,
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
   for (uint64_t row = 0; row < height; ++row) png_write_row(png, rgba + row * width * 4);
   png_write_end(png, nullptr);
@@ -36,7 +36,8 @@ const char* encode(png_structp png, png_infop info, uint64_t width, uint64_t hei
 
 void write_png(uint64_t width, uint64_t height, const std::vector<uint8_t>& rgba, std::ostream& out) {
   if (width == 0 || height == 0 || width > 0x7fffffff || height > 0x7fffffff)
-    throw std::runtime_error("PNG size " + std::to_string(width) + " x " + std::to_string(height) + " is not valid");
+    throw std::runtime_error("PNG size " + std::to_string(width) + " x " + std::to_string(height) +
+                             " is not valid");
   if (rgba.size() != width * height * 4) throw std::runtime_error("PNG pixel buffer has the wrong size");
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   if (!png) throw std::runtime_error("libpng: cannot create a write structure");
@@ -51,7 +52,8 @@ void write_png(uint64_t width, uint64_t height, const std::vector<uint8_t>& rgba
   if (!out) throw std::runtime_error("write failed");
 }
 
-void write_png_file(const std::string& path, uint64_t width, uint64_t height, const std::vector<uint8_t>& rgba) {
+void write_png_file(const std::string& path, uint64_t width, uint64_t height,
+                    const std::vector<uint8_t>& rgba) {
   write_file_atomically(path, [&](std::ostream& out) { write_png(width, height, rgba, out); });
 }
 

@@ -9,6 +9,7 @@
 namespace cdtgpu {
 
 void write_png(uint64_t width, uint64_t height, const std::vector<uint8_t>& rgba, std::ostream& out);
-void write_png_file(const std::string& path, uint64_t width, uint64_t height, const std::vector<uint8_t>& rgba);
+void write_png_file(const std::string& path, uint64_t width, uint64_t height,
+                    const std::vector<uint8_t>& rgba);
 
 }  // namespace cdtgpu

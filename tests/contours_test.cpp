@@ -1,23 +1,23 @@
 // Contour lines (core/contours): a plane gives one straight line per level at the closed-form position with
-// higher ground on the left; a cone z = r gives one closed ring per level, through the mesh's vertices when the
-// level is a ring's height; vertices exactly at a level count as above; the WKT text is exact.
+// higher ground on the left; a cone z = r gives one closed ring per level, through the mesh's vertices when
+// the level is a ring's height; vertices exactly at a level count as above; the WKT text is exact.
+#include "core/contours.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
 
 #include "core/cdt_cgal.hpp"
-#include "core/contours.hpp"
 #include "core/error.hpp"
 #include "core/prepare.hpp"
 #include "core/projection.hpp"
-#include "io/readers.hpp"
 #include "io/gis_writers.hpp"
-
-#include <nlohmann/json.hpp>
+#include "io/readers.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -35,7 +35,8 @@ TEST(Contours, APlaneGivesOneStraightLinePerLevelWithHigherGroundOnTheLeft) {
   for (int i = 0; i <= 30; ++i)
     for (int j = 0; j <= 30; ++j) {
       s = s * 6364136223846793005ull + 1442695040888963407ull;
-      const double x = 500000 + i * 10 + double((s >> 40) % 100) / 16, y = 6000000 + j * 10 + double((s >> 20) % 100) / 16;
+      const double x = 500000 + i * 10 + double((s >> 40) % 100) / 16,
+                   y = 6000000 + j * 10 + double((s >> 20) % 100) / 16;
       in.points.push_back({x, y, plane(x - 500000, y - 6000000)});
     }
   const Mesh m = triangulate_cgal(prepare(in)).mesh;
@@ -63,7 +64,8 @@ TEST(Contours, APlaneGivesOneStraightLinePerLevelWithHigherGroundOnTheLeft) {
   }
 }
 
-// Centre z = 0, rings of radius k = 1..6 with z = k, n points each at the same angles; triangles between rings.
+// Centre z = 0, rings of radius k = 1..6 with z = k, n points each at the same angles; triangles between
+// rings.
 Mesh cone(uint32_t n) {
   Mesh m;
   m.vertices.push_back({0, 0, 0});

@@ -1,6 +1,8 @@
-// The --preview picture (core/hillshade, io/write_png): a plane gets Lambert's shade of its normal everywhere,
-// a slope facing the light is brighter than one facing away, NODATA is transparent, and the PNG of the sample
-// reads back through libpng at about 1000 pixels on the long side with the grid's pixels.
+// The --preview picture (core/hillshade, io/write_png): a plane gets Lambert's shade of its normal
+// everywhere, a slope facing the light is brighter than one facing away, NODATA is transparent, and the PNG
+// of the sample reads back through libpng at about 1000 pixels on the long side with the grid's pixels.
+#include "core/hillshade.hpp"
+
 #include <gtest/gtest.h>
 #include <png.h>
 #include <unistd.h>
@@ -10,7 +12,6 @@
 #include <numbers>
 
 #include "core/cdt_cgal.hpp"
-#include "core/hillshade.hpp"
 #include "core/prepare.hpp"
 #include "core/projection.hpp"
 #include "io/readers.hpp"
@@ -60,7 +61,8 @@ TEST(Hillshade, TheSamplePreviewReadsBackThroughLibpng) {
   EXPECT_LE(std::max(w, h), 1002u);
   const std::vector<uint8_t> rgba = hillshade_rgba(dem);
   const std::string path =
-      (std::filesystem::temp_directory_path() / ("cdtgpu_preview_" + std::to_string(::getpid()) + ".png")).string();
+      (std::filesystem::temp_directory_path() / ("cdtgpu_preview_" + std::to_string(::getpid()) + ".png"))
+          .string();
   write_png_file(path, w, h, rgba);
 
   png_image image{};
@@ -86,14 +88,16 @@ TEST(Hillshade, EdgesAreDrawnOnTheirPixelsAndClipped) {
   const Raster dem = rasterise(plane_mesh(0.1, 0.1), 1);  // centres 0 .. 100 both ways, row 0 at y = 100
   std::vector<uint8_t> rgba = hillshade_rgba(dem);
   const std::vector<uint8_t> before = rgba;
-  const std::vector<Point3> v = {{10, 20, 0}, {30, 20, 0}, {50, -500, 0}, {50, 500, 0}, {-9, -9, 0}, {-5, -1, 0}};
+  const std::vector<Point3> v = {{10, 20, 0},  {30, 20, 0}, {50, -500, 0},
+                                 {50, 500, 0}, {-9, -9, 0}, {-5, -1, 0}};
   draw_edges(rgba, dem.spec, v, {{0, 1}, {2, 3}, {4, 5}});
   const uint64_t w = dem.spec.ncols;
   auto dark = [&](uint64_t row, uint64_t col) { return rgba[(row * w + col) * 4 + 2] == 90; };
   for (uint64_t col = 10; col <= 30; ++col) EXPECT_TRUE(dark(80, col)) << col;  // y = 20 is row 80
   EXPECT_FALSE(dark(80, 9));
   EXPECT_FALSE(dark(80, 31));
-  for (uint64_t row = 0; row < dem.spec.nrows; ++row) EXPECT_TRUE(dark(row, 50)) << row;  // clipped, whole column
+  for (uint64_t row = 0; row < dem.spec.nrows; ++row)
+    EXPECT_TRUE(dark(row, 50)) << row;  // clipped, whole column
   size_t changed = 0;
   for (size_t i = 0; i < rgba.size(); i += 4) changed += rgba[i + 2] != before[i + 2];
   EXPECT_EQ(changed, 21u + dem.spec.nrows - 1);  // the two lines cross once; the third is off the picture

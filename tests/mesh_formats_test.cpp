@@ -2,6 +2,8 @@
 // well-formed document (xmllint, when installed), a LandXML point list read back by a reader written here
 // (not the library's), bit-exact round trips through read_mesh_file, the CRS in the file and the .prj beside
 // it, whole-or-nothing files, and errors naming the file and line.
+#include "io/mesh_formats.hpp"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -17,7 +19,6 @@
 
 #include "core/error.hpp"
 #include "core/projection.hpp"
-#include "io/mesh_formats.hpp"
 #include "io/writers.hpp"
 
 namespace cdtgpu {
@@ -29,7 +30,8 @@ class MeshFormatsTest : public ::testing::Test {
  protected:
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() / ("cdtgpu_meshformats_" + std::to_string(::getpid()) + "_" + info->name());
+    dir_ =
+        fs::temp_directory_path() / ("cdtgpu_meshformats_" + std::to_string(::getpid()) + "_" + info->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -60,7 +62,8 @@ void expect_identical(const Mesh& a, const Mesh& b, const std::string& what) {
 
 Mesh small_mesh() {
   Mesh m;
-  m.vertices = {{500000, 6000000, 10.5}, {500010, 6000000, 11}, {500000.25, 6000010, 12}, {500010, 6000010, -0.1}};
+  m.vertices = {
+      {500000, 6000000, 10.5}, {500010, 6000000, 11}, {500000.25, 6000010, 12}, {500010, 6000010, -0.1}};
   m.triangles = {{0, 1, 2}, {1, 3, 2}};
   return m;
 }
@@ -84,10 +87,13 @@ Mesh random_mesh(size_t n, uint64_t seed) {
   Mesh m;
   for (size_t i = 0; i < n; ++i) {
     double d[3];
-    for (double& v : d) do v = std::bit_cast<double>(rng());
+    for (double& v : d) do
+        v = std::bit_cast<double>(rng());
       while (!std::isfinite(v));
-    if (i % 2) m.vertices.push_back({d[0], d[1], d[2]});
-    else m.vertices.push_back({double(rng() % 1000000000) / 1000, double(rng() % 7000000000) / 1000, 1.5});
+    if (i % 2)
+      m.vertices.push_back({d[0], d[1], d[2]});
+    else
+      m.vertices.push_back({double(rng() % 1000000000) / 1000, double(rng() % 7000000000) / 1000, 1.5});
   }
   for (uint32_t i = 0; i + 2 < n; ++i) m.triangles.push_back({i, i + 2, i + 1});
   return m;
@@ -174,13 +180,16 @@ TEST_F(MeshFormatsTest, LandXmlRecordsTheEpsgCodeAndEscapesTheWkt) {
   const Crs crs = mga56();
   ASSERT_EQ(crs.epsg, 7856);
   const std::string xml = landxml_text(small_mesh(), crs);
-  EXPECT_NE(xml.find("<CoordinateSystem name=\"GDA2020 / MGA zone 56\" epsgCode=\"7856\" ogcWktCode=\"PROJCS[&quot;"),
-            std::string::npos)
+  EXPECT_NE(
+      xml.find(
+          "<CoordinateSystem name=\"GDA2020 / MGA zone 56\" epsgCode=\"7856\" ogcWktCode=\"PROJCS[&quot;"),
+      std::string::npos)
       << xml.substr(0, 1500);
   Crs odd;
   odd.projected = true;
   odd.name = "a<b & \"c\"\nd";
-  EXPECT_NE(landxml_text(small_mesh(), odd).find("name=\"a&lt;b &amp; &quot;c&quot;&#10;d\""), std::string::npos);
+  EXPECT_NE(landxml_text(small_mesh(), odd).find("name=\"a&lt;b &amp; &quot;c&quot;&#10;d\""),
+            std::string::npos);
 }
 
 TEST_F(MeshFormatsTest, LandXmlIsWellFormed) {
@@ -195,17 +204,21 @@ TEST_F(MeshFormatsTest, LandXmlIsWellFormed) {
   const Mesh m = random_mesh(300, 5);
   std::ofstream(path("big.xml")) << landxml_text(m, mga56());
   auto xpath = [&](const std::string& expr) {
-    const std::string c = "xmllint --xpath \"" + expr + "\" " + path("big.xml") + " >" + path("out.txt") + " 2>&1";
+    const std::string c =
+        "xmllint --xpath \"" + expr + "\" " + path("big.xml") + " >" + path("out.txt") + " 2>&1";
     EXPECT_EQ(std::system(c.c_str()), 0) << expr << ": " << slurp(path("out.txt"));
     std::string r = slurp(path("out.txt"));
     while (!r.empty() && r.back() == '\n') r.pop_back();
     return r;
   };
   const std::string ns = "[namespace-uri()='http://www.landxml.org/schema/LandXML-1.2']";
-  EXPECT_EQ(xpath("count(/*[local-name()='LandXML']" + ns + "/*[local-name()='Surfaces']/*[local-name()='Surface'])"), "1");
+  EXPECT_EQ(xpath("count(/*[local-name()='LandXML']" + ns +
+                  "/*[local-name()='Surfaces']/*[local-name()='Surface'])"),
+            "1");
   EXPECT_EQ(xpath("string(//*[local-name()='Definition']/@surfType)"), "TIN");
   EXPECT_EQ(xpath("count(//*[local-name()='Pnts']/*[local-name()='P'])"), std::to_string(m.vertices.size()));
-  EXPECT_EQ(xpath("count(//*[local-name()='Faces']/*[local-name()='F'])"), std::to_string(m.triangles.size()));
+  EXPECT_EQ(xpath("count(//*[local-name()='Faces']/*[local-name()='F'])"),
+            std::to_string(m.triangles.size()));
   EXPECT_EQ(xpath("string(//*[local-name()='CoordinateSystem']/@epsgCode)"), "7856");
   EXPECT_EQ(xpath("string(//*[local-name()='Metric']/@linearUnit)"), "meter");
 }
@@ -222,7 +235,8 @@ TEST_F(MeshFormatsTest, TwoDmTextIsExact) {
   write_2dm(small_mesh(), mga56(), out);
   EXPECT_EQ(out.str(),
             "MESH2D\nMESHNAME \"GDA2020 / MGA zone 56\"\nNUM_MATERIALS_PER_ELEM 1\n"
-            "ND 1 500000 6000000 10.5\nND 2 500010 6000000 11\nND 3 500000.25 6000010 12\nND 4 500010 6000010 -0.1\n"
+            "ND 1 500000 6000000 10.5\nND 2 500010 6000000 11\nND 3 500000.25 6000010 12\nND 4 500010 "
+            "6000010 -0.1\n"
             "E3T 1 1 2 3 1\nE3T 2 2 4 3 1\n");
 }
 
@@ -263,24 +277,28 @@ TEST_F(MeshFormatsTest, ReadersNameTheFileAndLine) {
     }
     return "no error";
   };
-  EXPECT_NE(message("a.2dm", "MESH2D\nND 1 0 0 0\nND 2 1 0 0\nE3T 1 1 2 3 1\n").find("a.2dm:4: E3T names node 3"),
-            std::string::npos);
+  EXPECT_NE(
+      message("a.2dm", "MESH2D\nND 1 0 0 0\nND 2 1 0 0\nE3T 1 1 2 3 1\n").find("a.2dm:4: E3T names node 3"),
+      std::string::npos);
   EXPECT_NE(message("b.2dm", "MESH2D\nND 1 0 zero 0\n").find("b.2dm:2: ND must be followed by id x y z"),
             std::string::npos);
-  EXPECT_NE(message("c.2dm", "ND 1 0 0 0\n").find("c.2dm:1: a 2DM mesh starts with MESH2D"), std::string::npos);
+  EXPECT_NE(message("c.2dm", "ND 1 0 0 0\n").find("c.2dm:1: a 2DM mesh starts with MESH2D"),
+            std::string::npos);
   EXPECT_NE(message("d.2dm", "MESH2D\nE4Q 1 1 2 3 4 1\n").find("d.2dm:2: element E4Q is not a triangle"),
             std::string::npos);
   EXPECT_NE(message("a.xml", "<LandXML>\n<Pnts>\n<P id=\"1\">0 0</P>\n</Pnts></LandXML>\n")
                 .find("a.xml:3: <P> must hold three finite numbers"),
             std::string::npos);
-  EXPECT_NE(message("b.xml", "<LandXML>\n<Pnts>\n<P id=\"1\">0 0 0</P>\n</Pnts>\n<Faces>\n<F>1 1 2</F>\n</Faces>\n")
-                .find("b.xml:6: <F> names point id 2"),
-            std::string::npos);
+  EXPECT_NE(
+      message("b.xml", "<LandXML>\n<Pnts>\n<P id=\"1\">0 0 0</P>\n</Pnts>\n<Faces>\n<F>1 1 2</F>\n</Faces>\n")
+          .find("b.xml:6: <F> names point id 2"),
+      std::string::npos);
   EXPECT_NE(message("c.xml", "<LandXML/>\n").find("no <Pnts>"), std::string::npos);
 }
 
 TEST_F(MeshFormatsTest, TwoDmNodesMayFollowTheirElementsAndIdsNeedNotStartAtOne) {
-  std::ofstream(path("x.2dm")) << "MESH2D\r\nE3T 5 30 10 20 1\r\nND 10 0 0 1\r\nND 20 1 0 2\r\nND 30 0 1 3\r\n";
+  std::ofstream(path("x.2dm"))
+      << "MESH2D\r\nE3T 5 30 10 20 1\r\nND 10 0 0 1\r\nND 20 1 0 2\r\nND 30 0 1 3\r\n";
   const Mesh m = read_mesh_file(path("x.2dm"));
   ASSERT_EQ(m.vertices.size(), 3u);
   EXPECT_EQ(m.vertices[2], (Point3{0, 1, 3}));

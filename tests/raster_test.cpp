@@ -1,10 +1,11 @@
-// The DEM grid of a TIN (core/raster): a plane comes back as the plane at every cell, the sample's grid equals
-// a brute-force interpolation written here (every triangle tried in order, CGAL's orientation for the
+// The DEM grid of a TIN (core/raster): a plane comes back as the plane at every cell, the sample's grid
+// equals a brute-force interpolation written here (every triangle tried in order, CGAL's orientation for the
 // point-in-triangle test), the first triangle in mesh order wins a shared centre, the grid's extent is the
 // bounding box snapped outward, and the ESRI ASCII grid reads back through cdtgpu's own grid reader.
-#include <gtest/gtest.h>
+#include "core/raster.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <gtest/gtest.h>
 
 #include <bit>
 #include <charconv>
@@ -15,7 +16,6 @@
 #include "core/error.hpp"
 #include "core/prepare.hpp"
 #include "core/projection.hpp"
-#include "core/raster.hpp"
 #include "io/gis_writers.hpp"
 #include "io/readers.hpp"
 
@@ -48,8 +48,8 @@ double plane_through(const Point3& a, const Point3& b, const Point3& c, double x
 
 bool inside(const Point3& a, const Point3& b, const Point3& c, double x, double y) {
   const K::Point_2 pa(a.x, a.y), pb(b.x, b.y), pc(c.x, c.y), p(x, y);
-  return CGAL::orientation(pa, pb, p) != CGAL::RIGHT_TURN && CGAL::orientation(pb, pc, p) != CGAL::RIGHT_TURN &&
-         CGAL::orientation(pc, pa, p) != CGAL::RIGHT_TURN;
+  return CGAL::orientation(pa, pb, p) != CGAL::RIGHT_TURN &&
+         CGAL::orientation(pb, pc, p) != CGAL::RIGHT_TURN && CGAL::orientation(pc, pa, p) != CGAL::RIGHT_TURN;
 }
 
 double brute_force(const Mesh& m, double x, double y) {
@@ -64,8 +64,8 @@ double brute_force(const Mesh& m, double x, double y) {
 }
 
 TEST(Raster, APlaneComesBackAsThePlaneAtEveryCell) {
-  // Vertices on z = 0.25 x - 0.5 y + 100, coordinates on a 1/8 lattice so z is exact at every vertex; UTM-sized
-  // offsets so the rounding of large coordinates is exercised.
+  // Vertices on z = 0.25 x - 0.5 y + 100, coordinates on a 1/8 lattice so z is exact at every vertex;
+  // UTM-sized offsets so the rounding of large coordinates is exercised.
   for (double x0 : {0.0, 500000.0}) {
     const double y0 = x0 ? 6000000.0 : 0.0;
     auto plane = [&](double x, double y) { return 0.25 * (x - x0) - 0.5 * (y - y0) + 100; };
@@ -74,7 +74,8 @@ TEST(Raster, APlaneComesBackAsThePlaneAtEveryCell) {
     for (int i = 0; i <= 40; ++i)
       for (int j = 0; j <= 30; ++j) {
         s = s * 6364136223846793005ull + 1442695040888963407ull;
-        const double x = x0 + i * 2.5 + double((s >> 40) % 9) / 8, y = y0 + j * 3 + double((s >> 20) % 11) / 8;
+        const double x = x0 + i * 2.5 + double((s >> 40) % 9) / 8,
+                     y = y0 + j * 3 + double((s >> 20) % 11) / 8;
         in.points.push_back({x, y, plane(x, y)});
       }
     const Mesh m = triangulate(in);
@@ -137,14 +138,16 @@ TEST(Raster, AGridDemComesBackUnchangedAtItsOwnCells) {
   EXPECT_EQ(r.spec.y(29), 6200000);
   for (size_t i = 0; i < want.size(); ++i) {
     if (want[i] == Raster::nodata) continue;  // the hole is triangulated over: interpolated, not NODATA
-    EXPECT_EQ(std::bit_cast<uint64_t>(r.z[i]), std::bit_cast<uint64_t>(want[i])) << i << ": " << r.z[i] << " vs " << want[i];
+    EXPECT_EQ(std::bit_cast<uint64_t>(r.z[i]), std::bit_cast<uint64_t>(want[i]))
+        << i << ": " << r.z[i] << " vs " << want[i];
   }
 }
 
 TEST(Raster, TheGridIsTheBoundingBoxSnappedOutward) {
   const Mesh m = katoomba();
   double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
-  for (const Point3& p : m.vertices) x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+  for (const Point3& p : m.vertices)
+    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
   for (double cell : {1.0, 7.5, 20.0, 0.3}) {
     const GridSpec g = grid_for(m, cell);
     const double west = g.x(0), east = g.x(g.ncols - 1), south = g.y(g.nrows - 1), north = g.y(0);
@@ -169,10 +172,10 @@ TEST(Raster, TheFirstTriangleInMeshOrderTakesACentreOnItsBoundary) {
   Raster r = rasterise(m, 1);
   ASSERT_EQ(r.spec.ncols, 5u);
   ASSERT_EQ(r.spec.nrows, 5u);
-  EXPECT_EQ(r.at(4, 0), 1);  // (0, 0): a vertex of all three
-  EXPECT_EQ(r.at(2, 2), 1);  // (2, 2): on the hypotenuse of the first
+  EXPECT_EQ(r.at(4, 0), 1);               // (0, 0): a vertex of all three
+  EXPECT_EQ(r.at(2, 2), 1);               // (2, 2): on the hypotenuse of the first
   EXPECT_EQ(r.at(0, 4), Raster::nodata);  // (4, 4)
-  EXPECT_EQ(r.at(0, 0), 1);  // (0, 4): its corner
+  EXPECT_EQ(r.at(0, 0), 1);               // (0, 4): its corner
   std::swap(m.triangles[0], m.triangles[2]);
   r = rasterise(m, 1);
   EXPECT_EQ(r.at(4, 0), 2);
