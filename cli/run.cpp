@@ -162,6 +162,8 @@ int run_triangulate(const TriangulateOptions& options) {
     }
   });
 
+  if (grid) stats.counts["grid_cells"] = grid->z.size();
+  if (!options.contours_out.empty()) stats.counts["contour_lines"] = contours.size();
   stats.counts["steiner_points"] = result.steiner_points;
   stats.counts["vertices"] = result.mesh.vertices.size();
   stats.counts["triangles"] = result.mesh.triangles.size();

@@ -1,6 +1,7 @@
 // End to end: the cdtgpu binary on real files, one test per output format and per bad-input case.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -246,7 +247,7 @@ TEST_F(Cli, GridContoursAndPreviewComeWithTheMeshInOneRun) {
   write("ll.xyz", "150.30 -33.70 1000\n150.32 -33.70 1010\n150.31 -33.72 1005\n150.31 -33.69 990\n150.305 -33.705 1021\n");
   Result r = run("triangulate " + path("ll.xyz") + " --backend cgal -q -o " + path("tin.ply") + " --grid-out " +
                  path("dem.asc") + " --cell 50 --contours-out " + path("lines.wkt") + " --interval 5 --preview " +
-                 path("tin.png"));
+                 path("tin.png") + " --stats " + path("s.json"));
   ASSERT_EQ(r.code, 0) << r.err;
   for (const char* f : {"tin.ply", "tin.prj", "dem.asc", "dem.prj", "lines.wkt", "lines.prj", "tin.png"})
     EXPECT_TRUE(fs::exists(path(f))) << f;
@@ -257,6 +258,11 @@ TEST_F(Cli, GridContoursAndPreviewComeWithTheMeshInOneRun) {
   const std::string wkt = slurp(path("lines.wkt"));
   EXPECT_EQ(wkt.rfind("LINESTRING Z (", 0), 0u) << wkt.substr(0, 200);
   EXPECT_NE(wkt.find(" 995, "), std::string::npos);
+  const auto stats = nlohmann::json::parse(slurp(path("s.json")));
+  EXPECT_EQ(stats["counts"]["contour_lines"], size_t(std::count(wkt.begin(), wkt.end(), '\n')));
+  EXPECT_GT(stats["counts"]["grid_cells"].get<uint64_t>(), 100u);
+  for (const char* stage : {"grid", "contours", "preview", "write"})
+    EXPECT_TRUE(stats["stage_ms"].contains(stage)) << stage;
   // The grid is an input cdtgpu reads again.
   Result again = run("triangulate " + path("dem.asc") + " --backend cgal -q -o " + path("again.obj"));
   EXPECT_EQ(again.code, 0) << again.err;
