@@ -60,8 +60,9 @@ int main(int argc, char** argv) {
   auto* t = app.add_subcommand("triangulate", "triangulate inputs into a TIN");
   t->add_option("inputs", tri.input.inputs, "input files: .shp .wkt .xyz .csv .txt .asc, or - for WKT on stdin")
       ->required();
-  t->add_option("-o,--output", tri.output, "output mesh (.obj .ply .wkt), or - for stdout")->required();
-  t->add_option("--format", tri.format, "obj, ply or wkt (default: from the output's extension)");
+  t->add_option("-o,--output", tri.output, "output mesh (.obj .ply .wkt .xml (LandXML) .2dm), or - for stdout")
+      ->required();
+  t->add_option("--format", tri.format, "obj, ply, wkt, landxml or 2dm (default: from the output's extension)");
   t->add_flag("--ascii", tri.write.ascii, "PLY: ascii instead of binary little-endian");
   t->add_flag("--wkt-multipolygon", tri.write.wkt_multipolygon, "WKT: MULTIPOLYGON Z instead of TIN Z");
   t->add_option("--backend", tri.backend,
@@ -69,6 +70,16 @@ int main(int argc, char** argv) {
                  "CGAL), gpu (Vulkan compute, any device, lavapipe included) or cgal (the CPU reference)")
       ->default_val("auto")
       ->check(CLI::IsMember({"auto", "gpu", "cgal"}));
+  t->add_option("--grid-out", tri.grid_out, "also write the TIN as a DEM grid (ESRI ASCII .asc), NODATA outside");
+  t->add_option("--cell", tri.cell, "grid cell size; cell centres at its multiples")
+      ->default_val(1.0)
+      ->check(CLI::PositiveNumber);
+  t->add_option("--contours-out", tri.contours_out,
+                "also write contour lines: WKT LINESTRING Z, one per line (.geojson: GeoJSON)");
+  t->add_option("--interval", tri.interval, "contour interval; levels at its multiples")
+      ->default_val(10.0)
+      ->check(CLI::PositiveNumber);
+  t->add_option("--preview", tri.preview, "also write a hillshaded picture of the TIN (PNG, about 1000 px wide)");
   t->add_option("--stats", tri.stats_path, "write counts, CRS and stage times as JSON to this file");
   add_input_options(t, tri.input, crs, utm_zone, epsg);
 

@@ -9,6 +9,7 @@
 
 #include "core/cdt_cgal.hpp"
 #include "core/error.hpp"
+#include "core/hillshade.hpp"
 #include "core/prepare.hpp"
 #include "core/stats.hpp"
 #include "core/verify.hpp"
@@ -18,6 +19,8 @@
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
 #include "io/output_guard.hpp"
+#include "io/gis_writers.hpp"
+#include "io/write_png.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -120,12 +123,15 @@ int run_triangulate(const TriangulateOptions& options) {
   if (!options.format.empty())
     write.format = parse_format(options.format);
   else if (options.output == "-")
-    throw UsageError("writing to stdout needs --format (obj, ply or wkt)");
+    throw UsageError("writing to stdout needs --format (obj, ply, wkt, landxml or 2dm)");
   else
     write.format = format_from_extension(options.output);
   if (options.backend != "auto" && options.backend != "gpu" && options.backend != "cgal")
     throw UsageError("unknown backend '" + options.backend + "' (use auto, gpu or cgal)");
-  check_outputs_spare_inputs(options.input.inputs, triangulate_outputs(options.output, options.stats_path));
+  std::vector<std::string> outputs = triangulate_outputs(options.output, options.stats_path);
+  for (const std::string* extra : {&options.grid_out, &options.contours_out, &options.preview})
+    if (!extra->empty()) outputs.push_back(*extra);  // their .prj files hold the mesh's CRS and may be its .prj
+  check_outputs_spare_inputs(options.input.inputs, outputs);
 
   // The GPU starts on its own thread while the inputs are read: forced, or when auto may pick it (the files
   // are large enough to hold auto_min_points() points).
@@ -187,12 +193,38 @@ int run_triangulate(const TriangulateOptions& options) {
   });
   if (result.mesh.triangles.empty())
     spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
+  // Derived outputs are computed before anything is written: a grid that cannot be made writes nothing.
+  std::optional<Raster> grid;
+  std::vector<Contour> contours;
+  if (!options.grid_out.empty())
+    grid = timed(stats, "grid", [&] { return rasterise(result.mesh, options.cell); });
+  if (!options.contours_out.empty())
+    contours = timed(stats, "contours", [&] { return contour_lines(result.mesh, options.interval); });
+  std::optional<Raster> preview;
+  if (!options.preview.empty())
+    preview =
+        timed(stats, "preview", [&] { return rasterise(result.mesh, preview_cell(result.mesh, 1000)); });
   // A .prj beside a device, FIFO or /dev/stdout makes no sense (it would be /dev/stdout.prj): the CRS name
   // in the stream is all such an output gets.
-  Crs out_crs = l.crs;
-  if (is_special_output(options.output)) out_crs.wkt.clear();
-  timed(stats, "write", [&] { write_mesh_file(result.mesh, out_crs, write, options.output); });
+  auto crs_for = [&](const std::string& path) {
+    Crs c = l.crs;
+    if (is_special_output(path)) c.wkt.clear();
+    return c;
+  };
+  timed(stats, "write", [&] {
+    write_mesh_file(result.mesh, crs_for(options.output), write, options.output);
+    if (grid) write_ascii_grid_file(*grid, crs_for(options.grid_out), options.grid_out);
+    if (!options.contours_out.empty())
+      write_contours_wkt_file(contours, crs_for(options.contours_out), options.contours_out);
+    if (preview) {
+      std::vector<uint8_t> rgba = hillshade_rgba(*preview);
+      draw_edges(rgba, preview->spec, l.prepared.vertices, l.prepared.constraints);
+      write_png_file(options.preview, preview->spec.ncols, preview->spec.nrows, rgba);
+    }
+  });
 
+  if (grid) stats.counts["grid_cells"] = grid->z.size();
+  if (!options.contours_out.empty()) stats.counts["contour_lines"] = contours.size();
   stats.counts["steiner_points"] = result.steiner_points;
   stats.counts["vertices"] = result.mesh.vertices.size();
   stats.counts["triangles"] = result.mesh.triangles.size();

@@ -23,6 +23,11 @@ struct TriangulateOptions {
   std::string backend = "auto";  // auto (default: cli/gpu_start.hpp), gpu or cgal (the CPU reference)
   std::string device;           // Vulkan device override for the gpu backend
   std::string stats_path;    // empty: none
+  std::string grid_out;      // ESRI ASCII grid of the TIN (core/raster.hpp); empty: none
+  double cell = 1.0;         // its cell size
+  std::string contours_out;  // contour lines as WKT (core/contours.hpp); empty: none
+  double interval = 10.0;    // their interval
+  std::string preview;       // hillshaded PNG of the TIN (core/hillshade.hpp); empty: none
 };
 
 // Returns the process exit code; throws InputError / UsageError for bad input.

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "io/mesh_formats.hpp"
 #include "io/writers.hpp"
 
 namespace cdtgpu {
@@ -578,13 +579,15 @@ Mesh read_mesh_file(const std::string& path) {
   try {
     format = format_from_extension(path);
   } catch (const UsageError&) {
-    throw InputError(path, 0, "unknown mesh format (expected .obj, .ply or .wkt)");
+    throw InputError(path, 0, "unknown mesh format (expected .obj, .ply, .wkt, .xml or .2dm)");
   }
   const std::string data = slurp(path);
   switch (format) {
     case MeshFormat::Obj: return read_obj(path, data);
     case MeshFormat::Ply: return read_ply(path, data);
     case MeshFormat::Wkt: return WktParser(path, data).parse();
+    case MeshFormat::LandXml: return read_landxml(path, data);
+    case MeshFormat::Sms2dm: return read_2dm(path, data);
   }
   return {};
 }

@@ -19,6 +19,7 @@
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "io/mesh_formats.hpp"
 
 namespace cdtgpu {
 
@@ -222,8 +223,10 @@ MeshFormat format_from_extension(const std::string& path) {
   if (ext == ".obj") return MeshFormat::Obj;
   if (ext == ".ply") return MeshFormat::Ply;
   if (ext == ".wkt") return MeshFormat::Wkt;
+  if (ext == ".xml") return MeshFormat::LandXml;
+  if (ext == ".2dm") return MeshFormat::Sms2dm;
   throw UsageError("cannot tell the output format of '" + path + "' from its extension '" + ext +
-                   "' (use .obj, .ply or .wkt, or --format)");
+                   "' (use .obj, .ply, .wkt, .xml or .2dm, or --format)");
 }
 
 MeshFormat parse_format(const std::string& name) {
@@ -231,7 +234,9 @@ MeshFormat parse_format(const std::string& name) {
   if (n == "obj") return MeshFormat::Obj;
   if (n == "ply") return MeshFormat::Ply;
   if (n == "wkt") return MeshFormat::Wkt;
-  throw UsageError("unknown output format '" + name + "' (use obj, ply or wkt)");
+  if (n == "landxml" || n == "xml") return MeshFormat::LandXml;
+  if (n == "2dm") return MeshFormat::Sms2dm;
+  throw UsageError("unknown output format '" + name + "' (use obj, ply, wkt, landxml or 2dm)");
 }
 
 void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, std::ostream& out) {
@@ -240,6 +245,8 @@ void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, s
     case MeshFormat::Obj: write_obj(mesh, crs, sink); break;
     case MeshFormat::Ply: write_ply(mesh, crs, options.ascii, sink); break;
     case MeshFormat::Wkt: write_wkt(mesh, options.wkt_multipolygon, sink); break;
+    case MeshFormat::LandXml: write_landxml(mesh, crs, output_timestamp(), out); return;
+    case MeshFormat::Sms2dm: write_2dm(mesh, crs, out); return;
   }
   sink.flush();
 }

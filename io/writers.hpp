@@ -8,7 +8,7 @@
 
 namespace cdtgpu {
 
-enum class MeshFormat { Obj, Ply, Wkt };
+enum class MeshFormat { Obj, Ply, Wkt, LandXml, Sms2dm };  // LandXml, Sms2dm: io/mesh_formats.hpp
 
 struct WriteOptions {
   MeshFormat format = MeshFormat::Ply;
@@ -16,9 +16,9 @@ struct WriteOptions {
   bool wkt_multipolygon = false;  // WKT: MULTIPOLYGON Z instead of TIN Z
 };
 
-// From the extension (.obj, .ply, .wkt); throws UsageError for anything else.
+// From the extension (.obj, .ply, .wkt, .xml (LandXML), .2dm); throws UsageError for anything else.
 MeshFormat format_from_extension(const std::string& path);
-MeshFormat parse_format(const std::string& name);  // "obj", "ply", "wkt"
+MeshFormat parse_format(const std::string& name);  // "obj", "ply", "wkt", "landxml", "2dm"
 
 // Records the CRS where the format allows: OBJ a comment line, PLY a comment, WKT nothing in the stream
 // (a .prj beside the file, written by write_mesh_file).

@@ -8,6 +8,6 @@ $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends \
   cmake g++ make pkg-config git ca-certificates \
   libcgal-dev libtbb-dev libgmp-dev libmpfr-dev libboost-dev \
-  libgeographiclib-dev libshp-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
+  libgeographiclib-dev libshp-dev libpng-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools \
   libgtest-dev libgmock-dev libbenchmark-dev python3-matplotlib >/dev/null

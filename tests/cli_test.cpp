@@ -1,6 +1,7 @@
 // End to end: the cdtgpu binary on real files, one test per output format and per bad-input case.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include "gpu/context.hpp"
 
 #include <cstdlib>
@@ -250,6 +251,82 @@ TEST_F(Cli, FailedRunKeepsTheOldOutput) {
   EXPECT_EQ(r.code, 2);
   EXPECT_EQ(slurp(path("keep.ply")), before);
   EXPECT_EQ(files_matching("keep"), 1u) << "temporary file left behind";
+}
+
+}  // namespace
+
+namespace {
+
+TEST_F(Cli, LandXmlAnd2dmAreWrittenAndPassVerify) {
+  write_terrain();
+  for (std::string ext : {"xml", "2dm"}) {
+    std::string out = path("tin." + ext);
+    Result r = run("triangulate " + path("dem.csv") + " " + path("lines.wkt") + " --backend cgal -q -o " + out);
+    ASSERT_EQ(r.code, 0) << r.err;
+    Result v = run("verify " + out + " " + path("dem.csv") + " " + path("lines.wkt"));
+    EXPECT_EQ(v.code, 0) << ext << ": " << v.err;
+  }
+  EXPECT_EQ(slurp(path("tin.2dm")).rfind("MESH2D\n", 0), 0u);
+  EXPECT_NE(slurp(path("tin.xml")).find("<Definition surfType=\"TIN\">"), std::string::npos);
+  // LandXML carries a date and time; SOURCE_DATE_EPOCH fixes them, so the same input gives the same bytes.
+  std::string args = "triangulate " + path("dem.csv") + " --backend cgal -q -o ";
+  ASSERT_EQ(run(args + path("a.xml")).code, 0);
+  ASSERT_EQ(std::system(("SOURCE_DATE_EPOCH=1700000000 " + std::string(CDTGPU_BINARY) + " " + args + path("b.xml") +
+                         " && SOURCE_DATE_EPOCH=1700000000 " + std::string(CDTGPU_BINARY) + " " + args + path("c.xml"))
+                            .c_str()),
+            0);
+  EXPECT_EQ(slurp(path("b.xml")), slurp(path("c.xml")));
+  EXPECT_NE(slurp(path("b.xml")).find("date=\"2023-11-14\" time=\"22:13:20\""), std::string::npos);
+}
+
+TEST_F(Cli, GridContoursAndPreviewComeWithTheMeshInOneRun) {
+  // Lon/lat input, so the CRS has a WKT and every output gets its .prj.
+  write("ll.xyz", "150.30 -33.70 1000\n150.32 -33.70 1010\n150.31 -33.72 1005\n150.31 -33.69 990\n150.305 -33.705 1021\n");
+  Result r = run("triangulate " + path("ll.xyz") + " --backend cgal -q -o " + path("tin.ply") + " --grid-out " +
+                 path("dem.asc") + " --cell 50 --contours-out " + path("lines.wkt") + " --interval 5 --preview " +
+                 path("tin.png") + " --stats " + path("s.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* f : {"tin.ply", "tin.prj", "dem.asc", "dem.prj", "lines.wkt", "lines.prj", "tin.png"})
+    EXPECT_TRUE(fs::exists(path(f))) << f;
+  EXPECT_EQ(slurp(path("tin.png")).rfind("\x89PNG\r\n\x1a\n", 0), 0u);
+  const std::string asc = slurp(path("dem.asc"));
+  EXPECT_EQ(asc.rfind("ncols ", 0), 0u) << asc.substr(0, 200);
+  EXPECT_NE(asc.find("\ncellsize 50\nNODATA_value -9999\n"), std::string::npos) << asc.substr(0, 200);
+  const std::string wkt = slurp(path("lines.wkt"));
+  EXPECT_EQ(wkt.rfind("LINESTRING Z (", 0), 0u) << wkt.substr(0, 200);
+  EXPECT_NE(wkt.find(" 995, "), std::string::npos);
+  const auto stats = nlohmann::json::parse(slurp(path("s.json")));
+  EXPECT_EQ(stats["counts"]["contour_lines"], size_t(std::count(wkt.begin(), wkt.end(), '\n')));
+  EXPECT_GT(stats["counts"]["grid_cells"].get<uint64_t>(), 100u);
+  for (const char* stage : {"grid", "contours", "preview", "write"})
+    EXPECT_TRUE(stats["stage_ms"].contains(stage)) << stage;
+  // The grid is an input cdtgpu reads again.
+  Result again = run("triangulate " + path("dem.asc") + " --backend cgal -q -o " + path("again.obj"));
+  EXPECT_EQ(again.code, 0) << again.err;
+}
+
+TEST_F(Cli, LandXmlAnd2dmGoToStdout) {
+  write("pts.wkt", "MULTIPOINT ((0 0), (1 0), (0 1), (1 1))\n");
+  Result r = run("triangulate " + path("pts.wkt") + " --crs none --backend cgal -q --format landxml -o -", path("o.xml"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(path("o.xml")).find("<P id=\"4\">1 1 0</P>"), std::string::npos) << slurp(path("o.xml"));
+  r = run("triangulate " + path("pts.wkt") + " --crs none --backend cgal -q --format 2dm -o -", path("o.2dm"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(slurp(path("o.2dm")).find("\nND 4 1 1 0\nE3T 1 "), std::string::npos) << slurp(path("o.2dm"));
+}
+
+TEST_F(Cli, AGridTooFineOrABadCellIsAUsageErrorAndWritesNothing) {
+  write_terrain();
+  for (std::string bad : {"--cell 0", "--cell -2", "--cell 0.0001", "--cell x"}) {
+    Result r = run("triangulate " + path("dem.csv") + " --backend cgal -o " + path("out.ply") + " --grid-out " +
+                   path("out.asc") + " " + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.err;
+    EXPECT_EQ(files_matching("out"), 0u) << bad;
+  }
+  Result r = run("triangulate " + path("dem.csv") + " --backend cgal -o " + path("out.ply") + " --contours-out " +
+                 path("out.wkt") + " --interval 0");
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(files_matching("out"), 0u);
 }
 
 }  // namespace
