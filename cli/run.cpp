@@ -8,12 +8,15 @@
 #include <spdlog/spdlog.h>
 
 #include "core/cdt_cgal.hpp"
+#include "core/drape.hpp"
 #include "core/error.hpp"
 #include "core/prepare.hpp"
+#include "core/regions.hpp"
 #include "core/stats.hpp"
 #include "core/verify.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
+#include "io/input_spec.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -39,6 +42,7 @@ auto timed(RunStats& stats, const std::string& name, F&& f) {
 
 struct Loaded {
   InputSet in;
+  std::vector<InputPart> parts;  // what each input added, with its role and z rule
   Crs crs;
   PreparedInput prepared;
 };
@@ -46,11 +50,16 @@ struct Loaded {
 // `merge`: the duplicate merging of prepare (the CPU's by default; the GPU backend passes its own).
 Loaded load(const InputOptions& options, RunStats& stats, const PointMerger& merge = merge_points) {
   Loaded l;
-  timed(stats, "read", [&] {
-    for (const std::string& path : options.inputs) read_input(path, options.read, l.in);
-  });
+  std::vector<InputSpec> specs;
+  for (const std::string& arg : options.inputs) specs.push_back(parse_input_spec(arg));
+  timed(stats, "read", [&] { l.parts = read_inputs(specs, options.read, l.in); });
   l.crs = choose_crs(l.in, options.crs);
   timed(stats, "project", [&] { project(l.in, l.crs); });
+  const DrapeStats drape = timed(stats, "drape", [&] { return apply_z_rules(l.in, l.parts); });
+  if (drape.draped_vertices)
+    spdlog::info("draped {} vertices ({} beyond the surface's hull took the z of its nearest edge)",
+                 drape.draped_vertices, drape.outside_surface);
+  stats.counts["draped_vertices"] = drape.draped_vertices;
   l.prepared = timed(stats, "prepare", [&] { return prepare(l.in, merge); });
   spdlog::info("CRS: {}", l.crs.name);
 
@@ -135,6 +144,14 @@ int run_triangulate(const TriangulateOptions& options) {
     stats.counts["gpu_peak_device_bytes"] = gs.peak_device_bytes;
     return r;
   });
+  const RegionRules rules = region_rules(l.in, l.parts, l.prepared, options.max_edge);
+  const RegionStats rs = timed(stats, "regions", [&] { return apply_regions(result.mesh, l.prepared, rules); });
+  if (rs.triangles_outside || rs.triangles_trimmed)
+    spdlog::info("dropped {} triangles outside boundaries or inside holes, {} by --max-edge", rs.triangles_outside,
+                 rs.triangles_trimmed);
+  stats.counts["triangles_outside_regions"] = rs.triangles_outside;
+  stats.counts["triangles_trimmed"] = rs.triangles_trimmed;
+  stats.counts["vertices_outside_regions"] = rs.vertices_removed;
   if (result.mesh.triangles.empty())
     spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
   timed(stats, "write", [&] { write_mesh_file(result.mesh, l.crs, write, options.output); });

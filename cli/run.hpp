@@ -23,6 +23,7 @@ struct TriangulateOptions {
   std::string backend = "gpu";  // gpu (default) or cgal (the CPU reference)
   std::string device;           // Vulkan device override for the gpu backend
   std::string stats_path;    // empty: none
+  double max_edge = 0;       // > 0: concave-hull trimming (core/regions.hpp)
 };
 
 // Returns the process exit code; throws InputError / UsageError for bad input.
