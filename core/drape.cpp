@@ -125,7 +125,7 @@ DrapeStats apply_z_rules(InputSet& in, const std::vector<InputPart>& parts) {
 
   InputSet known;
   for (const InputPart& part : parts) {
-    if (part.z.draped()) continue;
+    if (part.z.kind != ZRule::Kind::keep) continue;
     known.points.insert(known.points.end(), in.points.begin() + long(part.points_begin),
                         in.points.begin() + long(part.points_end));
     known.lines.insert(known.lines.end(), in.lines.begin() + long(part.lines_begin),
@@ -133,7 +133,7 @@ DrapeStats apply_z_rules(InputSet& in, const std::vector<InputPart>& parts) {
   }
   CdtResult surface = triangulate_cgal(prepare(known));
   if (surface.mesh.triangles.empty())
-    throw UsageError("z=drape needs a surface: the inputs with z have " + std::to_string(surface.mesh.vertices.size()) +
+    throw UsageError("z=drape needs a surface: the inputs with their own z have " + std::to_string(surface.mesh.vertices.size()) +
                      " distinct points, fewer than 3 or all on one line");
   const DrapeSurface drape(std::move(surface.mesh));
 

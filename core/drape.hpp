@@ -4,11 +4,11 @@
 //   project(in, crs);
 //   DrapeStats s = apply_z_rules(in, parts);   // before prepare(in)
 //
-// The surface is the CDT (triangulate_cgal) of every input whose rule is keep or constant, its constraints
-// included; a draped vertex gets the linear interpolation of the triangle containing it (on an edge or a
-// vertex: the lowest-numbered triangle containing it, which gives the same z up to rounding). Containment is
-// decided with exact orientation tests. A vertex outside the surface's hull gets the z of the nearest point
-// of the hull (linear along that hull edge).
+// The surface is the CDT (triangulate_cgal) of every input whose z is its own (rule keep: geometry z or a
+// field), its constraints included; inputs given a constant are not part of it. A draped vertex gets the
+// linear interpolation of the triangle containing it (on an edge or a vertex: the lowest-numbered triangle
+// containing it, which gives the same z up to rounding). Containment is decided with exact orientation tests.
+// A vertex outside the surface's hull gets the z of the nearest point of the hull (linear along that edge).
 #pragma once
 #include <array>
 #include <cstdint>
