@@ -1,5 +1,6 @@
 #include "cli/run.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <functional>
@@ -14,6 +15,7 @@
 #include "core/regions.hpp"
 #include "core/stats.hpp"
 #include "core/verify.hpp"
+#include "core/verify_regions.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/atomic_file.hpp"
 #include "io/input_spec.hpp"
@@ -169,7 +171,9 @@ int run_verify(const std::string& mesh_path, const InputOptions& options) {
   RunStats stats;
   Mesh mesh = read_mesh_file(mesh_path);
   Loaded l = load(options, stats);
-  VerifyReport report = verify_mesh(mesh, l.prepared);
+  const RegionRules rules = region_rules(l.in, l.parts, l.prepared, 0);
+  const bool regions = std::count(rules.region_edge.begin(), rules.region_edge.end(), 1) > 0;
+  VerifyReport report = regions ? verify_regions(mesh, l.prepared, rules) : verify_mesh(mesh, l.prepared);
   for (const std::string& f : report.failures) spdlog::error("{}: {}", mesh_path, f);
   if (!report.ok()) {
     spdlog::error("{}: NOT the constrained Delaunay triangulation of the inputs", mesh_path);

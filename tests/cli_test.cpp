@@ -193,6 +193,18 @@ TEST_F(Cli, RolesAndDrapeWithBothBackends) {
   const size_t at = wkt.find("500150.5 6000100.5 ");
   ASSERT_NE(at, std::string::npos);
   EXPECT_GT(std::stod(wkt.substr(at + 19)), 100.0);
+
+  // verify understands the roles: without --max-edge the mesh is the CDT restricted to the domain.
+  const std::string roles = path("dem.csv") + " " + path("area.wkt") + ":role=boundary " + path("lake.wkt") +
+                            ":role=hole " + path("house.wkt") + ":z=drape -q";
+  ASSERT_EQ(run("triangulate " + roles + " --backend cgal -o " + path("roles.ply")).code, 0);
+  Result v = run("verify " + path("roles.ply") + " " + roles);
+  EXPECT_EQ(v.code, 0) << v.err;
+  // The lake given as a breakline: the mesh has a hole where verify expects triangles.
+  v = run("verify " + path("roles.ply") + " " + path("dem.csv") + " " + path("area.wkt") + ":role=boundary " +
+          path("lake.wkt") + " " + path("house.wkt") + ":z=drape");
+  EXPECT_EQ(v.code, 1) << v.err;
+  EXPECT_NE(v.err.find("missing"), std::string::npos) << v.err;
 }
 
 TEST_F(Cli, UnknownInputOptionIsAUsageError) {

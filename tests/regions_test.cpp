@@ -25,6 +25,7 @@
 #include "core/prepare.hpp"
 #include "core/regions.hpp"
 #include "core/verify.hpp"
+#include "core/verify_regions.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/input_spec.hpp"
 
@@ -357,6 +358,45 @@ TEST(Regions, CanonicalOrderKept) {
   canonicalize(c);
   EXPECT_EQ(c.vertices, m.vertices);
   EXPECT_EQ(c.triangles, m.triangles);
+}
+
+// verify_regions accepts what apply_regions keeps and rejects the whole CDT, a triangle missing, a triangle
+// too many.
+TEST(VerifyRegions, AcceptsRegionMeshesAndCatchesWrongOnes) {
+  std::vector<Layer> footprints = {{Role::vertices, scatter(300, -150, -150, 150, 150, 7), {}, {}},
+                                   {Role::boundary, {}, {polygon(0, 0, 120, 40)}, {}},
+                                   {Role::hole, {}, {square(50, 0, 10), square(-50, 0, 10)}, {}}};
+  std::vector<Layer> nested = {{Role::vertices, scatter(300, -100, -100, 100, 100, 8), {}, {}},
+                               {Role::hole, {}, {square(0, 0, 80), square(0, 0, 55), square(0, 0, 30)}, {}}};
+  for (const auto& layers : {lake_with_island(), footprints, nested}) {
+    Built b = build(layers);
+    PreparedInput p = prepare(b.in);
+    const RegionRules rules = region_rules(b.in, b.parts, p, 0);
+    CdtResult r = triangulate_cgal(p);
+    const Mesh whole = r.mesh;
+    apply_regions(r.mesh, p, rules);
+    VerifyReport ok = verify_regions(r.mesh, p, rules);
+    EXPECT_TRUE(ok.ok()) << (ok.failures.empty() ? "" : ok.failures[0]);
+    EXPECT_FALSE(verify_regions(whole, p, rules).ok());
+    Mesh fewer = r.mesh;
+    fewer.triangles.erase(fewer.triangles.begin() + long(fewer.triangles.size() / 2));
+    EXPECT_FALSE(verify_regions(fewer, p, rules).ok());
+    // The whole CDT's vertices, the kept triangles and one outside triangle.
+    Mesh more = whole;
+    more.triangles.clear();
+    const std::set<Tri> kept = triangles_of(r.mesh);
+    bool extra = false;
+    for (const Triangle& t : whole.triangles) {
+      const bool in = kept.count(tri(whole.vertices[t[0]], whole.vertices[t[1]], whole.vertices[t[2]])) > 0;
+      if (in || !extra) more.triangles.push_back(t);
+      extra |= !in;
+    }
+    VerifyReport bad = verify_regions(more, p, rules);
+    ASSERT_FALSE(bad.ok());
+    bool named = false;
+    for (const std::string& f : bad.failures) named |= f.find("is in the mesh but not") != std::string::npos;
+    EXPECT_TRUE(named) << bad.failures[0];
+  }
 }
 
 // The GPU backend's mesh through apply_regions gives the same mesh (on lavapipe where there is no GPU).
