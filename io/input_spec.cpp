@@ -1,6 +1,7 @@
 // parse_input_spec and read_inputs: the per-input suffix of the command line and reading with it.
 #include "io/input_spec.hpp"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -78,8 +79,9 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
   for (const InputSpec& spec : specs) {
     ReadOptions options = defaults;
     if (spec.z_field) {
-      const std::string ext = std::filesystem::path(spec.path).extension().string();
-      if (ext != ".shp" && ext != ".SHP")
+      std::string ext = std::filesystem::path(spec.path).extension().string();
+      for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+      if (ext != ".shp")
         throw UsageError("z=" + *spec.z_field + " names an attribute field, which only shapefiles have (" +
                          spec.path + "); z takes a number, drape, min, mean or max");
       options.z_field = *spec.z_field;
@@ -95,6 +97,9 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
     }
     part.points_end = in.points.size();
     part.lines_end = in.lines.size();
+    if ((spec.role == Role::boundary || spec.role == Role::hole) && part.lines_end == part.lines_begin)
+      throw UsageError(spec.path + ": role=" + (spec.role == Role::boundary ? "boundary" : "hole") +
+                       " needs polygons (rings), and this input has only points");
     part.role = spec.role;
     part.z = spec.z;
     parts.push_back(part);
