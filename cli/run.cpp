@@ -62,6 +62,14 @@ Loaded load(const InputOptions& options, RunStats& stats, const PointMerger& mer
     spdlog::info("draped {} vertices ({} beyond the surface's hull took the z of its nearest edge)",
                  drape.draped_vertices, drape.outside_surface);
   stats.counts["draped_vertices"] = drape.draped_vertices;
+  uint64_t zero_z = 0;
+  for (size_t i = 0; i < drape.zero_z.size(); ++i)
+    if (drape.zero_z[i]) {
+      zero_z += drape.zero_z[i];
+      spdlog::info("{}: {} vertices have no z and get 0 (:z=drape drapes them, :z=0 says so)", specs[i].path,
+                   drape.zero_z[i]);
+    }
+  stats.counts["vertices_without_z"] = zero_z;
   l.prepared = timed(stats, "prepare", [&] { return prepare(l.in, merge); });
   spdlog::info("CRS: {}", l.crs.name);
 

@@ -117,24 +117,41 @@ DrapeStats apply_z_rules(InputSet& in, const std::vector<InputPart>& parts) {
       for (size_t i = part.lines_begin; i < part.lines_end; ++i)
         for (Point3& p : in.lines[i].points) p.z = part.z.value;
       stats.constant_vertices += part.points_end - part.points_begin;
-      for (size_t i = part.lines_begin; i < part.lines_end; ++i) stats.constant_vertices += in.lines[i].points.size();
+      for (size_t i = part.lines_begin; i < part.lines_end; ++i)
+        stats.constant_vertices += in.lines[i].points.size();
     }
     any_draped |= part.z.draped();
   }
-  if (!any_draped) return stats;
+
+  // Vertices read without z, in parts that keep z: 0, as before; not part of the surface.
+  auto zero_missing = [&](const InputPart& part, uint64_t& count) {
+    if (part.z.kind != ZRule::Kind::keep) return;
+    for (size_t i = part.points_begin; i < part.points_end; ++i)
+      if (is_missing_z(in.points[i].z)) in.points[i].z = 0, ++count;
+    for (size_t i = part.lines_begin; i < part.lines_end; ++i)
+      for (Point3& p : in.lines[i].points)
+        if (is_missing_z(p.z)) p.z = 0, ++count;
+  };
+  if (!any_draped) {
+    for (const InputPart& part : parts) zero_missing(part, stats.zero_z.emplace_back(0));
+    return stats;
+  }
 
   InputSet known;
   for (const InputPart& part : parts) {
     if (part.z.kind != ZRule::Kind::keep) continue;
-    known.points.insert(known.points.end(), in.points.begin() + long(part.points_begin),
-                        in.points.begin() + long(part.points_end));
-    known.lines.insert(known.lines.end(), in.lines.begin() + long(part.lines_begin),
-                       in.lines.begin() + long(part.lines_end));
+    for (size_t i = part.points_begin; i < part.points_end; ++i)
+      if (!is_missing_z(in.points[i].z)) known.points.push_back(in.points[i]);
+    for (size_t i = part.lines_begin; i < part.lines_end; ++i)
+      if (std::none_of(in.lines[i].points.begin(), in.lines[i].points.end(),
+                       [](const Point3& p) { return is_missing_z(p.z); }))
+        known.lines.push_back(in.lines[i]);
   }
+  for (const InputPart& part : parts) zero_missing(part, stats.zero_z.emplace_back(0));
   CdtResult surface = triangulate_cgal(prepare(known));
   if (surface.mesh.triangles.empty())
-    throw UsageError("z=drape needs a surface: the inputs with their own z have " + std::to_string(surface.mesh.vertices.size()) +
-                     " distinct points, fewer than 3 or all on one line");
+    throw UsageError("z=drape needs a surface: the vertices with their own z make " +
+                     std::to_string(surface.mesh.vertices.size()) + " distinct points, fewer than 3 or all on one line");
   const DrapeSurface drape(std::move(surface.mesh));
 
   auto drape_point = [&](Point3& p) {

@@ -76,6 +76,7 @@ InputSpec parse_input_spec(const std::string& arg) {
 
 std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const ReadOptions& defaults, InputSet& in) {
   std::vector<InputPart> parts;
+  in.nan_for_missing_z = true;
   for (const InputSpec& spec : specs) {
     ReadOptions options = defaults;
     if (spec.z_field) {

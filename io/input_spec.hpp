@@ -30,7 +30,8 @@ struct InputSpec {
 InputSpec parse_input_spec(const std::string& arg);
 
 // Reads each input with its own options (z field, role); lines of role=vertices inputs become points.
-// Returns, per input, the points and lines it added to `in`.
+// Returns, per input, the points and lines it added to `in`. Vertices without z (2D geometry and no z field)
+// get a NaN z (InputSet::nan_for_missing_z): call core/drape's apply_z_rules before prepare.
 std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const ReadOptions& defaults, InputSet& in);
 
 }  // namespace cdtgpu

@@ -492,6 +492,31 @@ TEST(Drape, NeedsASurface) {
   EXPECT_THROW(apply_z_rules(b.in, b.parts), UsageError);
 }
 
+// Vertices read without z are known as such: 0 where z is kept (and counted), left out of the drape surface.
+TEST(Drape, VerticesWithoutZAreNotPartOfTheSurface) {
+  const std::string dir = ::testing::TempDir();
+  {
+    std::ofstream f(dir + "plane.wkt");
+    for (int j = 0; j <= 4; ++j)
+      for (int i = 0; i <= 4; ++i) f << "POINT Z (" << i * 10 << ' ' << j * 10 << ' ' << plane(i * 10, j * 10) << ")\n";
+    f << "POINT (21 19)\nLINESTRING (5 35, 35 35)\n";  // 2D: no z
+  }
+  { std::ofstream(dir + "road.wkt") << "LINESTRING (3 3, 37 21)\n"; }
+  InputSet in;
+  std::vector<InputPart> parts =
+      read_inputs({parse_input_spec(dir + "plane.wkt"), parse_input_spec(dir + "road.wkt:z=drape")}, {}, in);
+  EXPECT_TRUE(is_missing_z(in.points[25].z));
+  DrapeStats s = apply_z_rules(in, parts);
+  ASSERT_EQ(s.zero_z.size(), 2u);
+  EXPECT_EQ(s.zero_z[0], 3u);
+  EXPECT_EQ(s.zero_z[1], 0u);
+  EXPECT_EQ(s.draped_vertices, 2u);
+  EXPECT_EQ(in.points[25].z, 0.0);
+  for (const Point3& p : in.lines[0].points) EXPECT_EQ(p.z, 0.0);
+  for (const Point3& p : in.lines[1].points) EXPECT_NEAR(p.z, plane(p.x, p.y), 1e-12);  // not pulled to 0
+  for (const Point3& p : in.points) EXPECT_FALSE(std::isnan(p.z));
+}
+
 // ---------------------------------------------------------------------------------------------------------------
 // Per-input options
 
