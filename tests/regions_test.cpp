@@ -7,6 +7,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <gtest/gtest.h>
+#include <shapefil.h>
 
 #include <array>
 #include <cmath>
@@ -515,6 +516,27 @@ TEST(Drape, VerticesWithoutZAreNotPartOfTheSurface) {
   for (const Point3& p : in.lines[0].points) EXPECT_EQ(p.z, 0.0);
   for (const Point3& p : in.lines[1].points) EXPECT_NEAR(p.z, plane(p.x, p.y), 1e-12);  // not pulled to 0
   for (const Point3& p : in.points) EXPECT_FALSE(std::isnan(p.z));
+}
+
+// A 2D polygon shapefile: without a field its vertices have no z; with z=FIELD they take the field.
+TEST(Drape, ShapefileWithoutZFieldIsMissingZ) {
+  const std::string base = ::testing::TempDir() + "foot2d";
+  SHPHandle shp = SHPCreate(base.c_str(), SHPT_POLYGON);
+  ASSERT_NE(shp, nullptr);
+  double x[] = {1, 2, 2, 1, 1}, y[] = {1, 1, 2, 2, 1};
+  SHPObject* o = SHPCreateSimpleObject(SHPT_POLYGON, 5, x, y, nullptr);
+  SHPWriteObject(shp, -1, o);
+  SHPDestroyObject(o);
+  SHPClose(shp);
+  DBFHandle dbf = DBFCreate((base + ".dbf").c_str());
+  ASSERT_EQ(DBFAddField(dbf, "GROUND", FTDouble, 12, 3), 0);
+  DBFWriteDoubleAttribute(dbf, 0, 0, 7.25);
+  DBFClose(dbf);
+  InputSet in;
+  read_inputs({parse_input_spec(base + ".shp"), parse_input_spec(base + ".shp:z=GROUND")}, {}, in);
+  ASSERT_EQ(in.lines.size(), 2u);
+  for (const Point3& p : in.lines[0].points) EXPECT_TRUE(is_missing_z(p.z));
+  for (const Point3& p : in.lines[1].points) EXPECT_EQ(p.z, 7.25);
 }
 
 // ---------------------------------------------------------------------------------------------------------------
