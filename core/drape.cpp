@@ -151,7 +151,8 @@ DrapeStats apply_z_rules(InputSet& in, const std::vector<InputPart>& parts) {
   CdtResult surface = triangulate_cgal(prepare(known));
   if (surface.mesh.triangles.empty())
     throw UsageError("z=drape needs a surface: the vertices with their own z make " +
-                     std::to_string(surface.mesh.vertices.size()) + " distinct points, fewer than 3 or all on one line");
+                     std::to_string(surface.mesh.vertices.size()) +
+                     " distinct points, fewer than 3 or all on one line");
   const DrapeSurface drape(std::move(surface.mesh));
 
   auto drape_point = [&](Point3& p) {

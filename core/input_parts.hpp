@@ -25,7 +25,9 @@ struct ZRule {
     max,       // ... to the highest
   } kind = Kind::keep;
   double value = 0;  // constant
-  bool draped() const { return kind == Kind::drape || kind == Kind::min || kind == Kind::mean || kind == Kind::max; }
+  bool draped() const {
+    return kind == Kind::drape || kind == Kind::min || kind == Kind::mean || kind == Kind::max;
+  }
 };
 
 // The points [points_begin, points_end) and lines [lines_begin, lines_end) of InputSet that one input added.

@@ -1,5 +1,6 @@
 // apply_regions: boundaries, holes and max-edge trimming over a finished CDT. Cost: one sort of the 3T
-// half-edges (twins and per-vertex lists), one walk per constraint along mesh edges, one flood fill; O(T log T).
+// half-edges (twins and per-vertex lists), one walk per constraint along mesh edges, one flood fill:
+// O(T log T).
 //
 // The constrained mesh edges are found the way verify.cpp finds them: from one end of a constraint, step to
 // the neighbour that lies on the segment (exact orientation for input vertices; within rounding for Steiner
@@ -36,9 +37,9 @@ uint32_t find_vertex(const std::vector<Point3>& vs, const Point3& p) {
 
 // Half-edge h = 3 t + k runs from triangle t's vertex k to vertex k + 1.
 struct HalfEdges {
-  std::vector<uint32_t> twin;         // kNone on the hull
-  std::vector<uint32_t> first, out;   // CSR: half-edges leaving each vertex
-  std::vector<uint32_t> bprev_edge;   // per vertex: the hull half-edge ending there, or kNone
+  std::vector<uint32_t> twin;        // kNone on the hull
+  std::vector<uint32_t> first, out;  // CSR: half-edges leaving each vertex
+  std::vector<uint32_t> bprev_edge;  // per vertex: the hull half-edge ending there, or kNone
 };
 
 HalfEdges half_edges(const Mesh& mesh) {
@@ -47,8 +48,7 @@ HalfEdges half_edges(const Mesh& mesh) {
   const size_t H = ts.size() * 3;
   HalfEdges e;
   std::vector<std::pair<uint64_t, uint32_t>> by_key(H);
-  for (size_t h = 0; h < H; ++h)
-    by_key[h] = {key(ts[h / 3][h % 3], ts[h / 3][(h % 3 + 1) % 3]), uint32_t(h)};
+  for (size_t h = 0; h < H; ++h) by_key[h] = {key(ts[h / 3][h % 3], ts[h / 3][(h % 3 + 1) % 3]), uint32_t(h)};
   std::sort(by_key.begin(), by_key.end());
   e.twin.assign(H, kNone);
   e.first.assign(size_t(V) + 1, 0);
@@ -57,8 +57,10 @@ HalfEdges half_edges(const Mesh& mesh) {
   for (const auto& [k, h] : by_key) {
     const uint32_t a = uint32_t(k >> 32), b = uint32_t(k);
     auto it = std::lower_bound(by_key.begin(), by_key.end(), std::make_pair(key(b, a), uint32_t(0)));
-    if (it != by_key.end() && it->first == key(b, a)) e.twin[h] = it->second;
-    else e.bprev_edge[b] = h;
+    if (it != by_key.end() && it->first == key(b, a))
+      e.twin[h] = it->second;
+    else
+      e.bprev_edge[b] = h;
     ++e.first[a + 1];
   }
   for (uint32_t v = 0; v < V; ++v) e.first[v + 1] += e.first[v];
@@ -205,12 +207,13 @@ std::vector<uint8_t> region_constraints(const PreparedInput& prepared, const std
   std::sort(segs.begin(), segs.end());
   std::vector<uint8_t> region(prepared.constraints.size(), 0);
   for (size_t c = 0; c < region.size(); ++c)
-    region[c] = std::binary_search(segs.begin(), segs.end(), key(prepared.constraints[c][0], prepared.constraints[c][1]));
+    region[c] = std::binary_search(segs.begin(), segs.end(),
+                                   key(prepared.constraints[c][0], prepared.constraints[c][1]));
   return region;
 }
 
-RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts, const PreparedInput& prepared,
-                         double max_edge) {
+RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts,
+                         const PreparedInput& prepared, double max_edge) {
   std::vector<Polyline> rings;
   bool boundary = false;
   for (const InputPart& part : parts) {
@@ -228,7 +231,8 @@ RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts
 RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules) {
   RegionStats stats;
   const size_t T = mesh.triangles.size();
-  const bool regions = std::find(rules.region_edge.begin(), rules.region_edge.end(), 1) != rules.region_edge.end();
+  const bool regions =
+      std::find(rules.region_edge.begin(), rules.region_edge.end(), 1) != rules.region_edge.end();
   if (T == 0 || (!regions && rules.max_edge <= 0)) return stats;
   const HalfEdges e = half_edges(mesh);
   std::vector<uint8_t> flag(3 * T, 0);

@@ -2,8 +2,8 @@
 //
 //   PreparedInput p = prepare(in);
 //   CdtResult r = triangulate_cgal(p);                 // or gpu::GpuCdt::triangulate: the same mesh
-//   RegionRules rules = region_rules(in, parts, p, 250);  // parts: each input's role; max edge 250 m (0: none)
-//   RegionStats s = apply_regions(r.mesh, p, rules);   // r.mesh keeps the triangles inside, canonical
+//   RegionRules rules = region_rules(in, parts, p, 250);  // parts: each input's role; max edge 250 m (0:
+//   none) RegionStats s = apply_regions(r.mesh, p, rules);   // r.mesh keeps the triangles inside, canonical
 //
 // Membership is decided exactly by constrained edges, never by point-in-polygon on floats: the mesh edges
 // that lie on each constraint are found by walking the mesh from one end to the other (verify.cpp's walk),
@@ -40,8 +40,8 @@ struct RegionStats {
 
 // The rules for the inputs' roles: region edges from the lines of boundary and hole inputs; the outside is
 // kept when no boundary input has lines.
-RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts, const PreparedInput& prepared,
-                         double max_edge);
+RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts,
+                         const PreparedInput& prepared, double max_edge);
 
 // Region edge flags for prepared.constraints: a constraint is a region edge when its two ends are the two
 // ends of one segment of one of `rings` (by exact (x, y)); rings are closed, lines open.

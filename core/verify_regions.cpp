@@ -1,6 +1,6 @@
-// verify_regions: the reference CDT, a ray-parity inside test per triangle, and a comparison of triangle sets.
-// Cost: the CDT, then per triangle the region segments of one horizontal band (segments are listed in every
-// band their y range meets).
+// verify_regions: the reference CDT, a ray-parity inside test per triangle, and a comparison of triangle
+// sets. Cost: the CDT, then per triangle the region segments of one horizontal band (segments are listed in
+// every band their y range meets).
 #include "core/verify_regions.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -111,7 +111,8 @@ VerifyReport verify_regions(const Mesh& mesh, const PreparedInput& prepared, con
   std::vector<std::array<P2, 2>> segs;
   for (size_t c = 0; c < prepared.constraints.size(); ++c)
     if (c < rules.region_edge.size() && rules.region_edge[c]) {
-      const Point3 &a = prepared.vertices[prepared.constraints[c][0]], &b = prepared.vertices[prepared.constraints[c][1]];
+      const Point3 &a = prepared.vertices[prepared.constraints[c][0]],
+                   &b = prepared.vertices[prepared.constraints[c][1]];
       segs.push_back({P2(a.x, a.y), P2(b.x, b.y)});
     }
   const Rays rays(std::move(segs));
@@ -136,7 +137,9 @@ VerifyReport verify_regions(const Mesh& mesh, const PreparedInput& prepared, con
   }
   for (const auto& [c, n] : count) {
     if (n > 0) fail(describe(c) + " of the domain is missing from the mesh");
-    if (n < 0) fail(describe(c) + " is in the mesh but not a triangle of the CDT inside the domain (or has another z)");
+    if (n < 0)
+      fail(describe(c) +
+           " is in the mesh but not a triangle of the CDT inside the domain (or has another z)");
   }
   std::vector<uint8_t> used(mesh.vertices.size(), 0);
   for (const Triangle& t : mesh.triangles)

@@ -52,21 +52,34 @@ InputSpec parse_input_spec(const std::string& arg) {
     if (key == "role") {
       if (seen_role) throw UsageError("role given twice" + where);
       seen_role = true;
-      if (value == "breakline") spec.role = Role::breakline;
-      else if (value == "vertices") spec.role = Role::vertices;
-      else if (value == "boundary") spec.role = Role::boundary;
-      else if (value == "hole") spec.role = Role::hole;
-      else throw UsageError("unknown role '" + value + "'" + where + " (use breakline, vertices, boundary or hole)");
+      if (value == "breakline")
+        spec.role = Role::breakline;
+      else if (value == "vertices")
+        spec.role = Role::vertices;
+      else if (value == "boundary")
+        spec.role = Role::boundary;
+      else if (value == "hole")
+        spec.role = Role::hole;
+      else
+        throw UsageError("unknown role '" + value + "'" + where +
+                         " (use breakline, vertices, boundary or hole)");
     } else if (key == "z") {
       if (seen_z) throw UsageError("z given twice" + where);
       seen_z = true;
-      if (value.empty()) throw UsageError("z needs a value" + where + " (a field name, a number, drape, min, mean or max)");
-      if (value == "drape") spec.z.kind = ZRule::Kind::drape;
-      else if (value == "min") spec.z.kind = ZRule::Kind::min;
-      else if (value == "mean") spec.z.kind = ZRule::Kind::mean;
-      else if (value == "max") spec.z.kind = ZRule::Kind::max;
-      else if (std::optional<double> v = number(value)) spec.z = {ZRule::Kind::constant, *v};
-      else spec.z_field = value;
+      if (value.empty())
+        throw UsageError("z needs a value" + where + " (a field name, a number, drape, min, mean or max)");
+      if (value == "drape")
+        spec.z.kind = ZRule::Kind::drape;
+      else if (value == "min")
+        spec.z.kind = ZRule::Kind::min;
+      else if (value == "mean")
+        spec.z.kind = ZRule::Kind::mean;
+      else if (value == "max")
+        spec.z.kind = ZRule::Kind::max;
+      else if (std::optional<double> v = number(value))
+        spec.z = {ZRule::Kind::constant, *v};
+      else
+        spec.z_field = value;
     } else {
       throw UsageError("unknown input option '" + key + "'" + where + " (known: role, z)");
     }
@@ -74,7 +87,8 @@ InputSpec parse_input_spec(const std::string& arg) {
   return spec;
 }
 
-std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const ReadOptions& defaults, InputSet& in) {
+std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const ReadOptions& defaults,
+                                   InputSet& in) {
   std::vector<InputPart> parts;
   in.nan_for_missing_z = true;
   for (const InputSpec& spec : specs) {

@@ -20,7 +20,7 @@ namespace cdtgpu {
 struct InputSpec {
   std::string path;
   Role role = Role::breakline;
-  ZRule z;                    // keep unless z= gave a number, drape, min, mean or max
+  ZRule z;                             // keep unless z= gave a number, drape, min, mean or max
   std::optional<std::string> z_field;  // z=NAME: the shapefile field (overrides --z-field)
 };
 
@@ -32,6 +32,7 @@ InputSpec parse_input_spec(const std::string& arg);
 // Reads each input with its own options (z field, role); lines of role=vertices inputs become points.
 // Returns, per input, the points and lines it added to `in`. Vertices without z (2D geometry and no z field)
 // get a NaN z (InputSet::nan_for_missing_z): call core/drape's apply_z_rules before prepare.
-std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const ReadOptions& defaults, InputSet& in);
+std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const ReadOptions& defaults,
+                                   InputSet& in);
 
 }  // namespace cdtgpu

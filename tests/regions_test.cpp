@@ -3,6 +3,8 @@
 // the same points and rings, its faces marked by nesting level with a flood fill written here on CGAL's own
 // adjacency (CGAL 5.5 has no mark_domain_in_triangulation; this is its polygon-triangulation example), and
 // max-edge trimming written on the same triangulation.
+#include "core/regions.hpp"
+
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_face_base_with_info_2.h>
@@ -24,7 +26,6 @@
 #include "core/drape.hpp"
 #include "core/error.hpp"
 #include "core/prepare.hpp"
-#include "core/regions.hpp"
 #include "core/verify.hpp"
 #include "core/verify_regions.hpp"
 #include "gpu/cdt_pipeline.hpp"
@@ -71,7 +72,10 @@ Built build(const std::vector<Layer>& layers) {
 }
 
 std::vector<Point3> square(double cx, double cy, double half, double z = 0) {
-  return {{cx - half, cy - half, z}, {cx + half, cy - half, z}, {cx + half, cy + half, z}, {cx - half, cy + half, z}};
+  return {{cx - half, cy - half, z},
+          {cx + half, cy - half, z},
+          {cx + half, cy + half, z},
+          {cx - half, cy + half, z}};
 }
 
 std::vector<Point3> polygon(double cx, double cy, double r, int n, double phase = 0.1) {
@@ -145,8 +149,10 @@ struct Oracle {
       for (int i = 0; i < 3; ++i) {
         OracleCdt::Face_handle n = fh->neighbor(i);
         if (n->info().nesting != -1) continue;
-        if (is_region(fh, i)) border.push_back({fh, i});
-        else queue.push_back(n);
+        if (is_region(fh, i))
+          border.push_back({fh, i});
+        else
+          queue.push_back(n);
       }
     }
   }
@@ -164,7 +170,8 @@ struct Oracle {
 
   // Trimming: from the infinite faces across unconstrained edges longer than L, until nothing changes.
   void trim(double L) {
-    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info().trimmed = cdt.is_infinite(f);
+    for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f)
+      f->info().trimmed = cdt.is_infinite(f);
     for (bool changed = true; changed;) {
       changed = false;
       for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
@@ -263,7 +270,9 @@ TEST(Regions, LakeWithIslandMatchesCgalNesting) {
   auto has_triangle_at = [&](double x, double y) {
     for (const Triangle& t : m.triangles) {
       const Point3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
-      auto side = [&](const Point3& p, const Point3& q) { return (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x); };
+      auto side = [&](const Point3& p, const Point3& q) {
+        return (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
+      };
       if (side(a, b) >= 0 && side(b, c) >= 0 && side(c, a) >= 0) return true;
     }
     return false;
@@ -297,7 +306,8 @@ TEST(Regions, BreaklineFootprintsDoNotCutTheDomain) {
   expect_same(oracle(layers), ours(layers, 0, &breaklines), "breakline footprints");
   layers[2].role = Role::hole;
   ours(layers, 0, &holes);
-  EXPECT_GT(holes.triangles_outside, breaklines.triangles_outside + 12);  // footprint insides kept as breaklines
+  EXPECT_GT(holes.triangles_outside,
+            breaklines.triangles_outside + 12);  // footprint insides kept as breaklines
 }
 
 TEST(Regions, NestedHolesThreeDeepWithoutBoundary) {
@@ -448,7 +458,8 @@ TEST(Drape, FootprintOnASlopingPlaneGetsThePlanesZ) {
   std::vector<Point3> dem;
   for (int j = 0; j <= 10; ++j)
     for (int i = 0; i <= 10; ++i) dem.push_back({i * 10.0, j * 10.0, plane(i * 10.0, j * 10.0)});
-  const std::vector<Point3> footprint = {{31.5, 42.25, 0}, {47.125, 42.25, 0}, {47.125, 58.5, 0}, {31.5, 58.5, 0}};
+  const std::vector<Point3> footprint = {
+      {31.5, 42.25, 0}, {47.125, 42.25, 0}, {47.125, 58.5, 0}, {31.5, 58.5, 0}};
   for (auto kind : {ZRule::Kind::drape, ZRule::Kind::min, ZRule::Kind::mean, ZRule::Kind::max}) {
     Built b = build({{Role::vertices, dem, {}, {}}, {Role::breakline, {}, {footprint}, {kind, 0}}});
     DrapeStats s = apply_z_rules(b.in, b.parts);
@@ -474,7 +485,8 @@ TEST(Drape, FootprintOnASlopingPlaneGetsThePlanesZ) {
 }
 
 TEST(Drape, ConstantAndOutsideTheHull) {
-  std::vector<Point3> dem = {{0, 0, plane(0, 0)}, {10, 0, plane(10, 0)}, {0, 10, plane(0, 10)}, {10, 10, plane(10, 10)}};
+  std::vector<Point3> dem = {
+      {0, 0, plane(0, 0)}, {10, 0, plane(10, 0)}, {0, 10, plane(0, 10)}, {10, 10, plane(10, 10)}};
   Built b = build({{Role::vertices, dem, {}, {}},
                    {Role::vertices, {{5, 5, 0}, {20, 5, 0}}, {}, {ZRule::Kind::drape, 0}},
                    {Role::breakline, {}, {square(5, 5, 2, 7)}, {ZRule::Kind::constant, 12.5}}});
@@ -499,7 +511,8 @@ TEST(Drape, VerticesWithoutZAreNotPartOfTheSurface) {
   {
     std::ofstream f(dir + "plane.wkt");
     for (int j = 0; j <= 4; ++j)
-      for (int i = 0; i <= 4; ++i) f << "POINT Z (" << i * 10 << ' ' << j * 10 << ' ' << plane(i * 10, j * 10) << ")\n";
+      for (int i = 0; i <= 4; ++i)
+        f << "POINT Z (" << i * 10 << ' ' << j * 10 << ' ' << plane(i * 10, j * 10) << ")\n";
     f << "POINT (21 19)\nLINESTRING (5 35, 35 35)\n";  // 2D: no z
   }
   { std::ofstream(dir + "road.wkt") << "LINESTRING (3 3, 37 21)\n"; }
@@ -567,7 +580,7 @@ TEST(InputSpec, ParsesRoleAndZ) {
 TEST(InputSpec, PathsWithColonsStayPaths) {
   EXPECT_EQ(parse_input_spec("-").path, "-");
   EXPECT_EQ(parse_input_spec("data:2024/dem.xyz").path, "data:2024/dem.xyz");  // no '=' after the ':'
-  EXPECT_EQ(parse_input_spec("a:b/c.shp:role=hole").path, "a:b/c.shp");       // only the last ':'
+  EXPECT_EQ(parse_input_spec("a:b/c.shp:role=hole").path, "a:b/c.shp");        // only the last ':'
   EXPECT_EQ(parse_input_spec("x.wkt:").path, "x.wkt:");
   // A file that exists is taken whole, even when its name looks like options.
   const std::string odd = ::testing::TempDir() + "odd:role=hole.wkt";
@@ -594,12 +607,15 @@ TEST(InputSpec, UnknownKeyOrValueIsAUsageError) {
 TEST(InputSpec, ReadInputsGivesEachInputItsPartAndOptions) {
   const std::string dir = ::testing::TempDir();
   { std::ofstream(dir + "pts.xyz") << "0 0 1\n1 0 2\n0 1 3\n"; }
-  { std::ofstream(dir + "ring.wkt") << "POLYGON ((0.2 0.2, 0.4 0.2, 0.3 0.4, 0.2 0.2))\nLINESTRING (0 0.5, 0.5 0)\n"; }
+  {
+    std::ofstream(dir + "ring.wkt")
+        << "POLYGON ((0.2 0.2, 0.4 0.2, 0.3 0.4, 0.2 0.2))\nLINESTRING (0 0.5, 0.5 0)\n";
+  }
   InputSet in;
-  std::vector<InputPart> parts = read_inputs({parse_input_spec(dir + "pts.xyz"),
-                                              parse_input_spec(dir + "ring.wkt:role=vertices,z=drape"),
-                                              parse_input_spec(dir + "ring.wkt:role=hole")},
-                                             ReadOptions{}, in);
+  std::vector<InputPart> parts = read_inputs(
+      {parse_input_spec(dir + "pts.xyz"), parse_input_spec(dir + "ring.wkt:role=vertices,z=drape"),
+       parse_input_spec(dir + "ring.wkt:role=hole")},
+      ReadOptions{}, in);
   ASSERT_EQ(parts.size(), 3u);
   EXPECT_EQ(parts[0].points_begin, 0u);
   EXPECT_EQ(parts[0].points_end, 3u);
