@@ -163,7 +163,9 @@ int run_triangulate(const TriangulateOptions& options) {
   stats.counts["triangles_trimmed"] = rs.triangles_trimmed;
   stats.counts["vertices_outside_regions"] = rs.vertices_removed;
   if (result.mesh.triangles.empty())
-    spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
+    spdlog::warn(rs.triangles_outside || rs.triangles_trimmed
+                     ? "no triangles: boundaries, holes and --max-edge dropped them all"
+                     : "no triangles: fewer than 3 distinct points, or all points collinear");
   timed(stats, "write", [&] { write_mesh_file(result.mesh, l.crs, write, options.output); });
 
   stats.counts["steiner_points"] = result.steiner_points;

@@ -1,6 +1,6 @@
-// apply_regions: boundaries, holes and max-edge trimming over a finished CDT. Cost: one sort of the 3T
-// half-edges (twins and per-vertex lists), one walk per constraint along mesh edges, one flood fill:
-// O(T log T).
+// apply_regions: boundaries, holes and max-edge trimming over a finished CDT. Cost: O(T): per-vertex lists
+// of the 3T half-edges (counting sort) and their twins, one walk per constraint along mesh edges, one flood
+// fill, one compaction.
 //
 // The constrained mesh edges are found the way verify.cpp finds them: from one end of a constraint, step to
 // the neighbour that lies on the segment (exact orientation for input vertices; within rounding for Steiner
@@ -46,25 +46,29 @@ HalfEdges half_edges(const Mesh& mesh) {
   const std::vector<Triangle>& ts = mesh.triangles;
   const uint32_t V = uint32_t(mesh.vertices.size());
   const size_t H = ts.size() * 3;
+  auto from = [&](size_t h) { return ts[h / 3][h % 3]; };
+  auto to = [&](size_t h) { return ts[h / 3][(h % 3 + 1) % 3]; };
   HalfEdges e;
-  std::vector<std::pair<uint64_t, uint32_t>> by_key(H);
-  for (size_t h = 0; h < H; ++h) by_key[h] = {key(ts[h / 3][h % 3], ts[h / 3][(h % 3 + 1) % 3]), uint32_t(h)};
-  std::sort(by_key.begin(), by_key.end());
-  e.twin.assign(H, kNone);
+  // Half-edges leaving each vertex (counting sort), then each one's twin among those leaving its target
+  // (about six): no sort.
   e.first.assign(size_t(V) + 1, 0);
-  e.out.resize(H);
-  e.bprev_edge.assign(V, kNone);
-  for (const auto& [k, h] : by_key) {
-    const uint32_t a = uint32_t(k >> 32), b = uint32_t(k);
-    auto it = std::lower_bound(by_key.begin(), by_key.end(), std::make_pair(key(b, a), uint32_t(0)));
-    if (it != by_key.end() && it->first == key(b, a))
-      e.twin[h] = it->second;
-    else
-      e.bprev_edge[b] = h;
-    ++e.first[a + 1];
-  }
+  for (size_t h = 0; h < H; ++h) ++e.first[from(h) + 1];
   for (uint32_t v = 0; v < V; ++v) e.first[v + 1] += e.first[v];
-  for (size_t i = 0; i < H; ++i) e.out[i] = by_key[i].second;  // by_key is sorted by source vertex
+  e.out.resize(H);
+  std::vector<uint32_t> cursor(e.first.begin(), e.first.end() - 1);
+  for (size_t h = 0; h < H; ++h) e.out[cursor[from(h)]++] = uint32_t(h);
+  cursor = {};
+  e.twin.assign(H, kNone);
+  e.bprev_edge.assign(V, kNone);
+  for (size_t h = 0; h < H; ++h) {
+    const uint32_t a = from(h), b = to(h);
+    for (uint32_t i = e.first[b]; i < e.first[b + 1]; ++i)
+      if (to(e.out[i]) == a) {
+        e.twin[h] = e.out[i];
+        break;
+      }
+    if (e.twin[h] == kNone) e.bprev_edge[b] = uint32_t(h);
+  }
   return e;
 }
 
@@ -80,12 +84,16 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
   P.reserve(V);
   for (const Point3& p : mv) P.emplace_back(p.x, p.y);
   std::vector<uint8_t> is_input(V, 0);
+  // Both vertex lists are sorted by (x, y): one merge pass finds every input vertex in the mesh.
   std::vector<uint32_t> mesh_of(prepared.vertices.size());
+  uint32_t m = 0;
   for (size_t i = 0; i < prepared.vertices.size(); ++i) {
-    mesh_of[i] = find_vertex(mv, prepared.vertices[i]);
-    if (mesh_of[i] == kNone)
+    const Point3& p = prepared.vertices[i];
+    while (m < V && xy_less(mv[m], p)) ++m;
+    if (m == V || mv[m].x != p.x || mv[m].y != p.y)
       throw std::logic_error("regions: input vertex " + std::to_string(i) + " is not in the mesh");
-    is_input[mesh_of[i]] = 1;
+    mesh_of[i] = m;
+    is_input[m] = 1;
   }
   for (size_t c = 0; c < prepared.constraints.size(); ++c) {
     const uint8_t bits = kConstrained | (c < region.size() && region[c] ? kRegion : 0);
