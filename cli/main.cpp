@@ -58,9 +58,10 @@ int main(int argc, char** argv) {
   TriangulateOptions tri;
   std::string crs = "auto", utm_zone, epsg;
   auto* t = app.add_subcommand("triangulate", "triangulate inputs into a TIN");
-  t->add_option("inputs", tri.input.inputs, "input files: .shp .wkt .xyz .csv .txt .asc, or - for WKT on stdin; each may end in "
-                "options :role=breakline|vertices|boundary|hole and/or z=FIELD|NUMBER|drape|min|mean|max, "
-                "comma-separated (e.g. lakes.shp:role=hole, footprints.shp:role=breakline,z=drape)")
+  t->add_option("inputs", tri.input.inputs,
+                "input files: .shp .wkt .xyz .csv .txt .asc, or - for WKT on stdin; each may end in options "
+                ":role=breakline|vertices|boundary|hole and/or z=FIELD|NUMBER|drape|min|mean|max, comma-separated "
+                "(e.g. lakes.shp:role=hole, footprints.shp:role=breakline,z=drape)")
       ->required();
   t->add_option("-o,--output", tri.output, "output mesh (.obj .ply .wkt), or - for stdout")->required();
   t->add_option("--format", tri.format, "obj, ply or wkt (default: from the output's extension)");
