@@ -96,7 +96,8 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
     is_input[m] = 1;
   }
   for (size_t c = 0; c < prepared.constraints.size(); ++c) {
-    const uint8_t bits = kConstrained | (c < region.size() && region[c] ? kRegion : 0);
+    // Region edges toggle: a mesh edge covered by two region segments (collinear overlaps) is crossed twice.
+    const uint8_t toggle = c < region.size() && region[c] ? kRegion : 0;
     const uint32_t A = mesh_of[prepared.constraints[c][0]], B = mesh_of[prepared.constraints[c][1]];
     const P2 &pa = P[A], &pb = P[B];
     const double ux = pb.x() - pa.x(), uy = pb.y() - pa.y();
@@ -129,8 +130,8 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
       if (best == kNone || steps > V)
         throw std::logic_error("regions: constraint " + std::to_string(c) +
                                " is not covered by mesh edges (the mesh is not the CDT of its input)");
-      flag[best_he] |= bits;
-      if (e.twin[best_he] != kNone) flag[e.twin[best_he]] |= bits;
+      flag[best_he] = uint8_t((flag[best_he] | kConstrained) ^ toggle);
+      if (e.twin[best_he] != kNone) flag[e.twin[best_he]] = flag[best_he];
       cur = best;
     }
   }
@@ -213,10 +214,13 @@ std::vector<uint8_t> region_constraints(const PreparedInput& prepared, const std
     }
   }
   std::sort(segs.begin(), segs.end());
+  // A segment given by two rings (adjacent parcels, a lake on the boundary) is crossed twice: no region edge.
   std::vector<uint8_t> region(prepared.constraints.size(), 0);
-  for (size_t c = 0; c < region.size(); ++c)
-    region[c] = std::binary_search(segs.begin(), segs.end(),
-                                   key(prepared.constraints[c][0], prepared.constraints[c][1]));
+  for (size_t c = 0; c < region.size(); ++c) {
+    const uint64_t k = key(prepared.constraints[c][0], prepared.constraints[c][1]);
+    region[c] =
+        (std::upper_bound(segs.begin(), segs.end(), k) - std::lower_bound(segs.begin(), segs.end(), k)) % 2;
+  }
   return region;
 }
 

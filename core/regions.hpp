@@ -44,7 +44,9 @@ RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts
                          const PreparedInput& prepared, double max_edge);
 
 // Region edge flags for prepared.constraints: a constraint is a region edge when its two ends are the two
-// ends of one segment of one of `rings` (by exact (x, y)); rings are closed, lines open.
+// ends of an odd number of segments of `rings` (by exact (x, y)); rings are closed, lines open. Even: the
+// segment is crossed twice (an edge shared by adjacent boundaries is inside their union). Collinear partial
+// overlaps are resolved the same way on the mesh edges, by apply_regions.
 std::vector<uint8_t> region_constraints(const PreparedInput& prepared, const std::vector<Polyline>& rings);
 
 // Drops the triangles outside the domain and those trimmed, then the vertices left in no triangle. `mesh` is

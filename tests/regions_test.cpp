@@ -431,6 +431,46 @@ TEST(Regions, RoadCrossingTheBoundary) {
   for (const Point3& q : r.mesh.vertices) EXPECT_LT(std::hypot(q.x, q.y), 70.0 + 1e-9);
 }
 
+double area(const Mesh& m) {
+  double a = 0;
+  for (const Triangle& t : m.triangles) {
+    const Point3 &p = m.vertices[t[0]], &q = m.vertices[t[1]], &r = m.vertices[t[2]];
+    a += 0.5 * ((q.x - p.x) * (r.y - p.y) - (q.y - p.y) * (r.x - p.x));
+  }
+  return a;
+}
+
+// Several boundaries are their union, also when they share edges (adjacent parcels) or parts of edges: a
+// segment given twice is crossed twice.
+TEST(Regions, AdjacentBoundariesAreTheirUnion) {
+  const std::vector<Point3> pts = scatter(300, -5, -5, 25, 15, 10);
+  const std::vector<Point3> a = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}};
+  const std::vector<Point3> b = {{10, 0, 0}, {20, 0, 0}, {20, 10, 0}, {10, 10, 0}};
+  const std::vector<Point3> c = {{10, 2, 0}, {10, 8, 0}, {4, 8, 0}, {4, 2, 0}};  // inside a, on its edge
+  const std::vector<Point3> d = {
+      {20, 2, 0}, {24, 2, 0}, {24, 8, 0}, {20, 8, 0}};  // beside b, part of its edge
+  for (const auto& [name, rings, want] : {std::tuple{"shared edge", std::vector{a, b}, 200.0},
+                                          std::tuple{"partly shared edge", std::vector{a, b, d}, 224.0}}) {
+    Built built = build({{Role::vertices, pts, {}, {}}, {Role::boundary, {}, rings, {}}});
+    PreparedInput p = prepare(built.in);
+    const RegionRules rules = region_rules(built.in, built.parts, p, 0);
+    CdtResult r = triangulate_cgal(p);
+    apply_regions(r.mesh, p, rules);
+    EXPECT_NEAR(area(r.mesh), want, 1e-9) << name;
+    VerifyReport v = verify_regions(r.mesh, p, rules);
+    EXPECT_TRUE(v.ok()) << name << ": " << (v.failures.empty() ? "" : v.failures[0]);
+  }
+  // A hole touching its boundary's edge from inside: the parity rule cuts it out as well.
+  Built built =
+      build({{Role::vertices, pts, {}, {}}, {Role::boundary, {}, {a}, {}}, {Role::hole, {}, {c}, {}}});
+  PreparedInput p = prepare(built.in);
+  const RegionRules rules = region_rules(built.in, built.parts, p, 0);
+  CdtResult r = triangulate_cgal(p);
+  apply_regions(r.mesh, p, rules);
+  EXPECT_NEAR(area(r.mesh), 100.0 - 36.0, 1e-9);
+  EXPECT_TRUE(verify_regions(r.mesh, p, rules).ok());
+}
+
 // The GPU backend's mesh through apply_regions gives the same mesh (on lavapipe where there is no GPU).
 TEST(RegionsGpu, SameAsCgalBackend) {
   gpu::Context ctx = gpu::create_context({});
