@@ -58,7 +58,10 @@ int main(int argc, char** argv) {
   TriangulateOptions tri;
   std::string crs = "auto", utm_zone, epsg;
   auto* t = app.add_subcommand("triangulate", "triangulate inputs into a TIN");
-  t->add_option("inputs", tri.input.inputs, "input files: .shp .wkt .xyz .csv .txt .asc, or - for WKT on stdin")
+  t->add_option("inputs", tri.input.inputs,
+                "input files: .shp .wkt .xyz .csv .txt .asc, or - for WKT on stdin; each may end in options "
+                ":role=breakline|vertices|boundary|hole and/or z=FIELD|NUMBER|drape|min|mean|max, comma-separated "
+                "(e.g. lakes.shp:role=hole, footprints.shp:role=breakline,z=drape)")
       ->required();
   t->add_option("-o,--output", tri.output, "output mesh (.obj .ply .wkt .xml (LandXML) .2dm), or - for stdout")
       ->required();
@@ -81,6 +84,9 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   t->add_option("--preview", tri.preview, "also write a hillshaded picture of the TIN (PNG, about 1000 px wide)");
   t->add_option("--stats", tri.stats_path, "write counts, CRS and stage times as JSON to this file");
+  t->add_option("--max-edge", tri.max_edge,
+                 "drop triangles reached from outside across an unconstrained edge longer than this (concave hull)")
+      ->check(CLI::PositiveNumber);
   add_input_options(t, tri.input, crs, utm_zone, epsg);
 
   std::string mesh_path;

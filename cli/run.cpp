@@ -1,5 +1,6 @@
 #include "cli/run.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <fstream>
 #include <functional>
@@ -8,18 +9,22 @@
 #include <spdlog/spdlog.h>
 
 #include "core/cdt_cgal.hpp"
+#include "core/drape.hpp"
 #include "core/error.hpp"
 #include "core/hillshade.hpp"
 #include "core/prepare.hpp"
+#include "core/regions.hpp"
 #include "core/stats.hpp"
 #include "core/verify.hpp"
 #include "cli/gpu_start.hpp"
 #include "cli/progress.hpp"
-#include "gpu/check.hpp"
+#include "core/verify_regions.hpp"
 #include "gpu/cdt_pipeline.hpp"
+#include "gpu/check.hpp"
 #include "io/atomic_file.hpp"
-#include "io/output_guard.hpp"
 #include "io/gis_writers.hpp"
+#include "io/input_spec.hpp"
+#include "io/output_guard.hpp"
 #include "io/write_png.hpp"
 
 namespace cdtgpu {
@@ -48,6 +53,7 @@ auto timed(RunStats& stats, const std::string& name, F&& f) {
 
 struct Loaded {
   InputSet in;
+  std::vector<InputPart> parts;  // what each input added, with its role and z rule
   Crs crs;
   PreparedInput prepared;
 };
@@ -55,11 +61,24 @@ struct Loaded {
 // Read and projected; what prepare() needs next.
 Loaded read_all(const InputOptions& options, RunStats& stats) {
   Loaded l;
-  timed(stats, "read", [&] {
-    read_inputs(options.inputs, options.read, l.in);
-  });
+  std::vector<InputSpec> specs;
+  for (const std::string& arg : options.inputs) specs.push_back(parse_input_spec(arg));
+  timed(stats, "read", [&] { l.parts = read_inputs(specs, options.read, l.in); });
   l.crs = choose_crs(l.in, options.crs);
   timed(stats, "project", [&] { project(l.in, l.crs); });
+  const DrapeStats drape = timed(stats, "drape", [&] { return apply_z_rules(l.in, l.parts); });
+  if (drape.draped_vertices)
+    spdlog::info("draped {} vertices ({} beyond the surface's hull took the z of its nearest edge)",
+                 drape.draped_vertices, drape.outside_surface);
+  stats.counts["draped_vertices"] = drape.draped_vertices;
+  uint64_t zero_z = 0;
+  for (size_t i = 0; i < drape.zero_z.size(); ++i)
+    if (drape.zero_z[i]) {
+      zero_z += drape.zero_z[i];
+      spdlog::info("{}: {} vertices have no z and get 0 (:z=drape drapes them, :z=0 says so)", specs[i].path,
+                   drape.zero_z[i]);
+    }
+  stats.counts["vertices_without_z"] = zero_z;
   return l;
 }
 
@@ -131,13 +150,15 @@ int run_triangulate(const TriangulateOptions& options) {
   std::vector<std::string> outputs = triangulate_outputs(options.output, options.stats_path);
   for (const std::string* extra : {&options.grid_out, &options.contours_out, &options.preview})
     if (!extra->empty()) outputs.push_back(*extra);  // their .prj files hold the mesh's CRS and may be its .prj
-  check_outputs_spare_inputs(options.input.inputs, outputs);
+  std::vector<std::string> input_paths;  // without their :key=value options
+  for (const std::string& arg : options.input.inputs) input_paths.push_back(parse_input_spec(arg).path);
+  check_outputs_spare_inputs(input_paths, outputs);
 
   // The GPU starts on its own thread while the inputs are read: forced, or when auto may pick it (the files
   // are large enough to hold auto_min_points() points).
   const uint64_t min_points = auto_min_points();
   std::optional<GpuStart> start;
-  if (options.backend == "gpu" || (options.backend == "auto" && max_input_points(options.input.inputs) >= min_points))
+  if (options.backend == "gpu" || (options.backend == "auto" && max_input_points(input_paths) >= min_points))
     start.emplace(options.device, options.backend == "auto");
 
   Loaded l = read_all(options.input, stats);
@@ -191,8 +212,18 @@ int run_triangulate(const TriangulateOptions& options) {
     stats.counts["gpu_peak_device_bytes"] = gs.peak_device_bytes;
     return r;
   });
+  const RegionRules rules = region_rules(l.in, l.parts, l.prepared, options.max_edge);
+  const RegionStats rs = timed(stats, "regions", [&] { return apply_regions(result.mesh, l.prepared, rules); });
+  if (rs.triangles_outside || rs.triangles_trimmed)
+    spdlog::info("dropped {} triangles outside boundaries or inside holes, {} by --max-edge", rs.triangles_outside,
+                 rs.triangles_trimmed);
+  stats.counts["triangles_outside_regions"] = rs.triangles_outside;
+  stats.counts["triangles_trimmed"] = rs.triangles_trimmed;
+  stats.counts["vertices_outside_regions"] = rs.vertices_removed;
   if (result.mesh.triangles.empty())
-    spdlog::warn("no triangles: fewer than 3 distinct points, or all points collinear");
+    spdlog::warn(rs.triangles_outside || rs.triangles_trimmed
+                     ? "no triangles: boundaries, holes and --max-edge dropped them all"
+                     : "no triangles: fewer than 3 distinct points, or all points collinear");
   // Derived outputs are computed before anything is written: a grid that cannot be made writes nothing.
   std::optional<Raster> grid;
   std::vector<Contour> contours;
@@ -244,7 +275,9 @@ int run_verify(const std::string& mesh_path, const InputOptions& options) {
   RunStats stats;
   Mesh mesh = read_mesh_file(mesh_path);
   Loaded l = load(options, stats);
-  VerifyReport report = verify_mesh(mesh, l.prepared);
+  const RegionRules rules = region_rules(l.in, l.parts, l.prepared, 0);
+  const bool regions = std::count(rules.region_edge.begin(), rules.region_edge.end(), 1) > 0;
+  VerifyReport report = regions ? verify_regions(mesh, l.prepared, rules) : verify_mesh(mesh, l.prepared);
   for (const std::string& f : report.failures) spdlog::error("{}: {}", mesh_path, f);
   if (!report.ok()) {
     spdlog::error("{}: NOT the constrained Delaunay triangulation of the inputs", mesh_path);

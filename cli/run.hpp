@@ -28,6 +28,7 @@ struct TriangulateOptions {
   std::string contours_out;  // contour lines as WKT (core/contours.hpp); empty: none
   double interval = 10.0;    // their interval
   std::string preview;       // hillshaded PNG of the TIN (core/hillshade.hpp); empty: none
+  double max_edge = 0;       // > 0: concave-hull trimming (core/regions.hpp)
 };
 
 // Returns the process exit code; throws InputError / UsageError for bad input.

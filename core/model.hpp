@@ -1,6 +1,7 @@
 // The data model shared by readers, backends, writers and verify.
 #pragma once
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -36,7 +37,14 @@ struct InputSet {
   std::vector<Polyline> lines;       // constraints
   Repairs repairs;
   std::string source_crs_wkt;        // WKT1 of the first .prj seen, if any
+  // Set by io/input_spec's read_inputs: readers give vertices without z (2D geometry, no z field) the z
+  // missing_z() instead of 0, and core/drape's apply_z_rules resolves every one before prepare. Off: z = 0.
+  bool nan_for_missing_z = false;
 };
+
+// A NaN with its own payload: "this vertex was read without z". Any other NaN is still bad input.
+inline double missing_z() { return std::bit_cast<double>(uint64_t(0x7ff8'0000'007a'0000)); }
+inline bool is_missing_z(double z) { return std::bit_cast<uint64_t>(z) == 0x7ff8'0000'007a'0000; }
 
 using Triangle = std::array<uint32_t, 3>;  // vertex indices, counter-clockwise
 using Edge = std::array<uint32_t, 2>;

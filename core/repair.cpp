@@ -7,7 +7,8 @@
 namespace cdtgpu {
 
 void check_finite(const InputSet& in, uint32_t source, uint64_t record, const Point3& p) {
-  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+  const bool z_ok = std::isfinite(p.z) || (in.nan_for_missing_z && is_missing_z(p.z));
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !z_ok)
     throw InputError(source < in.sources.size() ? in.sources[source] : "?", record,
                      "coordinate is not a finite number");
 }

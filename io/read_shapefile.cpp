@@ -419,7 +419,7 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
     const bool z_from_geometry = !z_field && has_z(type) && o->padfZ;
     check_coordinates(*o, box, z_from_geometry, path, record);
     if (geographic) check_lon_lat(*o, prj_path, path, record);
-    const double z_attribute = z_field ? z_field->read(i) : 0.0;
+    const double z_attribute = z_field ? z_field->read(i) : in.nan_for_missing_z ? missing_z() : 0.0;
     auto vertex = [&](int k) {
       return Point3{o->padfX[k], o->padfY[k], z_from_geometry ? o->padfZ[k] : z_attribute};
     };

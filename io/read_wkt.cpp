@@ -156,6 +156,7 @@ class Parser {
       i_ = start;  // name the line of the coordinate itself, which may follow the geometry's first line
       fail("coordinate is not a finite number");
     }
+    if (!has_z && in_.nan_for_missing_z) return {p.x, p.y, missing_z()};
     return p;
   }
 

@@ -72,39 +72,43 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
                          "' (expected .shp, .wkt, .xyz, .csv, .txt or .asc, or - for WKT on stdin)");
 }
 
-void read_inputs(const std::vector<std::string>& paths, const ReadOptions& options, InputSet& in) {
-  if (options.z_field.empty()) {
-    for (const std::string& path : paths) read_input(path, options, in);
+GlobalZField::GlobalZField(const ReadOptions& options) : options_(options) {}
+
+void GlobalZField::read(const std::string& path, InputSet& in) {
+  if (options_.z_field.empty() || path == "-" || lower(std::filesystem::path(path).extension().string()) != ".shp") {
+    read_input(path, options_, in);
     return;
   }
+  any_shapefile_ = true;
+  ZFieldLookup lookup;
+  read_shapefile(path, options_, in, &lookup);
+  if (lookup.found)
+    found_ = true;
+  else
+    without_.emplace_back(path, lookup.why_not);
+}
+
+void GlobalZField::finish() const {
+  if (options_.z_field.empty()) return;
   // --z-field NOPE used to be ignored without a word for Z shapefiles (their geometry's z was kept); the rule is
   // now that some input must have the field, so a misspelt name fails while contours with ELEV read along with
   // footprints without it (the README's sample) still work.
-  std::vector<std::pair<std::string, std::string>> without;  // shapefile, why
-  bool any_shapefile = false, found = false;
-  for (const std::string& path : paths) {
-    if (path == "-" || lower(std::filesystem::path(path).extension().string()) != ".shp") {
-      read_input(path, options, in);
-      continue;
-    }
-    any_shapefile = true;
-    ZFieldLookup lookup;
-    read_shapefile(path, options, in, &lookup);
-    if (lookup.found)
-      found = true;
-    else
-      without.emplace_back(path, lookup.why_not);
-  }
-  if (!any_shapefile)
-    throw UsageError("--z-field " + options.z_field + " reads z from a shapefile's attributes, and no input is a "
+  if (!any_shapefile_)
+    throw UsageError("--z-field " + options_.z_field + " reads z from a shapefile's attributes, and no input is a "
                      "shapefile");
-  if (!found) {
+  if (!found_) {
     std::string why;
-    for (const auto& [path, reason] : without) why += (why.empty() ? "" : "; ") + path + ": " + reason;
-    throw InputError(without.front().first, 0,
-                     "no input shapefile has the z field " + options.z_field + " (" + why + ")");
+    for (const auto& [path, reason] : without_) why += (why.empty() ? "" : "; ") + path + ": " + reason;
+    throw InputError(without_.front().first, 0,
+                     "no input shapefile has the z field " + options_.z_field + " (" + why + ")");
   }
-  for (const auto& [path, reason] : without) spdlog::info("{}: {}: z from its geometry", path, reason);
+  for (const auto& [path, reason] : without_) spdlog::info("{}: {}: z from its geometry", path, reason);
+}
+
+void read_inputs(const std::vector<std::string>& paths, const ReadOptions& options, InputSet& in) {
+  GlobalZField reader(options);
+  for (const std::string& path : paths) reader.read(path, in);
+  reader.finish();
 }
 
 }  // namespace cdtgpu

@@ -3,6 +3,7 @@
 #include <istream>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/model.hpp"
@@ -22,6 +23,18 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
 // z must have it. Throws InputError naming each shapefile and the fields it has when none has the field, and
 // UsageError when no input is a shapefile.
 void read_inputs(const std::vector<std::string>& paths, const ReadOptions& options, InputSet& in);
+
+// read_inputs one input at a time, for callers that mix inputs under the global z field with others.
+class GlobalZField {
+ public:
+  explicit GlobalZField(const ReadOptions& options);
+  void read(const std::string& path, InputSet& in);  // one input, under options.z_field
+  void finish() const;                               // throws as read_inputs does
+ private:
+  ReadOptions options_;
+  bool any_shapefile_ = false, found_ = false;
+  std::vector<std::pair<std::string, std::string>> without_;  // shapefile, why
+};
 
 // Alone, a shapefile must have the z field when one is asked for (InputError listing the fields it has).
 void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in);

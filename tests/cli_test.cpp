@@ -207,6 +207,54 @@ TEST_F(Cli, VerifyRejectsAMeshOfOtherInputs) {
   EXPECT_NE(v.err.find("NOT"), std::string::npos) << v.err;
 }
 
+// Per-input options: a boundary and a hole cut the TIN, a 2D footprint is draped, and both backends agree.
+TEST_F(Cli, RolesAndDrapeWithBothBackends) {
+  write_terrain();
+  write("area.wkt", "POLYGON ((500030 6000030, 500170 6000030, 500170 6000170, 500030 6000170, 500030 6000030))\n");
+  write("lake.wkt", "POLYGON ((500060 6000060, 500090 6000060, 500090 6000090, 500060 6000090, 500060 6000060))\n");
+  write("house.wkt", "POLYGON ((500150.5 6000100.5, 500160.5 6000100.5, 500160.5 6000110.5, 500150.5 6000110.5))\n");
+  const std::string in = path("dem.csv") + " " + path("area.wkt") + ":role=boundary " + path("lake.wkt") +
+                         ":role=hole " + path("house.wkt") + ":z=drape --max-edge 50 -q";
+  Result c = run("triangulate " + in + " --backend cgal -o " + path("cgal.ply") + " --stats " + path("c.json"));
+  ASSERT_EQ(c.code, 0) << c.err;
+  Result g = run("triangulate " + in + " -o " + path("gpu.ply"));
+  ASSERT_EQ(g.code, 0) << g.err;
+  EXPECT_EQ(slurp(path("gpu.ply")), slurp(path("cgal.ply")));
+  auto stats = nlohmann::json::parse(slurp(path("c.json")));
+  EXPECT_EQ(stats["counts"]["draped_vertices"], 4);
+  EXPECT_GT(stats["counts"]["triangles_outside_regions"].get<int>(), 100);
+  EXPECT_GT(stats["counts"]["vertices_outside_regions"].get<int>(), 100);
+  // The draped house's corners sit on the terrain (z about 100 + i + j / 2 there), not at 0.
+  Result w = run("triangulate " + in + " --backend cgal --format wkt -o -", path("tin.wkt"));
+  ASSERT_EQ(w.code, 0) << w.err;
+  const std::string wkt = slurp(path("tin.wkt"));
+  const size_t at = wkt.find("500150.5 6000100.5 ");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_GT(std::stod(wkt.substr(at + 19)), 100.0);
+
+  // verify understands the roles: without --max-edge the mesh is the CDT restricted to the domain.
+  const std::string roles = path("dem.csv") + " " + path("area.wkt") + ":role=boundary " + path("lake.wkt") +
+                            ":role=hole " + path("house.wkt") + ":z=drape -q";
+  ASSERT_EQ(run("triangulate " + roles + " --backend cgal -o " + path("roles.ply")).code, 0);
+  Result v = run("verify " + path("roles.ply") + " " + roles);
+  EXPECT_EQ(v.code, 0) << v.err;
+  // The lake given as a breakline: the mesh has a hole where verify expects triangles.
+  v = run("verify " + path("roles.ply") + " " + path("dem.csv") + " " + path("area.wkt") + ":role=boundary " +
+          path("lake.wkt") + " " + path("house.wkt") + ":z=drape");
+  EXPECT_EQ(v.code, 1) << v.err;
+  EXPECT_NE(v.err.find("missing"), std::string::npos) << v.err;
+}
+
+TEST_F(Cli, UnknownInputOptionIsAUsageError) {
+  write_terrain();
+  Result r = run("triangulate " + path("dem.csv") + ":colour=red -o " + path("out.ply"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("colour"), std::string::npos) << r.err;
+  r = run("triangulate " + path("dem.csv") + ":z=ELEV -o " + path("out.ply"));
+  EXPECT_EQ(r.code, 2) << r.err;  // a field name on a text file
+  EXPECT_EQ(files_matching("out"), 0u);
+}
+
 // Bad input: exit code 2, a message naming the file (and line where there is one), no output written.
 void expect_bad(const Cli& t, const Result& r, const std::string& file, const std::string& detail) {
   EXPECT_EQ(r.code, 2) << r.err;

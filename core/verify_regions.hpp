@@ -1,0 +1,20 @@
+// verify for meshes made with boundary and hole inputs: the CDT restricted to the domain.
+//
+//   RegionRules rules = region_rules(in, parts, prepared, 0);
+//   VerifyReport r = verify_regions(mesh, prepared, rules);
+//
+// Independent of apply_regions' flood fill: the CDT of `prepared` is computed with the CGAL backend and
+// checked by verify_mesh; each of its triangles is in the domain when a point strictly inside it (checked
+// with exact orientation) is inside by the parity of region segments crossed by a ray to +x (exact
+// orientation tests, half-open in y), odd or even as RegionRules says. The mesh must hold exactly those
+// triangles, with the CDT's vertices and z. --max-edge trimming is not checked (a trimmed mesh fails).
+#pragma once
+#include "core/regions.hpp"
+#include "core/verify.hpp"
+
+namespace cdtgpu {
+
+VerifyReport verify_regions(const Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules,
+                            size_t max_failures = 20);
+
+}  // namespace cdtgpu

@@ -1,0 +1,130 @@
+// parse_input_spec and read_inputs: the per-input suffix of the command line and reading with it.
+#include "io/input_spec.hpp"
+
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <string_view>
+
+#include "core/error.hpp"
+
+namespace cdtgpu {
+
+namespace {
+
+std::optional<double> number(std::string_view s) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  double v = 0;
+  auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc() || end != s.data() + s.size() || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+std::vector<std::string_view> split(std::string_view s, char c) {
+  std::vector<std::string_view> items;
+  for (size_t at = 0;;) {
+    const size_t next = s.find(c, at);
+    items.push_back(s.substr(at, next == std::string_view::npos ? std::string_view::npos : next - at));
+    if (next == std::string_view::npos) return items;
+    at = next + 1;
+  }
+}
+
+}  // namespace
+
+InputSpec parse_input_spec(const std::string& arg) {
+  InputSpec spec;
+  spec.path = arg;
+  std::error_code ec;
+  const size_t colon = arg.rfind(':');
+  if (colon == std::string::npos || colon == 0 || std::filesystem::exists(arg, ec)) return spec;
+  const std::string_view suffix = std::string_view(arg).substr(colon + 1);
+  const std::vector<std::string_view> items = split(suffix, ',');
+  for (std::string_view item : items)
+    if (item.find('=') == std::string_view::npos) return spec;  // not options: a path with a ':'
+  spec.path = arg.substr(0, colon);
+  bool seen_role = false, seen_z = false;
+  for (std::string_view item : items) {
+    const size_t eq = item.find('=');
+    const std::string key(item.substr(0, eq)), value(item.substr(eq + 1));
+    const std::string where = " in '" + arg + "'";
+    if (key == "role") {
+      if (seen_role) throw UsageError("role given twice" + where);
+      seen_role = true;
+      if (value == "breakline")
+        spec.role = Role::breakline;
+      else if (value == "vertices")
+        spec.role = Role::vertices;
+      else if (value == "boundary")
+        spec.role = Role::boundary;
+      else if (value == "hole")
+        spec.role = Role::hole;
+      else
+        throw UsageError("unknown role '" + value + "'" + where +
+                         " (use breakline, vertices, boundary or hole)");
+    } else if (key == "z") {
+      if (seen_z) throw UsageError("z given twice" + where);
+      seen_z = true;
+      if (value.empty())
+        throw UsageError("z needs a value" + where + " (a field name, a number, drape, min, mean or max)");
+      if (value == "drape")
+        spec.z.kind = ZRule::Kind::drape;
+      else if (value == "min")
+        spec.z.kind = ZRule::Kind::min;
+      else if (value == "mean")
+        spec.z.kind = ZRule::Kind::mean;
+      else if (value == "max")
+        spec.z.kind = ZRule::Kind::max;
+      else if (std::optional<double> v = number(value))
+        spec.z = {ZRule::Kind::constant, *v};
+      else
+        spec.z_field = value;
+    } else {
+      throw UsageError("unknown input option '" + key + "'" + where + " (known: role, z)");
+    }
+  }
+  return spec;
+}
+
+std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const ReadOptions& defaults,
+                                   InputSet& in) {
+  std::vector<InputPart> parts;
+  in.nan_for_missing_z = true;
+  GlobalZField global(defaults);  // inputs without their own z=FIELD: --z-field must be in some shapefile
+  for (const InputSpec& spec : specs) {
+    ReadOptions options = defaults;
+    if (spec.z_field) {
+      std::string ext = std::filesystem::path(spec.path).extension().string();
+      for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+      if (ext != ".shp")
+        throw UsageError("z=" + *spec.z_field + " names an attribute field, which only shapefiles have (" +
+                         spec.path + "); z takes a number, drape, min, mean or max");
+      options.z_field = *spec.z_field;
+    }
+    InputPart part;
+    part.points_begin = in.points.size();
+    part.lines_begin = in.lines.size();
+    if (spec.z_field)
+      read_input(spec.path, options, in);  // its own field: required
+    else
+      global.read(spec.path, in);
+    if (spec.role == Role::vertices) {
+      for (size_t i = part.lines_begin; i < in.lines.size(); ++i)
+        in.points.insert(in.points.end(), in.lines[i].points.begin(), in.lines[i].points.end());
+      in.lines.resize(part.lines_begin);
+    }
+    part.points_end = in.points.size();
+    part.lines_end = in.lines.size();
+    if ((spec.role == Role::boundary || spec.role == Role::hole) && part.lines_end == part.lines_begin)
+      throw UsageError(spec.path + ": role=" + (spec.role == Role::boundary ? "boundary" : "hole") +
+                       " needs polygons (rings), and this input has only points");
+    part.role = spec.role;
+    part.z = spec.z;
+    parts.push_back(part);
+  }
+  global.finish();
+  return parts;
+}
+
+}  // namespace cdtgpu
