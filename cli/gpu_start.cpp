@@ -48,6 +48,19 @@ GpuStart::~GpuStart() {
   if (ready_) ready_->cdt.reset();  // its passes before the context
 }
 
+void GpuStart::leave_for_exit() {
+  if (pending_.valid()) {
+    try {
+      ready_ = pending_.get();
+    } catch (...) {  // a start that failed has nothing to leave
+      return;
+    }
+  }
+  if (!ready_) return;
+  gpu::store_pipeline_cache(ready_->ctx);
+  (void)ready_.release();  // deliberately never destroyed
+}
+
 gpu::GpuCdt& GpuStart::cdt() {
   if (!ready_) ready_ = pending_.get();
   return *ready_->cdt;

@@ -263,6 +263,7 @@ int run_triangulate(const TriangulateOptions& options) {
                result.mesh.triangles.size(), l.prepared.constraints.size(), result.steiner_points);
   if (cdt) stats.stage_ms.emplace_back("gpu pipeline waits", gpu::pipeline_wait_ms());
   timed(stats, "release", [&] {
+    if (start) start->leave_for_exit();
     start.reset();
     l = Loaded{};
     result = CdtResult{};

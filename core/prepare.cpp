@@ -9,7 +9,10 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
+#include <chrono>
 #include <atomic>
 #include <cmath>
 #include <execution>
@@ -58,6 +61,12 @@ PointMerge merge_points(std::span<const double> xy) {
 }
 
 PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
+  using Clock = std::chrono::steady_clock;
+  auto t = Clock::now();
+  auto phase = [&](const char* name) {
+    spdlog::debug("prepare: {} {:.1f} ms", name, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+    t = Clock::now();
+  };
   PreparedInput out;
   uint64_t total = in.points.size();
   for (const Polyline& l : in.lines) total += l.points.size();
@@ -81,8 +90,10 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
   for (const Polyline& l : in.lines)
     for (const Point3& p : l.points) push(p);
 
+  phase("gather");
   // The merged vertices: coordinates and z of their first occurrence; conflicts where a later z differs.
   const PointMerge m = merge(xy);
+  phase("merge");
   if (m.vertex_of.size() != total || m.first.size() > total)
     throw std::logic_error("prepare: the point merge returned " + std::to_string(m.vertex_of.size()) +
                            " of " + std::to_string(total) + " points");
@@ -113,6 +124,7 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
   out.merged_duplicates = total - out.vertices.size();
   xy = {};
   z = {};
+  phase("vertices");
 
   // Segments of every polyline, the closing edge of every ring included.
   std::vector<SegmentKey> segs;
@@ -133,9 +145,11 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
     }
     base += n;
   }
+  phase("segments");
   std::sort(std::execution::par, segs.begin(), segs.end(), [](const SegmentKey& s, const SegmentKey& t) {
     return s.ab != t.ab ? s.ab < t.ab : s.line < t.line;
   });
+  phase("segment sort");
   for (size_t i = 0; i < segs.size(); ++i) {
     if (i > 0 && segs[i].ab == segs[i - 1].ab) {
       ++out.duplicate_segments;
@@ -144,6 +158,7 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
     out.constraints.push_back({uint32_t(segs[i].ab >> 32), uint32_t(segs[i].ab & 0xffffffffu)});
     out.constraint_line.push_back(segs[i].line);
   }
+  phase("constraints");
   return out;
 }
 

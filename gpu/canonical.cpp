@@ -1,6 +1,9 @@
 #include "gpu/canonical.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <bit>
+#include <chrono>
 
 #include "gpu/profiler.hpp"
 #include "gpu/recorder.hpp"
@@ -46,8 +49,13 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
   uint32_t finite = 0;
   gpu::download(ctx_, count, &finite, 4);
   static_assert(sizeof(Triangle) == 12, "Triangle is three packed uint32");
+  const auto t0 = std::chrono::steady_clock::now();
   out.resize(finite);
+  const auto t1 = std::chrono::steady_clock::now();
   gpu::download(ctx_, tris, out.data(), uint64_t(finite) * sizeof(Triangle));
+  spdlog::debug("canonical download: {:.1f} ms to allocate, {:.1f} ms to copy {} triangles",
+                std::chrono::duration<double, std::milli>(t1 - t0).count(),
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count(), finite);
   return out;
 }
 

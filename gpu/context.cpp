@@ -280,8 +280,15 @@ std::string describe_devices(const std::string& override_name) {
 }
 
 namespace {
-// Saves the pipeline cache when the run compiled something new, then destroys it.
 void save_cache(Context& c) {
+  if (!c.pipeline_cache) return;
+  store_pipeline_cache(c);
+  vkDestroyPipelineCache(c.device, c.pipeline_cache, nullptr);
+  c.pipeline_cache = VK_NULL_HANDLE;
+}
+}  // namespace
+
+void store_pipeline_cache(const Context& c) {
   if (!c.pipeline_cache) return;
   size_t n = 0;
   std::vector<char> data;
@@ -293,9 +300,9 @@ void save_cache(Context& c) {
   if (!data.empty() && !c.pipeline_cache_file.empty() &&
       (data.size() != c.pipeline_cache_loaded || std::hash<std::string_view>{}({data.data(), data.size()}) != c.pipeline_cache_hash))
     save_pipeline_cache(c.pipeline_cache_file, c.props, data);
-  vkDestroyPipelineCache(c.device, c.pipeline_cache, nullptr);
-  c.pipeline_cache = VK_NULL_HANDLE;
 }
+
+namespace {
 
 void release(Context& c) {
   if (c.device) {

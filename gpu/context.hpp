@@ -104,6 +104,10 @@ struct Context {
   mutable std::shared_ptr<void> temp_pool;
 };
 
+// Saves the context's pipeline cache to its file when the run compiled something new (destroying the context
+// does this too).
+void store_pipeline_cache(const Context& ctx);
+
 // Creates the context; throws DeviceError (naming the device and the missing features) when the chosen device
 // cannot run the pipeline: it needs shaderFloat64, shaderInt64, shaderBufferInt64Atomics, timestamps, subgroup
 // arithmetic/ballot and VK_KHR_push_descriptor.

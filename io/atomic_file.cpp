@@ -6,6 +6,10 @@
 // is checked: std::ofstream's close cannot report a failed final flush, so the bytes go through write(2).
 #include "io/atomic_file.hpp"
 
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -251,9 +255,14 @@ void write_replacing(const std::string& path, const Target& t,
     // The new file keeps the old one's permissions (umask applies to a new one only).
     if (t.exists && ::fchmod(fd, t.mode & 07777) != 0)
       fail(path, "cannot set the permissions of " + tmp, errno);
+    const auto t0 = std::chrono::steady_clock::now();
     write_fd(fd, path, write);
+    const auto t1 = std::chrono::steady_clock::now();
     // Synced before the rename, so that a crash can leave the old file or the new one, never an empty one.
     if (::fsync(fd) != 0 && errno != EINVAL) fail(path, "write failed (sync)", errno);
+    spdlog::debug("{}: written in {:.1f} ms, synced in {:.1f} ms", path,
+                  std::chrono::duration<double, std::milli>(t1 - t0).count(),
+                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count());
   } catch (...) {
     ::close(fd);
     ::unlink(tmp.c_str());

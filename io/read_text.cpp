@@ -133,7 +133,7 @@ void read_xyz_text(std::string_view text, const std::string& name, InputSet& in)
   const std::vector<Chunk> chunks = split_lines(text.substr(rest), chunk_bytes(text.size() - rest), line_no + 1);
   std::vector<InputSet> parts(chunks.size());
   parse_chunks(chunks, [&](size_t k, const Chunk& c) {
-    InputSet& part = parts[k] = chunk_part(source, name);
+    InputSet& part = parts[k] = chunk_part(in, source, name);
     part.points.reserve((c.end - c.begin) / 16);
     uint64_t line = c.first_line;
     for_each_line(text.substr(rest), c.begin, c.end, [&](const char* b, const char* e) {

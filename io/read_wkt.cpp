@@ -322,7 +322,7 @@ void read_wkt_text(std::string_view text, const std::string& name, InputSet& in)
   for (size_t k = 0; k < chunks.size(); ++k) open[k + 1] += open[k];
   std::vector<InputSet> parts(chunks.size());
   parse_chunks(chunks, [&](size_t k, const Chunk& c) {
-    parts[k] = chunk_part(source, name);
+    parts[k] = chunk_part(in, source, name);
     parse_wkt_chunk(text, c, std::max(0L, open[k]), name, source, parts[k]);
   });
   append_parts(in, parts);

@@ -137,8 +137,9 @@ void parse_chunks(const std::vector<Chunk>& chunks, const std::function<void(siz
     if (e) std::rethrow_exception(e);
 }
 
-InputSet chunk_part(uint32_t source, const std::string& name) {
+InputSet chunk_part(const InputSet& in, uint32_t source, const std::string& name) {
   InputSet part;
+  part.nan_for_missing_z = in.nan_for_missing_z;
   part.sources.resize(size_t(source) + 1);
   part.sources[source] = name;
   return part;

@@ -57,9 +57,9 @@ size_t chunk_bytes(size_t text_size);
 // rethrows the exception of the lowest-numbered chunk that threw (the earliest in the file).
 void parse_chunks(const std::vector<Chunk>& chunks, const std::function<void(size_t, const Chunk&)>& parse);
 
-// An empty InputSet for one chunk's results: its sources list names `name` at index `source`, so that
-// errors raised while adding geometry to it name the file.
-InputSet chunk_part(uint32_t source, const std::string& name);
+// An empty InputSet for one chunk's results, read as `in` is read (its reading flags): its sources list names
+// `name` at index `source`, so that errors raised while adding geometry to it name the file.
+InputSet chunk_part(const InputSet& in, uint32_t source, const std::string& name);
 // Appends the parts to `in` in order (points, lines, repair counts), as if read one after another.
 void append_parts(InputSet& in, std::vector<InputSet>& parts);
 

@@ -103,7 +103,7 @@ TEST(GpuPipeline, KatoombaSample) {
   InputSet in;
   ReadOptions ro;
   ro.z_field = "ELEV";
-  for (const char* name : {"contours.shp", "dem.xyz", "buildings.shp"}) read_input(dir + name, ro, in);
+  read_inputs({dir + "contours.shp", dir + "dem.xyz", dir + "buildings.shp"}, ro, in);
   project(in, choose_crs(in, parse_crs("auto")));
   gpu::GpuCdtStats s = expect_equal_to_cgal("katoomba", in);
   EXPECT_GT(s.gpu_total_ms, 0);

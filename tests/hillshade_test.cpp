@@ -52,7 +52,7 @@ TEST(Hillshade, TheSamplePreviewReadsBackThroughLibpng) {
   ReadOptions ro;
   ro.z_field = "ELEV";
   const std::string dir = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
-  for (const char* f : {"contours.shp", "dem.xyz", "buildings.shp"}) read_input(dir + f, ro, in);
+  read_inputs({dir + "contours.shp", dir + "dem.xyz", dir + "buildings.shp"}, ro, in);
   project(in, choose_crs(in, parse_crs("auto")));
   const Mesh m = triangulate_cgal(prepare(in)).mesh;
   const Raster dem = rasterise(m, preview_cell(m, 1000));
