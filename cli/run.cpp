@@ -5,6 +5,7 @@
 #include <fstream>
 #include <functional>
 #include <optional>
+#include <span>
 
 #include <spdlog/spdlog.h>
 
@@ -163,24 +164,36 @@ int run_triangulate(const TriangulateOptions& options) {
 
   Loaded l = read_all(options.input, stats);
   std::string reason = "--backend " + options.backend;
-  bool use_gpu = options.backend == "gpu";
+  const uint64_t n = point_count(l.in);
+  bool want_gpu = options.backend == "gpu", use_gpu = false;
   if (options.backend == "auto") {
-    const uint64_t n = point_count(l.in);
-    if (n < min_points) {
+    want_gpu = n >= min_points;
+    if (!want_gpu)
       reason = std::to_string(n) + " input points, fewer than " + std::to_string(min_points) +
                ": the CPU is faster than the GPU's start-up";
-    } else {
-      if (!start) start.emplace(options.device, true);
-      try {
-        timed(stats, "gpu start", [&] { start->cdt(); });
-        use_gpu = true;
-        reason = std::to_string(n) + " input points on a GPU";
-      } catch (const gpu::DeviceError& e) {
-        reason = std::string("no GPU to use (") + e.what() + ")";
-      }
-    }
+    else if (!start)
+      start.emplace(options.device, true);
   }
-  if (options.backend == "gpu") timed(stats, "gpu start", [&] { start->cdt(); });  // a start error is thrown here
+  // The GPU is waited for only where prepare first needs it, its duplicate merge, so that its start overlaps
+  // reading and prepare's gathering. Auto falls back to the CPU when the start fails; a forced GPU throws.
+  PointMerger merge = merge_points;
+  if (want_gpu)
+    merge = [&](std::span<const double> xy) {
+      const auto t0 = std::chrono::steady_clock::now();
+      try {
+        start->cdt();
+      } catch (const gpu::DeviceError& e) {
+        if (options.backend == "gpu") throw;
+        reason = std::string("no GPU to use (") + e.what() + ")";
+        return merge_points(xy);
+      }
+      stats.stage_ms.emplace_back("prepare: gpu start wait",
+                                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      use_gpu = true;
+      if (options.backend == "auto") reason = std::to_string(n) + " input points on a GPU";
+      return start->cdt().merger()(xy);  // duplicates merged on the GPU: the same result as the CPU's
+    };
+  prepare_all(l, stats, merge);
   gpu::GpuCdt* cdt = use_gpu ? &start->cdt() : nullptr;
   stats.backend = use_gpu ? "gpu" : "cgal";
   stats.backend_reason = reason;
@@ -193,8 +206,6 @@ int run_triangulate(const TriangulateOptions& options) {
   }
   spdlog::debug("backend {}: {}", stats.backend, reason);
 
-  // With the GPU backend, duplicates are merged on the GPU too (the same result as the CPU's merge).
-  prepare_all(l, stats, cdt ? cdt->merger() : PointMerger(merge_points));
   CdtResult result = timed(stats, "triangulate", [&] {
     if (!cdt) return triangulate_cgal(l.prepared);
     gpu::GpuCdtStats gs;
@@ -261,7 +272,7 @@ int run_triangulate(const TriangulateOptions& options) {
   stats.counts["triangles"] = result.mesh.triangles.size();
   spdlog::info("{} vertices, {} triangles ({} constraints, {} Steiner points)", result.mesh.vertices.size(),
                result.mesh.triangles.size(), l.prepared.constraints.size(), result.steiner_points);
-  if (cdt) stats.stage_ms.emplace_back("gpu pipeline waits", gpu::pipeline_wait_ms());
+  if (cdt) stats.stage_ms.emplace_back("triangulate: pipeline waits", gpu::pipeline_wait_ms());
   timed(stats, "release", [&] {
     if (start) start->leave_for_exit();
     start.reset();

@@ -4,6 +4,7 @@
 // orders are total, so any correct sort gives the same result. The merge of duplicates is a parameter: the
 // GPU backend passes gpu::merge_points, which gives the same answer (tests/gpu_dedupe_test.cpp).
 #include "core/prepare.hpp"
+#include "core/touched.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -75,20 +76,31 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
                             " input vertices exceed the 32-bit index range");
   out.input_points = total;
 
+  // Every occurrence's coordinates in reading order, gathered on all cores (lines start at known offsets).
   std::vector<double> xy, z;
-  xy.reserve(2 * total);
-  z.reserve(total);
-  auto push = [&](const Point3& p) {
+  resize_touched(xy, 2 * total);
+  resize_touched(z, total);
+  std::vector<uint64_t> line_at(in.lines.size() + 1, in.points.size());
+  for (size_t i = 0; i < in.lines.size(); ++i) line_at[i + 1] = line_at[i] + in.lines[i].points.size();
+  std::atomic<bool> bad{false};
+  auto put = [&](uint64_t i, const Point3& p) {
     // NaN would break the sort's strict weak order; readers reject it, this guards direct callers.
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      throw std::invalid_argument("prepare: vertex " + std::to_string(z.size()) + " is not finite");
-    xy.push_back(p.x);
-    xy.push_back(p.y);
-    z.push_back(p.z);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) bad.store(true, std::memory_order_relaxed);
+    xy[2 * i] = p.x;
+    xy[2 * i + 1] = p.y;
+    z[i] = p.z;
   };
-  for (const Point3& p : in.points) push(p);
-  for (const Polyline& l : in.lines)
-    for (const Point3& p : l.points) push(p);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, in.points.size(), 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) put(i, in.points[i]);
+  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, in.lines.size()), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t l = r.begin(); l < r.end(); ++l)
+      for (size_t k = 0; k < in.lines[l].points.size(); ++k) put(line_at[l] + k, in.lines[l].points[k]);
+  });
+  if (bad)
+    for (size_t i = 0; i < total; ++i)
+      if (!std::isfinite(xy[2 * i]) || !std::isfinite(xy[2 * i + 1]) || !std::isfinite(z[i]))
+        throw std::invalid_argument("prepare: vertex " + std::to_string(i) + " is not finite");
 
   phase("gather");
   // The merged vertices: coordinates and z of their first occurrence; conflicts where a later z differs.
@@ -99,7 +111,7 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
                            " of " + std::to_string(total) + " points");
   const std::vector<uint32_t>& vertex_of = m.vertex_of;
   // Both loops gather at random (cache misses): in parallel (TBB), each result independent of the split.
-  out.vertices.resize(m.first.size());
+  resize_touched(out.vertices, m.first.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, m.first.size()), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v < r.end(); ++v) {
       const uint32_t i = m.first[v];

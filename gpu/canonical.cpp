@@ -5,6 +5,7 @@
 #include <bit>
 #include <chrono>
 
+#include "core/touched.hpp"
 #include "gpu/profiler.hpp"
 #include "gpu/recorder.hpp"
 #include "shaders/layout.h"
@@ -50,7 +51,7 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
   gpu::download(ctx_, count, &finite, 4);
   static_assert(sizeof(Triangle) == 12, "Triangle is three packed uint32");
   const auto t0 = std::chrono::steady_clock::now();
-  out.resize(finite);
+  resize_touched(out, finite);
   const auto t1 = std::chrono::steady_clock::now();
   gpu::download(ctx_, tris, out.data(), uint64_t(finite) * sizeof(Triangle));
   spdlog::debug("canonical download: {:.1f} ms to allocate, {:.1f} ms to copy {} triangles",
