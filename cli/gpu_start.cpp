@@ -3,7 +3,10 @@
 #include <cctype>
 #include <chrono>
 #include <cstdlib>
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 namespace cdtgpu {
 
@@ -12,15 +15,44 @@ uint64_t auto_min_points() {
   return kAutoMinPoints;
 }
 
-uint64_t max_input_points(const std::vector<std::string>& paths) {
+namespace {
+
+// Points in a text file, from its size and the first 64 KiB: lines for XYZ, coordinates (commas and line ends)
+// for WKT. An ASCII grid says its size in its header (ncols x nrows); a shapefile point record is 28 bytes or
+// more, so size / 28 bounds it.
+uint64_t estimate_points(const std::string& path, uint64_t size, const std::string& ext) {
+  if (ext == ".shp") return size / 28;
+  std::ifstream in(path, std::ios::binary);
+  std::string head(64 << 10, '\0');
+  in.read(head.data(), std::streamsize(head.size()));
+  head.resize(size_t(in.gcount()));
+  if (head.empty()) return 0;
+  if (ext == ".asc") {
+    std::istringstream h(head);
+    uint64_t ncols = 0, nrows = 0;
+    for (std::string key, value; h >> key >> value;) {
+      for (char& c : key) c = char(std::tolower(static_cast<unsigned char>(c)));
+      if (key == "ncols") ncols = std::strtoull(value.c_str(), nullptr, 10);
+      if (key == "nrows") nrows = std::strtoull(value.c_str(), nullptr, 10);
+      if (ncols && nrows) return ncols * nrows;
+    }
+    return size / 2;
+  }
+  const uint64_t marks = uint64_t(std::count(head.begin(), head.end(), '\n')) +
+                         (ext == ".wkt" ? uint64_t(std::count(head.begin(), head.end(), ',')) : 0);
+  return marks ? size / std::max<uint64_t>(1, head.size() / marks) : 1;
+}
+
+}  // namespace
+
+uint64_t estimate_input_points(const std::vector<std::string>& paths) {
   uint64_t total = 0;
   for (const std::string& p : paths) {
     std::error_code ec;
     if (p == "-" || !std::filesystem::is_regular_file(p, ec)) continue;
     std::string ext = std::filesystem::path(p).extension().string();
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    const uint64_t bytes_per_point = ext == ".asc" ? 2 : ext == ".shp" ? 28 : 6;
-    total += std::filesystem::file_size(p, ec) / bytes_per_point;
+    total += estimate_points(p, std::filesystem::file_size(p, ec), ext);
   }
   return total;
 }

@@ -18,10 +18,10 @@ namespace cdtgpu {
 constexpr uint64_t kAutoMinPoints = 100000;
 uint64_t auto_min_points();
 
-// The most points the input files can hold, from their sizes and the fewest bytes a point takes in each format
-// (an ASCII grid cell 2, a text line 6, a shapefile point record 28; stdin counts 0). Auto starts the GPU
-// while reading only when this reaches auto_min_points(): a guess that decides what overlaps, never what runs.
-uint64_t max_input_points(const std::vector<std::string>& paths);
+// About how many points the input files hold, from their sizes and first bytes (stdin counts 0). Auto starts
+// the GPU while reading when this reaches auto_min_points(): a guess that decides what overlaps, never what
+// runs (that is decided from the points read). A wrong guess costs a start that is waited for at exit.
+uint64_t estimate_input_points(const std::vector<std::string>& paths);
 
 class GpuStart {
  public:

@@ -159,7 +159,9 @@ int run_triangulate(const TriangulateOptions& options) {
   // are large enough to hold auto_min_points() points).
   const uint64_t min_points = auto_min_points();
   std::optional<GpuStart> start;
-  if (options.backend == "gpu" || (options.backend == "auto" && max_input_points(input_paths) >= min_points))
+  const uint64_t estimate = options.backend == "auto" ? estimate_input_points(input_paths) : 0;
+  spdlog::debug("about {} input points in the files", estimate);
+  if (options.backend == "gpu" || (options.backend == "auto" && estimate >= min_points))
     start.emplace(options.device, options.backend == "auto");
 
   Loaded l = read_all(options.input, stats);
