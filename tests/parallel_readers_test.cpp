@@ -1,6 +1,9 @@
 // The text readers parse in chunks on all cores (io/text_source.hpp): inputs of several chunks must give the
 // same points, lines, repairs and error lines as reading line by line would.
 #include <gtest/gtest.h>
+#include <shapefil.h>
+
+#include <cmath>
 
 #include <charconv>
 #include <cstdio>
@@ -150,4 +153,45 @@ TEST(ParallelReaders, WktReportsTheFirstBadGeometryOfTheFile) {
               read_wkt_text(open, "open.wkt", in);
             }).find("open.wkt:" + std::to_string(line_of(open, "LINESTRING (1 2, 3 4"))),
             std::string::npos);
+}
+
+// Shapefiles are read in ranges of records on all cores (io/read_shapefile.cpp): more records than one range
+// must come back in order, and a bad record in a later range is the one named.
+TEST(ParallelReaders, ShapefileOfManyRangesGivesEveryPointInOrderAndNamesTheBadRecord) {
+  const auto dir = std::filesystem::temp_directory_path() / "cdtgpu_parallel_shp";
+  std::filesystem::create_directories(dir);
+  const std::string base = (dir / "pts").string();
+  auto write = [&]() {
+    SHPHandle shp = SHPCreate(base.c_str(), SHPT_POINTZ);
+    DBFHandle dbf = DBFCreate(base.c_str());
+    DBFAddField(dbf, "ID", FTInteger, 10, 0);
+    for (int i = 0; i < 30000; ++i) {
+      double x = 500000 + i * 0.5, y = 6000000 + (i % 101), z = i * 0.01;
+      SHPObject* o = SHPCreateSimpleObject(SHPT_POINTZ, 1, &x, &y, &z);
+      SHPWriteObject(shp, -1, o);
+      SHPDestroyObject(o);
+      DBFWriteIntegerAttribute(dbf, i, 0, i);
+    }
+    SHPClose(shp);
+    DBFClose(dbf);
+  };
+  write();
+  InputSet in;
+  read_shapefile(base + ".shp", {}, in);
+  ASSERT_EQ(in.points.size(), 30000u);
+  for (int i = 0; i < 30000; ++i) ASSERT_EQ(in.points[size_t(i)], (Point3{500000 + i * 0.5, 6000000.0 + (i % 101), i * 0.01})) << i;
+  // Record 27001's x (PointZ records are 8 + 36 bytes after the 100-byte header; x is 12 bytes in) made far
+  // larger than the header's box says.
+  {
+    std::fstream f(base + ".shp", std::ios::binary | std::ios::in | std::ios::out);
+    const double far = 1e300;
+    f.seekp(100 + 27000 * 44 + 12);
+    f.write(reinterpret_cast<const char*>(&far), 8);
+  }
+  const std::string err = error_of([&] {
+    InputSet bad;
+    read_shapefile(base + ".shp", {}, bad);
+  });
+  EXPECT_NE(err.find("pts.shp:27001:"), std::string::npos) << err;
+  std::filesystem::remove_all(dir);
 }
