@@ -180,12 +180,17 @@ TEST(ParallelReaders, ShapefileOfManyRangesGivesEveryPointInOrderAndNamesTheBadR
   read_shapefile(base + ".shp", {}, in);
   ASSERT_EQ(in.points.size(), 30000u);
   for (int i = 0; i < 30000; ++i) ASSERT_EQ(in.points[size_t(i)], (Point3{500000 + i * 0.5, 6000000.0 + (i % 101), i * 0.01})) << i;
-  // Record 27001's x (PointZ records are 8 + 36 bytes after the 100-byte header; x is 12 bytes in) made far
+  // Record 27001's x (12 bytes into the record; its offset from the .shx, big-endian 16-bit words) made far
   // larger than the header's box says.
   {
+    std::ifstream shx(base + ".shx", std::ios::binary);
+    unsigned char e[4];
+    shx.seekg(100 + 27000 * 8);
+    shx.read(reinterpret_cast<char*>(e), 4);
+    const long offset = 2L * (long(e[0]) << 24 | long(e[1]) << 16 | long(e[2]) << 8 | long(e[3]));
     std::fstream f(base + ".shp", std::ios::binary | std::ios::in | std::ios::out);
     const double far = 1e300;
-    f.seekp(100 + 27000 * 44 + 12);
+    f.seekp(offset + 12);
     f.write(reinterpret_cast<const char*>(&far), 8);
   }
   const std::string err = error_of([&] {
