@@ -309,7 +309,8 @@ class RecordIndex {
   RecordIndex& operator=(const RecordIndex&) = delete;
   size_t records() const { return index_.size() / 8; }
 
-  void check(int i) {
+  // Reads only: one index serves every thread.
+  void check(int i) const {
     const uint64_t record = uint64_t(i) + 1;
     const auto* e = reinterpret_cast<const unsigned char*>(index_.data()) + size_t(i) * 8;
     const uint64_t offset = uint64_t(be32(e)) * 2, length = uint64_t(be32(e + 4)) * 2;
@@ -320,8 +321,9 @@ class RecordIndex {
                            std::to_string(offset) + " to " + std::to_string(offset + 8 + length) +
                            ", outside the file (" + std::to_string(shp_size_) + " bytes)");
     unsigned char h[8] = {};
-    mapped_seek(shp_, SAOffset(offset), SEEK_SET);
-    if (mapped_read(h, 8, 1, shp_) != 1) throw InputError(shp_path_, record, "cannot read the record");
+    const auto* f = reinterpret_cast<const MappedFile*>(shp_);
+    if (offset + 8 > f->size) throw InputError(shp_path_, record, "cannot read the record");
+    std::memcpy(h, f->data + offset, 8);
     if (be32(h) != record || uint64_t(be32(h + 4)) * 2 != length)
       throw InputError(shp_path_, record,
                        "corrupt record: its header (record " + std::to_string(be32(h)) + ", " +
@@ -487,7 +489,7 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
   const uint32_t source = uint32_t(in.sources.size() - 1);
   const size_t before = in.points.size() + in.lines.size();
   // Reads records [begin, end) into part (used by every chunk below).
-  auto read_records = [&](int begin, int end, SHPInfo* handle, RecordIndex& index, const ZField* zf,
+  auto read_records = [&](int begin, int end, SHPInfo* handle, const RecordIndex& index, const ZField* zf,
                           InputSet& part) {
     for (int i = begin; i < end; ++i) {
       const uint64_t record = uint64_t(i) + 1;
@@ -547,14 +549,13 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
     std::unique_ptr<SHPInfo, ShpClose> own(c == 0 ? nullptr : SHPOpenLL(path.c_str(), "rb", &own_hooks));
     SHPInfo* handle = c == 0 ? shp.get() : own.get();
     if (!handle) throw InputError(path, uint64_t(range.begin) + 1, "cannot read: " + take_error());
-    RecordIndex own_index(path, *shx);
     std::optional<ZField> own_z;
     if (z_field && c > 0) {
       std::string unused;
       own_z = open_z_field(path, base, options.z_field, has_z(type), count, unused);
     }
     const ZField* zf = c == 0 ? (z_field ? &*z_field : nullptr) : (own_z ? &*own_z : nullptr);
-    read_records(int(range.begin), int(range.end), handle, own_index, zf, part);
+    read_records(int(range.begin), int(range.end), handle, index, zf, part);
   });
   append_parts(in, parts);
   read_prj(base, in);
