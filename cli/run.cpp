@@ -121,6 +121,7 @@ void prepare_all(Loaded& l, RunStats& stats, const PointMerger& merge = merge_po
   c["null_shapes"] = r.null_shapes;
   c["nodata_cells"] = r.nodata_cells;
   stats.crs = l.crs.name;
+  stats.crs_epsg = l.crs.epsg;
 }
 
 

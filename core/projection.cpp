@@ -191,8 +191,50 @@ bool prj_is_geographic(const std::string& wkt) {
   return w.rfind("geogcs[", 0) == 0 || w.rfind("geogcrs[", 0) == 0;
 }
 
+// The datum a geographic .prj names: GDA2020 and GDA94 (Australia: projected to MGA), WGS 84 (to UTM). Empty
+// text (no .prj) is taken as WGS 84, as the data's lon/lat would be by default; any other datum is an error,
+// since projecting it as WGS 84 would be off by up to hundreds of metres.
+Datum prj_datum(const std::string& wkt, const std::string& file) {
+  if (wkt.empty() || !prj_is_geographic(wkt)) return Datum::Wgs84;
+  std::string w = lower(wkt);
+  w.erase(std::remove_if(w.begin(), w.end(), [](char c) { return c == '_' || c == ' ' || c == '"'; }), w.end());
+  if (w.find("gda2020") != std::string::npos) return Datum::Gda2020;
+  if (w.find("gda94") != std::string::npos || w.find("gda1994") != std::string::npos ||
+      w.find("geocentricdatumofaustralia1994") != std::string::npos)
+    return Datum::Gda94;
+  if (w.find("wgs84") != std::string::npos || w.find("wgs1984") != std::string::npos ||
+      w.find("worldgeodeticsystem1984") != std::string::npos)
+    return Datum::Wgs84;
+  throw InputError(file, 0,
+                   "its .prj names a geographic datum cdtgpu does not project (GDA2020, GDA94 and WGS 84 are "
+                   "known): " + wkt.substr(0, 120) + " (--crs none keeps the coordinates as read)");
+}
+
 bool is_lon_lat(const Bounds& b) {
   return !b.empty() && b.min_x >= -180 && b.max_x <= 180 && b.min_y >= -90 && b.max_y <= 90;
+}
+
+// The EPSG code of an MGA or UTM .prj (ESRI names such as GDA2020_MGA_Zone_56, GDA_1994_MGA_Zone_55,
+// WGS_1984_UTM_Zone_56S), 0 for anything else.
+int projected_epsg(const std::string& wkt) {
+  std::string w = lower(wkt.substr(0, wkt.find(',')));
+  if (w.rfind("projcs[", 0) != 0) return 0;
+  w.erase(std::remove_if(w.begin(), w.end(), [](char c) { return c == '_' || c == ' ' || c == '"'; }), w.end());
+  const size_t at = w.find("zone");
+  if (at == std::string::npos) return 0;
+  int zone = 0;
+  const char* p = w.data() + at + 4;
+  const auto [end, ec] = std::from_chars(p, w.data() + w.size(), zone);
+  if (ec != std::errc() || zone < 1 || zone > 60) return 0;
+  int code = 0;
+  if (w.find("mga") != std::string::npos && w.find("gda2020") != std::string::npos)
+    code = 7800 + zone;
+  else if (w.find("mga") != std::string::npos && (w.find("gda1994") != std::string::npos || w.find("gda94") != std::string::npos))
+    code = 28300 + zone;
+  else if (w.find("utm") != std::string::npos && (w.find("wgs1984") != std::string::npos || w.find("wgs84") != std::string::npos))
+    code = (end < w.data() + w.size() && *end == 'n' ? 32600 : 32700) + zone;
+  EpsgInfo info{};
+  return epsg_info(code, info) ? code : 0;
 }
 
 // Coordinates kept as read (projected stays false: we did not project). The name comes from the .prj's
@@ -209,6 +251,7 @@ Crs kept_crs(const InputSet& in, const std::string& fallback_name) {
     if (end != std::string::npos && end > start) c.name = c.wkt.substr(start, end - start);
     break;
   }
+  c.epsg = projected_epsg(c.wkt);
   return c;
 }
 
@@ -289,6 +332,17 @@ Crs choose_crs(const InputSet& in, const CrsRequest& request) {
                    fmt_number(lons.max - lons.min));
     // Force a UTM zone even near the poles (the standard rule would choose UPS there).
     const int zone = GeographicLib::UTMUPS::StandardZone(lat, lon, GeographicLib::UTMUPS::UTM);
+    // GDA data goes to its own MGA zone (EPSG 78zz / 283zz): what Australian users and their other tools
+    // expect, on the GRS80 ellipsoid. MGA is defined south of the equator in zones 46-59 (GDA2020), 48-58
+    // (GDA94); elsewhere the data is projected to UTM on WGS 84, with a warning.
+    const Datum datum = prj_datum(in.source_crs_wkt, in.sources.empty() ? "input" : in.sources.front());
+    if (datum != Datum::Wgs84) {
+      const int code = (datum == Datum::Gda2020 ? 7800 : 28300) + zone;
+      EpsgInfo info{};
+      if (lat < 0 && epsg_info(code, info)) return make_crs(datum, zone, false);
+      spdlog::warn("{} data outside the MGA zones (zone {}{}): projected to WGS 84 / UTM instead",
+                   datum == Datum::Gda2020 ? "GDA2020" : "GDA94", zone, lat >= 0 ? "N" : "S");
+    }
     return make_crs(Datum::Wgs84, zone, lat >= 0);
   }
   if (!b.empty() && !lon_lat)

@@ -11,6 +11,7 @@ namespace cdtgpu {
 struct RunStats {
   nlohmann::ordered_json counts = nlohmann::ordered_json::object();
   std::string crs;
+  int crs_epsg = 0;  // 0: none known
   std::string backend;         // the backend that ran: gpu or cgal
   std::string backend_reason;  // why (auto's choice, or the flag)
   std::string device;  // the Vulkan device, for the gpu backend
@@ -21,6 +22,7 @@ struct RunStats {
     nlohmann::ordered_json j;
     j["counts"] = counts;
     j["crs"] = crs;
+    if (crs_epsg) j["crs_epsg"] = crs_epsg;
     j["backend"] = backend;
     if (!backend_reason.empty()) j["backend_reason"] = backend_reason;
     if (!device.empty()) j["device"] = device;

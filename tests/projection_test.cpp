@@ -240,3 +240,50 @@ TEST(Project, MovesPointsAndEveryPolylineVertex) {
 
 }  // namespace
 }  // namespace cdtgpu
+
+namespace cdtgpu {
+
+// The datum of a geographic .prj decides the projection: GDA2020 and GDA94 data go to their MGA zone (what
+// Australian users expect), WGS 84 and data without a .prj to UTM; an unknown datum is refused.
+TEST(ChooseCrs, GdaDataGoesToItsMgaZone) {
+  InputSet k = lon_lat_points({{150.30, -33.70}, {150.32, -33.72}});
+  k.source_crs_wkt =
+      "GEOGCS[\"GCS_GDA2020\",DATUM[\"D_GDA2020\",SPHEROID[\"GRS_1980\",6378137.0,298.257222101]],"
+      "PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]]";
+  Crs crs = choose_crs(k, parse_crs("auto"));
+  EXPECT_EQ(crs.epsg, 7856);
+  EXPECT_EQ(crs.name, "GDA2020 / MGA zone 56");
+  k.source_crs_wkt = "GEOGCS[\"GCS_GDA_1994\",DATUM[\"D_GDA_1994\",SPHEROID[\"GRS_1980\",6378137.0,298.257222101]]]";
+  EXPECT_EQ(choose_crs(k, parse_crs("auto")).epsg, 28356);
+  k.source_crs_wkt = "GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\",SPHEROID[\"WGS_1984\",6378137.0,298.257223563]]]";
+  EXPECT_EQ(choose_crs(k, parse_crs("auto")).epsg, 32756);
+  // An explicit zone or code still wins.
+  EXPECT_EQ(choose_crs(k, parse_crs("EPSG:7856")).epsg, 7856);
+  k.source_crs_wkt = "GEOGCS[\"GCS_North_American_1983\",DATUM[\"D_North_American_1983\"]]";
+  EXPECT_THROW(choose_crs(k, parse_crs("auto")), InputError);
+  EXPECT_EQ(choose_crs(k, parse_crs("none")).name, "none");
+  // GDA data north of the equator has no MGA zone: UTM on WGS 84.
+  InputSet north = lon_lat_points({{150.30, 10.0}, {150.32, 10.1}});
+  north.source_crs_wkt = "GEOGCS[\"GCS_GDA2020\",DATUM[\"D_GDA2020\"]]";
+  EXPECT_EQ(choose_crs(north, parse_crs("auto")).epsg, 32656);
+}
+
+TEST(ChooseCrs, ProjectedMgaAndUtmInputIsRecognised) {
+  InputSet p = lon_lat_points({});
+  p.points = {{250000, 6260000, 0}, {250100, 6260100, 0}};
+  p.source_crs_wkt = "PROJCS[\"GDA2020_MGA_Zone_56\",GEOGCS[\"GCS_GDA2020\"]]";
+  Crs crs = choose_crs(p, parse_crs("auto"));
+  EXPECT_FALSE(crs.from_geographic);
+  EXPECT_EQ(crs.epsg, 7856);
+  EXPECT_EQ(crs.name, "GDA2020_MGA_Zone_56");
+  p.source_crs_wkt = "PROJCS[\"GDA_1994_MGA_Zone_55\",GEOGCS[\"GCS_GDA_1994\"]]";
+  EXPECT_EQ(choose_crs(p, parse_crs("auto")).epsg, 28355);
+  p.source_crs_wkt = "PROJCS[\"WGS_1984_UTM_Zone_56S\",GEOGCS[\"GCS_WGS_1984\"]]";
+  EXPECT_EQ(choose_crs(p, parse_crs("auto")).epsg, 32756);
+  p.source_crs_wkt = "PROJCS[\"WGS_1984_UTM_Zone_33N\",GEOGCS[\"GCS_WGS_1984\"]]";
+  EXPECT_EQ(choose_crs(p, parse_crs("auto")).epsg, 32633);
+  p.source_crs_wkt = "PROJCS[\"NAD_1983_StatePlane_Texas\",GEOGCS[\"GCS_North_American_1983\"]]";
+  EXPECT_EQ(choose_crs(p, parse_crs("auto")).epsg, 0);
+}
+
+}  // namespace cdtgpu
