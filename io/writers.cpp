@@ -79,15 +79,6 @@ class Sink {
   size_t n_ = 0;
 };
 
-const Triangle& checked(const Mesh& mesh, size_t t) {
-  const Triangle& tri = mesh.triangles[t];
-  for (uint32_t v : tri)
-    if (v >= mesh.vertices.size())
-      throw std::runtime_error("triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
-                               " but the mesh has " + std::to_string(mesh.vertices.size()) + " vertices");
-  return tri;
-}
-
 // One line: a name with a line break inside would break the header or comment.
 std::string one_line(const std::string& s) {
   std::string r = s;
@@ -107,7 +98,7 @@ void write_obj(const Mesh& mesh, const Crs& crs, Sink& out) {
     out.ch('\n');
   }
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle& tri = checked(mesh, t);
+    const Triangle& tri = checked_triangle(mesh, t);
     out.ch('f');
     for (uint32_t v : tri) {
       out.ch(' ');
@@ -137,7 +128,7 @@ void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out) {
       out.ch('\n');
     }
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const Triangle& tri = checked(mesh, t);
+      const Triangle& tri = checked_triangle(mesh, t);
       out.ch('3');
       for (uint32_t v : tri) {
         out.ch(' ');
@@ -161,7 +152,7 @@ void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out) {
       },
       [](bool a, bool b) { return a && b; });
   if (!valid)
-    for (size_t t = 0; t < n; ++t) checked(mesh, t);  // throws for the first bad triangle
+    for (size_t t = 0; t < n; ++t) checked_triangle(mesh, t);  // throws for the first bad triangle
   // In blocks of 4 MiB reused: a 65 MB array for 5M faces cost more in page faults than its packing.
   constexpr size_t kFacesPerBlock = (size_t(4) << 20) / 13;
   std::vector<char> faces(std::min(n, kFacesPerBlock) * 13);
@@ -202,7 +193,7 @@ void write_wkt(const Mesh& mesh, bool multipolygon, Sink& out) {
   auto point = [&](uint32_t v) { out.text(pool.data() + start[v], start[v + 1] - start[v]); };
   out.ch('(');
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle& tri = checked(mesh, t);
+    const Triangle& tri = checked_triangle(mesh, t);
     out.text(t ? ", ((" : "((", t ? 4 : 2);
     point(tri[0]);
     out.text(", ", 2);
