@@ -2,6 +2,7 @@
 // check the triangles against the reference backend, print the table and optionally write every figure as JSON.
 #include "bench/bench.hpp"
 #include "bench/e2e.hpp"
+#include "bench/peer.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -325,9 +326,10 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
                   "1 (1M..4M points, 500K constraints), 2 (2M points, 200K..1M constraints), long (long "
                   "constraints), terrain (DEM grid + contours), all (these four), dt (Delaunay only: 1M..8M "
                   "uniform points and a grid, CGAL's Delaunay_triangulation_2), or e2e (`cdtgpu triangulate` "
-                  "as a child process, files in, PLY out: 20K..4M points + a quarter as many contour segments)")
+                  "as a child process, files in, PLY out: 20K..4M points + a quarter as many contour segments), or peer "
+                  "(GPU stages beside gDel2D's on the same vertices and segments, see --peer and --rows)")
       ->default_val("all")
-      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e"}));
+      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e", "peer"}));
   cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points; e2e: 20K and 200K) that finish in about a minute on 2 cores");
   cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
   cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
@@ -351,6 +353,11 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_flag("!--no-first-run", o.first_run,
                 "e2e: skip the run with empty shader and pipeline caches (minutes on lavapipe, which compiles every "
                 "pipeline then)");
+  cmd->add_option("--peer", o.peer, "peer: gDel2D's executable, run on each row's input in its binary format");
+  cmd->add_option("--rows", o.rows, "peer: POINTS+SEGMENTS rows (default 2M,8M,2M+500K,2M+1M,4M+1M)")->delimiter(',');
+  cmd->add_option("--cgal-max", o.cgal_max_points,
+                  "no CGAL run (so no comparison) above this many points, where CGAL takes minutes (default 10M)")
+      ->transform([](std::string s) { return std::to_string(parse_bench_size(s)); });
   cmd->add_option("--keep", o.keep_dir, "e2e: write inputs, outputs, stats and logs into this folder and keep them");
 }
 
@@ -441,14 +448,16 @@ int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std
     std::string name;
     Opt options;
   };
-  std::vector<Variant> variants(4);
-  variants[0].name = "full method";
+  std::vector<Variant> variants(5);
+  variants[0].name = "full method (with our cavity insertion)";
   variants[1].name = "no prefix-sum layout (fixed slots per constraint)";
   variants[1].options.layout = Opt::Layout::FixedSlots;
   variants[2].name = "no adaptive flipping (one flip per constraint)";
   variants[2].options.flipping = Opt::Flipping::OnePerConstraint;
   variants[3].name = "no influence-domain index (slot claims alone)";
   variants[3].options.domain_index = false;
+  variants[4].name = "the paper's method: flips only, no cavity insertion";
+  variants[4].options.cavities = false;
 
   std::printf("ablation (the paper's Table 3): %llu points; 'constraints ms' = device time of crossing detection + "
               "prefix-sum layout + flip rounds; 'host' = constraints the host safety net inserted\n",
@@ -534,6 +543,7 @@ void warm_pipelines(const gpu::Context& ctx) {
 
 int run_bench(const BenchOptions& o) {
   if (o.table == "e2e") return run_e2e(o);  // the child processes open their own devices
+  if (o.table == "peer") return run_peer(o);
   gpu::ContextOptions co;
   co.device = o.device;
   std::string device = "none (--cgal-only)", device_name;
@@ -574,7 +584,9 @@ int run_bench(const BenchOptions& o) {
     double prepare_ms = ms_since(tp);
 
     const int cgal_runs = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
-    Timings cgal = time_backend(w.table == "dt" ? run_cgal_delaunay : run_cgal_fast, p, cgal_runs);
+    const bool with_cgal = p.vertices.size() <= o.cgal_max_points;
+    Timings cgal;
+    if (with_cgal) cgal = time_backend(w.table == "dt" ? run_cgal_delaunay : run_cgal_fast, p, cgal_runs);
     Timings g;
     GpuMerge merge;
     merge.in = &in;
@@ -582,7 +594,7 @@ int run_bench(const BenchOptions& o) {
 
     json check = json::object();
     std::string status = "-";
-    if (o.check || in.points.size() <= kCheckLimit) {
+    if (with_cgal && (o.check || in.points.size() <= kCheckLimit)) {
       auto tr = Clock::now();
       CdtResult ref = triangulate_cgal(p);
       check["reference_ms"] = ms_since(tr);
@@ -597,8 +609,8 @@ int run_bench(const BenchOptions& o) {
       status = diff.empty() ? "ok" : "FAIL";
       failures += !diff.empty();
     }
-    if (gpu) {
-      // The GPU result must equal CGAL's at every size, checked or not.
+    if (gpu && with_cgal) {
+      // The GPU result must equal CGAL's at every size where CGAL runs, checked or not.
       std::string diff = mesh_difference(g.mesh, cgal.mesh);
       check["gpu_equal"] = diff.empty();
       if (!diff.empty()) {
@@ -617,15 +629,16 @@ int run_bench(const BenchOptions& o) {
       }
     }
 
-    const double cgal_ms = median(cgal.total);
+    const double cgal_ms = with_cgal ? median(cgal.total) : std::nan("");
     const double wall_ms = gpu ? median(g.total) : 0;
     const double dev_ms = gpu ? median(g.device) : 0;
     const double len = mean_length_in_spacings(p);
     std::printf("%-8s %9zu %9zu %11zu %9s %9s %9s %8s %6s %6s %9zu %5.2f %s\n", w.table.c_str(), in.points.size(),
-                p.vertices.size(), p.constraints.size(), fmt_ms(cgal_ms).c_str(), gpu ? fmt_ms(dev_ms).c_str() : "-",
-                gpu ? fmt_ms(wall_ms).c_str() : "-", gpu ? fmt_ms(cgal_ms / wall_ms).c_str() : "-",
+                p.vertices.size(), p.constraints.size(), with_cgal ? fmt_ms(cgal_ms).c_str() : "-",
+                gpu ? fmt_ms(dev_ms).c_str() : "-", gpu ? fmt_ms(wall_ms).c_str() : "-",
+                gpu && with_cgal ? fmt_ms(cgal_ms / wall_ms).c_str() : "-",
                 gpu ? std::to_string(g.rounds).c_str() : "-", gpu ? bytes_per_point(g, p).c_str() : "-",
-                cgal.mesh.triangles.size(), len, status.c_str());
+                (with_cgal ? cgal : g).mesh.triangles.size(), len, status.c_str());
     std::fflush(stdout);
 
     json row;
@@ -639,14 +652,14 @@ int run_bench(const BenchOptions& o) {
     if (w.fraction > 0) row["subset_fraction"] = w.fraction;
     if (w.grid) row["grid"] = w.grid;
     row["mean_constraint_length_spacings"] = len;
-    row["triangles"] = cgal.mesh.triangles.size();
+    row["triangles"] = (with_cgal ? cgal : g).mesh.triangles.size();
     row["generate_ms"] = generate_ms;
     row["prepare_ms"] = prepare_ms;
     if (gpu) row["prepare_gpu_merge_ms"] = merge.ms;
-    row["cgal"] = cgal.to_json();
+    row["cgal"] = with_cgal ? cgal.to_json() : json();
     row["gpu"] = gpu ? g.to_json() : json();
-    row["speedup"] = gpu ? json(cgal_ms / wall_ms) : json();
-    row["speedup_device"] = gpu ? json(cgal_ms / dev_ms) : json();
+    row["speedup"] = gpu && with_cgal ? json(cgal_ms / wall_ms) : json();
+    row["speedup_device"] = gpu && with_cgal ? json(cgal_ms / dev_ms) : json();
     row["check"] = check;
     rows.push_back(row);
   }

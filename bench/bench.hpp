@@ -31,7 +31,7 @@ struct BackendRun {
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
 
 struct BenchOptions {
-  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only) or e2e
+  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only), e2e or peer
   bool quick = false;               // 20K..80K points instead of 1M..4M
   std::vector<std::string> sizes;   // point counts overriding the table's, e.g. 50000 or 1.5M
   int runs = 5;                     // timed runs per backend and workload (median), after one warm-up
@@ -48,6 +48,11 @@ struct BenchOptions {
   std::string binary;                 // the cdtgpu to time; empty: this executable (/proc/self/exe)
   std::string keep_dir;               // keep every input, output, stats file and log here; empty: a temp dir
   bool first_run = true;              // the run with empty caches (on lavapipe it compiles every pipeline: ~1 min)
+  // --table peer (bench/peer.hpp)
+  std::vector<std::string> rows;      // "POINTS+SEGMENTS" each, e.g. 2M+500K; empty: the five rows
+  std::string peer;                   // gDel2D's executable; empty: our columns only
+  // Every table: no CGAL run (and so no comparison) for inputs of more points than this; CGAL takes minutes there.
+  uint64_t cgal_max_points = 10000000;
 };
 
 // Adds the options above to a `bench` subcommand.

@@ -3,11 +3,7 @@
 // JSON, compares the PLY outputs byte for byte, prints one line per row x format x backend and writes JSON.
 #include "bench/e2e.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
 #include <spdlog/spdlog.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -21,11 +17,10 @@
 #include <sstream>
 #include <thread>
 
+#include "bench/child.hpp"
 #include "bench/e2e_workload.hpp"
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
-
-extern char** environ;
 
 namespace cdtgpu {
 
@@ -51,69 +46,6 @@ std::string fmt(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, v < 100 ? "%.1f" : "%.0f", v);
   return buf;
-}
-
-// One child run: its wall clock, exit status and (when it succeeded) its stats.
-struct ChildRun {
-  double wall_ms = 0;
-  int exit_code = 0;  // 128 + signal when killed
-  std::string log;    // the child's stdout + stderr
-  json stats;
-};
-
-std::string read_text(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::ostringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-// posix_spawn of argv[0] with stdin from /dev/null and stdout + stderr into `log_path`; `env_overrides`
-// replace or add variables of this process's environment.
-ChildRun spawn_child(const std::vector<std::string>& argv,
-                     const std::map<std::string, std::string>& env_overrides, const std::string& log_path,
-                     const std::string& stats_path) {
-  std::vector<std::string> env;
-  for (char** e = environ; *e; ++e) {
-    std::string kv = *e;
-    if (!env_overrides.contains(kv.substr(0, kv.find('=')))) env.push_back(kv);
-  }
-  for (const auto& [k, v] : env_overrides) env.push_back(k + "=" + v);
-  std::vector<char*> cargv, cenv;
-  for (const std::string& a : argv) cargv.push_back(const_cast<char*>(a.c_str()));
-  cargv.push_back(nullptr);
-  for (const std::string& e : env) cenv.push_back(const_cast<char*>(e.c_str()));
-  cenv.push_back(nullptr);
-
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, 1, 2);
-
-  std::error_code ec;
-  fs::remove(stats_path, ec);
-  ChildRun r;
-  pid_t pid = 0;
-  const auto t0 = Clock::now();
-  const int err = posix_spawn(&pid, cargv[0], &actions, nullptr, cargv.data(), cenv.data());
-  posix_spawn_file_actions_destroy(&actions);
-  if (err != 0) throw std::runtime_error("cannot start " + argv[0] + ": " + std::strerror(err));
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) throw std::runtime_error(std::string("waitpid: ") + std::strerror(errno));
-  r.wall_ms = ms_since(t0);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  r.log = read_text(log_path);
-  if (r.exit_code == 0) {
-    try {
-      r.stats = json::parse(read_text(stats_path));
-    } catch (const std::exception& e) {
-      r.exit_code = -1;
-      r.log += "\ncannot read the stats JSON " + stats_path + ": " + e.what();
-    }
-  }
-  return r;
 }
 
 // The last line of a child's log that says something, for the table's failure note (CLI11's closing advice

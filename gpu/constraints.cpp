@@ -89,7 +89,7 @@ std::string describe_error(uint32_t code, uint32_t c, std::span<const Edge> cons
     case CDT_ERR_OUTSIDE:
       return which + " leaves the convex hull of the points";
     case CDT_ERR_NOT_AN_EDGE:
-      return which + " is not an edge after insertion: it crosses another constraint (resolve crossings first)";
+      return which + " crosses another constraint (resolve crossings first)";
     default:
       return which + ": the walk lost its way (the triangulation is not valid)";
   }
@@ -214,10 +214,12 @@ ConstraintInserter::ConstraintInserter(const Context& ctx, const Primitives& pri
       vertex_map_(create_pass(ctx, {"cdt_vertex_map", 2, sizeof(CdtSlotsPush)})),
       walk_(create_pass(ctx, {"cdt_walk", 16, sizeof(CdtWalkPush)})),
       args_(create_pass(ctx, {"cdt_args", 4, sizeof(CdtArgsPush)})),
-      insert_claim_(create_pass(ctx, {"cdt_insert_claim", 8, sizeof(CdtRoundPush)})),
+      insert_claim_(create_pass(ctx, {"cdt_insert_claim", 9, sizeof(CdtRoundPush)})),
       insert_flip_(create_pass(ctx, {"cdt_insert_flip", 11, sizeof(CdtRoundPush)})),
       fix_(create_pass(ctx, {"cdt_fix", 5, sizeof(CdtRoundPush)})),
-      legal_seed_(create_pass(ctx, {"cdt_legal_seed", 5, sizeof(CdtSlotsPush)})),
+      cavity_(create_pass(ctx, {"cdt_cavity", 16, sizeof(CdtWalkPush)})),
+      cavity_fix_(create_pass(ctx, {"cdt_cavity_fix", 5, sizeof(CdtRoundPush)})),
+      legal_seed_(create_pass(ctx, {"cdt_legal_seed", 6, sizeof(CdtSlotsPush)})),
       legal_claim_(create_pass(ctx, {"cdt_legal_claim", 9, sizeof(CdtRoundPush)})),
       legal_flip_(create_pass(ctx, {"cdt_legal_flip", 13, sizeof(CdtRoundPush)})) {}
 
@@ -239,6 +241,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   const bool fixed_slots = options.layout == ConstraintOptions::Layout::FixedSlots;
   const uint32_t one_per_constraint = options.flipping == ConstraintOptions::Flipping::OnePerConstraint ? 1u : 0u;
   const uint32_t domain = options.domain_index ? 1u : 0u;
+  const bool cavities = options.cavities && options.domain_index && !fixed_slots && !one_per_constraint;
   const uint32_t max_groups = ctx_.props.limits.maxComputeWorkGroupCount[0];
   const uint32_t max_steps = 3 * slots + 64;
   if (constraints.size() >= CDT_NEVER) throw std::invalid_argument("insert_constraints: too many constraints");
@@ -294,6 +297,14 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
 
   StageClock clock;
   ConstraintStats st;
+  const bool detail = options.profile_kernels;
+  // With options.profile_kernels: timestamps around one kernel (or a round, `name` then as given).
+  auto timed = [&](Profiler& prof, Recorder& rec, const std::string& name, auto&& record) {
+    if (detail) prof.begin(rec, name);
+    record();
+    if (detail) prof.end(rec);
+  };
+  auto stages_for = [&](uint32_t batch, uint32_t per_round) { return detail ? (per_round + 1) * batch + 8 : 3 * batch + 2; };
   uint32_t round = 1;
 
   // Records the copy of the counters (and `rounds` rounds of statistics) into the mapped readback buffer.
@@ -309,11 +320,11 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   };
   auto read_stats = [&](uint32_t rounds) { return std::vector<uint32_t>(rb + CDT_CTL_WORDS, rb + CDT_CTL_WORDS + 2 * rounds); };
   const Buffer* row_cache = nullptr;
-  auto walk = [&](Recorder& rec, uint32_t mode, uint32_t r, uint32_t capacity, uint32_t stride) {
+  auto walk = [&](Recorder& rec, uint32_t mode, uint32_t r, uint32_t capacity, uint32_t stride, bool use_cache = true) {
     // Bound but unused before they exist.
     const Buffer& rows = table ? *table : result.flags;
     const Buffer& cached = row_cache ? *row_cache : result.flags;
-    CdtWalkPush push{m, mode, r, capacity, max_steps, stride, row_cache ? 1u : 0u, domain};
+    CdtWalkPush push{m, mode, r, capacity, max_steps, stride, row_cache && use_cache ? 1u : 0u, domain};
     rec.dispatch_groups(walk_, {tri.points, tri.verts, tri.nbrs, cons, start, counts, offsets, rows, owner,
                                 result.flags, vmap, partner, ctl, cached, cache_base, cache_cap},
                         push, groups(m));
@@ -347,9 +358,10 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     prof.end(rec);
     prof.begin(rec, "crossing detection");
     walk(rec, CDT_WALK_COUNT, round, 0, 0);
-    if (!fixed_slots && m > 0) {  // the row cache's layout: the first counts, compacted
+    if (!fixed_slots && m > 0) {  // the row cache's layout: the first counts, compacted; also round 1's offsets
       prims_.exclusive_scan(rec, counts, cache_base, m);
       rec.copy(counts, cache_cap, uint64_t(m) * 4);
+      rec.copy(cache_base, offsets, uint64_t(m) * 4);
     }
     prof.end(rec);
     copy_back(rec, 0);
@@ -379,37 +391,64 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
 
   // 2. Insertion rounds: crossing detection, then adaptive parallel flipping, until no constraint crosses an edge.
   bool legalise_all = options.legalise_all;
+  bool host_rewrote = false;  // the safety net rewrote slots: the constrained bits are marked again
   if (crossed > 0) {
     make_table();
     uint32_t fewest = UINT32_MAX, stalled = 0, before = 0, last = crossed;
     uint32_t batch = std::clamp(options.rounds_per_submit, 1u, kMaxBatch);
     for (bool done = false; !done;) {
       Recorder rec(ctx_);
-      Profiler prof(ctx_, 3 * batch);
+      Profiler prof(ctx_, stages_for(batch, 12));
       const uint32_t cap = static_cast<uint32_t>(capacity), s = fixed_slots ? stride : 0;
-      rec.fill(ctl, 0);  // clears the overflow flag; per-round counters are zero between rounds anyway
+      // Round 1 of the prefix-sum layout reuses the first count (start, counts, the crossed total in ctl) and
+      // its scan (offsets): nothing flipped since.
+      const bool reuse_first_count = round == 1 && !fixed_slots;
+      if (!reuse_first_count) rec.fill(ctl, 0);  // clears the overflow flag; per-round counters are zero anyway
       if (fresh_table && fixed_slots) rec.fill(*table, 0xFFFFFFFFu);  // every row empty
       fresh_table = false;
       for (uint32_t b = 0; b < batch; ++b) {
         const uint32_t r = round + b;
+        const bool first = reuse_first_count && b == 0;
+        if (detail) prof.begin(rec, "r" + std::to_string(r) + " insert");
         prof.begin(rec, "crossing detection");
-        walk(rec, CDT_WALK_COUNT, r, cap, s);
+        if (!first) timed(prof, rec, "k:walk count", [&] { walk(rec, CDT_WALK_COUNT, r, cap, s); });
         prof.end(rec);
         prof.begin(rec, "prefix-sum layout");  // stage 2 of the table: offsets, then the rows written compactly
-        if (!fixed_slots) prims_.exclusive_scan(rec, counts, offsets, m);
-        args(rec, CDT_ARGS_INSERT, r, b, cap, s);
-        if (!fixed_slots) walk(rec, CDT_WALK_WRITE, r, cap, 0);
+        if (!fixed_slots && !first)
+          timed(prof, rec, "k:scan", [&] { prims_.exclusive_scan(rec, counts, offsets, m); });
+        timed(prof, rec, "k:args table", [&] { args(rec, CDT_ARGS_INSERT, r, b, cap, s); });
+        // Round 1's rows are not in the row cache (the first count ran before it existed): walk them.
+        if (!fixed_slots) timed(prof, rec, "k:walk write", [&] { walk(rec, CDT_WALK_WRITE, r, cap, 0, !first); });
         prof.end(rec);
         prof.begin(rec, "flipping");
         CdtRoundPush push{r, one_per_constraint, domain};
-        rec.dispatch_indirect(insert_claim_, {tri.points, tri.verts, tri.nbrs, *table, owner, claim, ctl, first_row},
-                              &push, ctl, CDT_CTL_ARGS_TABLE * 4);
-        rec.dispatch_indirect(insert_flip_, {tri.verts, tri.nbrs, *table, claim, result.flags, remap, stamp, partner,
-                                             flips, ctl, first_row},
-                              &push, ctl, CDT_CTL_ARGS_TABLE * 4);
-        args(rec, CDT_ARGS_FLIPS, r, b, cap, s);
-        fix(rec, r);
+        if (cavities)  // the legalisation candidates are free until then: they hold the cavity fix list
+          timed(prof, rec, "k:cavity", [&] {
+            CdtWalkPush cp{m, 0, r, cap, max_steps, 0, 0, domain};
+            rec.dispatch_groups(cavity_, {tri.points, tri.verts, tri.nbrs, cons, start, counts, offsets, *table, owner,
+                                          result.flags, remap, stamp, partner, vmap, cand, ctl},
+                                cp, groups(m));
+          });
+        timed(prof, rec, "k:insert claim", [&] {
+          rec.dispatch_indirect(insert_claim_,
+                                {tri.points, tri.verts, tri.nbrs, *table, owner, claim, ctl, first_row, result.flags},
+                                &push, ctl,
+                                CDT_CTL_ARGS_TABLE * 4);
+        });
+        timed(prof, rec, "k:insert flip", [&] {
+          rec.dispatch_indirect(insert_flip_, {tri.verts, tri.nbrs, *table, claim, result.flags, remap, stamp,
+                                               partner, flips, ctl, first_row},
+                                &push, ctl, CDT_CTL_ARGS_TABLE * 4);
+        });
+        timed(prof, rec, "k:args flips", [&] { args(rec, CDT_ARGS_FLIPS, r, b, cap, s); });
+        timed(prof, rec, "k:insert fix", [&] { fix(rec, r); });
+        if (cavities)
+          timed(prof, rec, "k:cavity fix", [&] {
+            rec.dispatch_indirect(cavity_fix_, {tri.nbrs, remap, stamp, cand, ctl}, &push, ctl,
+                                  CDT_CTL_ARGS_FIXES * 4);
+          });
         prof.end(rec);
+        if (detail) prof.end(rec);
       }
       copy_back(rec, batch);
       rec.submit();
@@ -425,6 +464,8 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         }
         ++st.flip_rounds;
         st.rounds.push_back({found, flipped});
+        before = last;
+        last = found;
         crossed = std::max(crossed, found);
         if (found < fewest) {
           fewest = found;
@@ -447,6 +488,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         upload(ctx_, tri.verts, host.verts.data(), host.verts.size() * 4);
         upload(ctx_, tri.nbrs, host.nbrs.data(), host.nbrs.size() * 4);
         legalise_all = true;
+        host_rewrote = true;
         done = true;
       }
       if (overflow && !done) {
@@ -457,11 +499,13 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     }
   }
 
-  // 3. Which edges are constraints (the flags then travel with their edges through the legalising flips).
-  {
+  // 3. Which edges are constraints: each count walk that found its constraint an edge set its bits, and flips
+  //    carry them along; after the host safety net they are marked again.
+  if (host_rewrote) {
     Recorder rec(ctx_);
     Profiler prof(ctx_, 1);
     prof.begin(rec, "mark constrained");
+    rec.fill(result.flags, 0);
     vertex_map(rec);
     walk(rec, CDT_WALK_MARK, round, 0, 0);
     prof.end(rec);
@@ -474,14 +518,15 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   // 4. Legalisation rounds: flip every unconstrained edge that fails the perturbed incircle test.
   {
     bool seeded = false;
-    uint32_t batch = std::clamp(options.rounds_per_submit, 1u, kMaxBatch);
+    uint32_t batch = std::clamp(options.rounds_per_submit, 1u, kMaxBatch), before = 0, last = 0;
     for (bool done = false; !done;) {
       Recorder rec(ctx_);
-      Profiler prof(ctx_, batch + 1);
+      Profiler prof(ctx_, stages_for(batch, 6));
       if (!seeded) {
         prof.begin(rec, "legalise seed");
         CdtSlotsPush push{slots, round, legalise_all ? 1u : 0u};
-        rec.dispatch_groups(legal_seed_, {tri.verts, stamp, qstamp, *queue[round & 1], ctl}, push, groups(slots));
+        rec.dispatch_groups(legal_seed_, {tri.verts, stamp, qstamp, *queue[round & 1], ctl, partner}, push,
+                            groups(slots));
         prof.end(rec);
         seeded = true;
       }
@@ -491,16 +536,22 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         const Buffer& next = *queue[(r + 1) & 1];
         CdtRoundPush push{r, 0, 0};
         prof.begin(rec, "legalise");
-        args(rec, CDT_ARGS_QUEUE, r, b, 0, 0);
-        rec.dispatch_indirect(legal_claim_,
-                              {tri.points, tri.verts, tri.nbrs, result.flags, qstamp, q, claim, cand, ctl}, &push,
-                              ctl, CDT_CTL_ARGS_QUEUE * 4);
-        rec.dispatch_indirect(legal_flip_,
-                              {tri.verts, tri.nbrs, result.flags, remap, stamp, partner, qstamp, q, next, claim, cand,
-                               flips, ctl},
-                              &push, ctl, CDT_CTL_ARGS_QUEUE * 4);
-        args(rec, CDT_ARGS_FLIPS, r, b, 0, 0);
-        fix(rec, r);
+        if (detail) prof.begin(rec, "r" + std::to_string(r) + " legalise");
+        timed(prof, rec, "k:args queue", [&] { args(rec, CDT_ARGS_QUEUE, r, b, 0, 0); });
+        timed(prof, rec, "k:legal claim", [&] {
+          rec.dispatch_indirect(legal_claim_,
+                                {tri.points, tri.verts, tri.nbrs, result.flags, qstamp, q, claim, cand, ctl}, &push,
+                                ctl, CDT_CTL_ARGS_QUEUE * 4);
+        });
+        timed(prof, rec, "k:legal flip", [&] {
+          rec.dispatch_indirect(legal_flip_,
+                                {tri.verts, tri.nbrs, result.flags, remap, stamp, partner, qstamp, q, next, claim,
+                                 cand, flips, ctl},
+                                &push, ctl, CDT_CTL_ARGS_QUEUE * 4);
+        });
+        timed(prof, rec, "k:args flips", [&] { args(rec, CDT_ARGS_FLIPS, r, b, 0, 0); });
+        timed(prof, rec, "k:legal fix", [&] { fix(rec, r); });
+        if (detail) prof.end(rec);
         prof.end(rec);
       }
       copy_back(rec, batch);
@@ -515,11 +566,14 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         }
         ++st.legalise_rounds;
         st.legalise_flips += per_round[2 * b + 1];
+        st.legalise_log.push_back({per_round[2 * b], per_round[2 * b + 1]});
+        before = last;
+        last = per_round[2 * b];
       }
       round += batch;
       if (round > options.max_rounds)
         throw DeviceError("insert_constraints: more than " + std::to_string(options.max_rounds) + " rounds");
-      batch = std::min(batch * 2, kMaxBatch);
+      batch = predict_rounds(before, last);  // queues shrink geometrically too
     }
   }
 

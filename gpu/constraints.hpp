@@ -54,6 +54,10 @@ struct ConstraintOptions {
   // false (ablation): no owners; conflicting flips are settled by the slot claims alone, and progress rests on
   // the claims' per-round hashed order and the stall safety net below.
   bool domain_index = true;
+  // Cavity insertion (ours, beyond the paper): a constraint that crosses at most CDT_CAVITY_MAX edges and owns
+  // all of its triangles this round is inserted at once by retriangulating its cavity; the rest go on by flips.
+  // Needs the domain index and the prefix-sum layout; off in the paper's ablation variants.
+  bool cavities = true;
   // Seed legalisation with every finite slot, not only the slots flipped during insertion: for inputs that are
   // not the (perturbed) Delaunay triangulation of their points.
   bool legalise_all = false;
@@ -66,6 +70,9 @@ struct ConstraintOptions {
   uint32_t stall_rounds = 256;
   uint32_t flip_round_limit = UINT32_MAX;
   uint32_t max_rounds = 1u << 20;  // legalisation beyond this many rounds is reported as an error
+  // Timestamps around every kernel ("k:..." stages, summed over rounds) and every round ("r<N> insert",
+  // "r<N> legalise"), in ConstraintStats::stage_ms. Their barriers add cost; for finding where time goes.
+  bool profile_kernels = false;
 };
 
 struct ConstraintStats {
@@ -73,11 +80,13 @@ struct ConstraintStats {
   uint32_t legalise_rounds = 0;  // legalisation rounds with a non-empty queue
   uint64_t crossed_edges = 0;    // edges crossed by the constraints in the input triangulation
   uint32_t longest_crossing = 0;  // the most edges one constraint crosses in the input triangulation
-  uint64_t insertion_flips = 0;
+  uint64_t insertion_flips = 0;      // flips, and constraints inserted by their cavities
   uint64_t legalise_flips = 0;
   uint32_t fallback_constraints = 0;  // inserted by the host safety net (see ConstraintOptions::stall_rounds)
   // Per insertion round: edges crossed at its start and flips made (UINT32_MAX: skipped, table grown).
   std::vector<std::array<uint32_t, 2>> rounds;
+  // Per legalisation round: queued slots at its start and flips made.
+  std::vector<std::array<uint32_t, 2>> legalise_log;
   std::vector<std::pair<std::string, double>> stage_ms;  // GPU time per stage, in pipeline order
   uint64_t peak_device_bytes = 0;  // the triangulation, the constrained bits and the inserter's scratch
 };
@@ -114,7 +123,8 @@ class ConstraintInserter {
   const Context& ctx_;
   const Primitives& prims_;
   mutable std::unique_ptr<Scratch> scratch_;
-  Pass vertex_map_, walk_, args_, insert_claim_, insert_flip_, fix_, legal_seed_, legal_claim_, legal_flip_;
+  Pass vertex_map_, walk_, args_, insert_claim_, insert_flip_, fix_, cavity_, cavity_fix_, legal_seed_, legal_claim_,
+      legal_flip_;
 };
 
 // One-shot convenience (builds the pipelines on every call; keep a ConstraintInserter for repeated use).

@@ -39,6 +39,8 @@ void main() {
     if (over) ctl[CDT_CTL_OVERFLOW] = 1u;
     ctl[CDT_CTL_TOTAL] = total;
     ctl[CDT_CTL_FLIPS] = 0u;
+    ctl[CDT_CTL_FIXES] = 0u;
+    ctl[CDT_CTL_CAVITIES] = 0u;
     ctl[CDT_CTL_CROSSED] = 0u;
     ctl[CDT_CTL_ROUND_OVER] = 0u;
     set_args(CDT_CTL_ARGS_TABLE, over ? 0u : total);
@@ -46,12 +48,17 @@ void main() {
     stats[2u * p.stat_slot + 1u] = over ? CDT_NEVER : 0u;  // CDT_NEVER: this round was skipped
   } else if (p.mode == CDT_ARGS_FLIPS) {
     set_args(CDT_CTL_ARGS_FLIPS, ctl[CDT_CTL_FLIPS]);
-    if (stats[2u * p.stat_slot + 1u] != CDT_NEVER) stats[2u * p.stat_slot + 1u] = ctl[CDT_CTL_FLIPS];
+    set_args(CDT_CTL_ARGS_FIXES, ctl[CDT_CTL_FIXES]);
+    // A constraint inserted by its cavity counts as a flip: the round made progress.
+    if (stats[2u * p.stat_slot + 1u] != CDT_NEVER)
+      stats[2u * p.stat_slot + 1u] = ctl[CDT_CTL_FLIPS] + ctl[CDT_CTL_CAVITIES];
   } else {
     uint q = ctl[CDT_CTL_NEXT];
     ctl[CDT_CTL_QUEUE] = q;
     ctl[CDT_CTL_NEXT] = 0u;
     ctl[CDT_CTL_FLIPS] = 0u;
+    ctl[CDT_CTL_FIXES] = 0u;
+    ctl[CDT_CTL_CAVITIES] = 0u;
     set_args(CDT_CTL_ARGS_QUEUE, 3u * q);
     stats[2u * p.stat_slot] = q;
     stats[2u * p.stat_slot + 1u] = 0u;

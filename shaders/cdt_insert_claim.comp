@@ -23,8 +23,9 @@ layout(std430, binding = 2) readonly buffer Nbrs { uint nbrs[]; };
 layout(std430, binding = 3) buffer Table { CdtCross table[]; };
 layout(std430, binding = 4) readonly buffer Owner { uint64_t owner[]; };
 layout(std430, binding = 5) buffer Claim { uint64_t claim[]; };
-layout(std430, binding = 6) readonly buffer Ctl { uint ctl[]; };
+layout(std430, binding = 6) buffer Ctl { uint ctl[]; };
 layout(std430, binding = 7) buffer First { uint64_t first_row[]; };  // per constraint (one_per_constraint)
+layout(std430, binding = 8) readonly buffer CFlags { uint cflags[]; };
 layout(push_constant) uniform Push { CdtRoundPush p; };
 
 void main() {
@@ -37,6 +38,13 @@ void main() {
   uint t2 = NBR_TRI(code2), k2 = NBR_EDGE(code2);
   uint64_t okey = cdt_owner_key(p.round, e.cons);
   if (p.domain != 0u && (owner[t1] != okey || owner[t2] != okey)) return;
+  // A constraint is marked when its count walk (or cavity) makes it an edge; crossing one means two constraints
+  // cross (refused: the caller resolves crossings first). Checked before any flip, so none removes it. (Not
+  // before the owner check: a cavity may have rewritten another constraint's slots this round.)
+  if (((cflags[t1] >> k1) & 1u) != 0u) {
+    if (atomicCompSwap(ctl[CDT_CTL_ERROR], 0u, CDT_ERR_NOT_AN_EDGE) == 0u) ctl[CDT_CTL_ERROR_CONS] = e.cons;
+    return;
+  }
   uint side = e.info & CDT_SIDE_MASK;
   bool removes = (e.info & CDT_FIRST) != 0u || side == CDT_SIDE_END || (table[g - 1u].info & CDT_SIDE_MASK) == side;
   dvec2 P = pts[verts[3u * t1 + k1]], V1 = pts[verts[3u * t1 + cdt_next(k1)]];

@@ -3,14 +3,15 @@
 // the edges the open segment crosses until it reaches b: e_1 .. e_K, triangles T_0 .. T_K. Modes (layout_cdt.h):
 //   INIT   start[c] = vmap[a].
 //   COUNT  counts[c] = K, start[c] = T_0; K = 0 and start[c] = CDT_NEVER once a-b is an edge (c is done: no
-//          other constraint crosses it, so nothing flips it away). A start slot flipped last round no longer
+//          other constraint crosses it, so nothing flips it away), and then the edge's constrained bits are set
+//          (they travel with the edge through the legalising flips). A start slot flipped last round no longer
 //          holding a is replaced by its flip partner, which then does. With fixed slots (the ablation without
 //          the prefix-sum layout) it also writes the rows, at c * stride, and empties the rest of c's rows.
 //   WRITE  the K rows of c into table[offsets[c] ..] (the dynamic intersected-edge table) and the claims of c
 //          on T_0 .. T_K in owner[] (the influence-domain index: the smallest constraint owns a triangle). The
 //          COUNT walk kept the rows in the row cache; when all K fit they are copied (no predicates, no chain of
 //          dependent loads), otherwise c walks again.
-//   MARK   (after insertion, from a fresh vertex map) sets the constrained bit of edge a-b in both its slots.
+//   MARK   (after the host safety net, from a fresh vertex map) sets the constrained bits of edge a-b again.
 // Every geometric question is orient2d(a, q, r) at one call site (lavapipe compiles each site separately).
 #version 460
 #extension GL_GOOGLE_include_directive : require
@@ -55,6 +56,13 @@ uint corner_of(uint t, uint v) {
   return 3u;
 }
 
+// The constrained bit of edge k of slot t, on both of its sides.
+void mark_edge(uint t, uint k) {
+  uint code = nbrs[3u * t + k];
+  atomicOr(cflags[t], 1u << k);
+  atomicOr(cflags[NBR_TRI(code)], 1u << NBR_EDGE(code));
+}
+
 #define ASK_V1 0u    // orient(a, v1, b) of the current corner at a
 #define ASK_V2 1u    // orient(a, v2, b)
 #define ASK_APEX 2u  // orient(a, b, w) of the apex beyond the crossed edge
@@ -80,7 +88,10 @@ void main() {
       counts[c] = 0u;
       return;
     }
-    if (corner_of(t, a) == 3u) t = partner[t];
+    if (corner_of(t, a) == 3u) {  // rewritten last round: by a flip (its partner holds a) or a cavity (vmap)
+      uint q = partner[t];
+      t = q != CDT_NEVER && corner_of(q, a) != 3u ? q : vmap[a];
+    }
   } else if (p.mode == CDT_WALK_WRITE) {
     t = start[c];
     uint k_rows = counts[c];
@@ -224,6 +235,7 @@ void main() {
     uint crossed = found == FOUND_CROSSED ? rows : 0u;
     counts[c] = crossed;
     start[c] = found == FOUND_CROSSED ? t0 : CDT_NEVER;
+    if (found == FOUND_EDGE) mark_edge(edge_t, edge_k);
     SUBGROUP_ADD(ctl[CDT_CTL_CROSSED], crossed);
     uint most = subgroupMax(crossed);
     if (subgroupElect() && most != 0u) atomicMax(ctl[CDT_CTL_MAXK], most);
@@ -235,8 +247,6 @@ void main() {
   } else if (p.mode == CDT_WALK_WRITE) {
     if (rows != limit) report(CDT_ERR_LOST, c);
   } else if (p.mode == CDT_WALK_MARK && found == FOUND_EDGE) {
-    uint code = nbrs[3u * edge_t + edge_k];
-    atomicOr(cflags[edge_t], 1u << edge_k);
-    atomicOr(cflags[NBR_TRI(code)], 1u << NBR_EDGE(code));
+    mark_edge(edge_t, edge_k);
   }
 }

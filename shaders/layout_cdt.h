@@ -36,10 +36,15 @@ struct CdtCross {
 #define CDT_CTL_MAXK 7u        // sticky: the most edges one constraint crossed in any round
 #define CDT_CTL_CROSSED 8u     // crossed edges found by this round's count walk (reset by CDT_ARGS_INSERT)
 #define CDT_CTL_ROUND_OVER 9u  // fixed slots: a constraint crossed more edges than its rows this round
+#define CDT_CTL_FIXES 10u      // outer edges of this round's cavities (length of the cavity fix list)
+#define CDT_CTL_CAVITIES 11u   // constraints inserted by cavities this round
 #define CDT_CTL_ARGS_TABLE 12u // dispatch over the table rows
 #define CDT_CTL_ARGS_FLIPS 16u // dispatch over the flip list
 #define CDT_CTL_ARGS_QUEUE 20u // dispatch over 3 x the queue (one invocation per slot edge)
-#define CDT_CTL_WORDS 24u
+#define CDT_CTL_ARGS_FIXES 24u // dispatch over the cavity fix list
+#define CDT_CTL_WORDS 28u
+// Cavity insertion (cdt_cavity.comp): constraints crossing at most this many edges, owning them all.
+#define CDT_CAVITY_MAX 12u
 
 #define CDT_ERR_VERTEX_ON_CONSTRAINT 1u  // a walk met a vertex exactly on the open segment
 #define CDT_ERR_LOST 2u                  // a walk could not find its start or ran past its step bound
@@ -48,11 +53,12 @@ struct CdtCross {
 
 // Walk modes.
 #define CDT_WALK_INIT 0u   // start[c] = a slot holding a (from the vertex map)
-#define CDT_WALK_COUNT 1u  // counts[c] = crossed edges (0 once c is an edge); start[c] = T_0; with fixed
+#define CDT_WALK_COUNT 1u  // counts[c] = crossed edges (0 once c is an edge, whose bits it then sets); start[c] = T_0; with fixed
                            // slots (stride > 0) also writes the rows and claims, as WRITE does
 #define CDT_WALK_WRITE 2u  // rows of c into table[offsets[c] ..] (from the row cache when they fit, else by
                            // walking again), owner claims on T_0 .. T_K
-#define CDT_WALK_MARK 3u   // sets the constrained bit of the edge a-b on both sides (start from the vertex map)
+#define CDT_WALK_MARK 3u   // sets the constrained bit of the edge a-b on both sides (start from the vertex map);
+                           // only after the host safety net rewrote slots
 
 // Round numbers are global (insertion, then legalisation) and start at 1; stamp NEVER = never flipped.
 #define CDT_NEVER 0xFFFFFFFFu

@@ -308,6 +308,24 @@ TEST(GpuCdt, AblationVariantsGiveTheSameTriangulation) {
   EXPECT_GE(b.stats.flip_rounds, full.stats.flip_rounds);
 }
 
+// Cavity insertion (a constraint crossing few edges, owning its triangles, retriangulated at once) against the
+// flips alone: both CGAL's triangulation; cavities take fewer rounds and leave legalisation less to flip.
+TEST(GpuCdt, CavitiesAndFlipsGiveTheSameTriangulation) {
+  TerrainOptions t;
+  t.grid = 100;
+  t.levels = 30;
+  t.seed = 73;
+  for (const auto& [name, in] : {std::pair<std::string, InputSet>{"random DT edges", random_with_dt_edges(20000, 4000, 0.2, 71)},
+                                 {"terrain contours", terrain_workload(t)}}) {
+    Outcome with = check_against_cgal("cavities: " + name, in);
+    ConstraintOptions flips_only;
+    flips_only.cavities = false;
+    Outcome without = check_against_cgal("flips only: " + name, in, flips_only);
+    EXPECT_LT(with.stats.flip_rounds, without.stats.flip_rounds) << name;
+    EXPECT_LT(with.stats.legalise_flips, without.stats.legalise_flips) << name;
+  }
+}
+
 // GpuCdt shares one scratch cache between the Delaunay build, the inserter and the canonical sort, so each
 // finds buffers the others filled. Here every shared buffer holds garbage before each stage: the result must be
 // CGAL's all the same (every stage initialises what it reads).

@@ -241,7 +241,7 @@ TEST(Bench, AblationVariantsAllGiveCgalsTriangles) {
   EXPECT_EQ(j["workloads"][1]["constraints"], 1000);
   EXPECT_EQ(j["workloads"][2]["constraints"], 2000);
   for (const auto& w : j["workloads"]) {
-    ASSERT_EQ(w["variants"].size(), 4u);  // full, fixed slots, one flip per constraint, no influence-domain index
+    ASSERT_EQ(w["variants"].size(), 5u);  // full, fixed slots, one flip per constraint, no domain index, flips only
     for (const auto& v : w["variants"]) EXPECT_TRUE(v["cgal_equal"].get<bool>()) << v["variant"];
     EXPECT_EQ(w["variants"][3]["variant"], "no influence-domain index (slot claims alone)");
   }
