@@ -17,6 +17,9 @@ using namespace layout;
 TriangleSorter::TriangleSorter(const Context& ctx, const Primitives& prims)
     : ctx_(ctx),
       prims_(prims),
+      count_(create_pass(ctx, {"canonical_count", 4, sizeof(CanonicalKeysPush)})),
+      place_(create_pass(ctx, {"canonical_place", 4, sizeof(CanonicalKeysPush)})),
+      bucket_(create_pass(ctx, {"canonical_bucket", 4, sizeof(CanonicalKeysPush)})),
       keys_(create_pass(ctx, {"canonical_keys", 4, sizeof(CanonicalKeysPush)})),
       write_(create_pass(ctx, {"canonical_write", 4, sizeof(CanonicalKeysPush)})) {}
 
@@ -26,29 +29,50 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
   const uint32_t slots = tri.num_slots;
   if (slots == 0) return out;
   BufferCache& buffers = cache ? *cache : scratch_;
-  const Buffer& keys = buffers.get(ctx_, kSlots8[0], uint64_t(slots) * 8, "canonical keys");
-  const Buffer& payload = buffers.get(ctx_, kSlots4[0], uint64_t(slots) * 4, "canonical payload");
-  const Buffer& count = buffers.get(ctx_, "canonical count", 4);
-  const Buffer& keys2 = buffers.get(ctx_, kSlots8[1], uint64_t(slots) * 8, "canonical keys 2");
-  const Buffer& payload2 = buffers.get(ctx_, kSlots4[1], uint64_t(slots) * 4, "canonical payload 2");
+  const uint32_t n = tri.num_points;
+  const Buffer& count = buffers.get(ctx_, "canonical count", 8);  // finite triangles, a bucket too large
   const Buffer& tris = tri.nbrs;  // no longer needed: it takes the sorted triples
   const uint64_t groups = (uint64_t(slots) + CANONICAL_WG - 1) / CANONICAL_WG;
+  // Two vertex fields of `shift` bits in the radix keys: the digits above them are zero and need no pass.
+  const CanonicalKeysPush push{slots, n, uint32_t(std::bit_width(n))};
+  // Buckets by smallest vertex (count, scan, place, sort each bucket by its second vertex): a few light passes
+  // instead of six radix passes over 64-bit keys.
+  uint32_t counts[2] = {0, 0};
   {
+    const Buffer& bucket = buffers.get(ctx_, kPoints4[0], uint64_t(n) * 4, "canonical buckets");
+    const Buffer& offsets = buffers.get(ctx_, kPoints4[1], uint64_t(n) * 4, "canonical offsets");
+    const Buffer& rank = buffers.get(ctx_, kSlots4[0], uint64_t(slots) * 4, "canonical ranks");
     Recorder rec(ctx_);
     Profiler prof(ctx_, 1);
     prof.begin(rec, "canonical order");
     rec.fill(count, 0);
-    // Two vertex fields of `shift` bits: the digits above them are zero and need no pass.
-    const CanonicalKeysPush push{slots, tri.num_points, uint32_t(std::bit_width(tri.num_points))};
+    rec.fill(bucket, 0);
+    rec.dispatch_groups(count_, {tri.verts, bucket, rank, count}, push, groups);
+    prims_.exclusive_scan(rec, bucket, offsets, n);
+    rec.dispatch_groups(place_, {tri.verts, offsets, rank, tris}, push, groups);
+    rec.dispatch_groups(bucket_, {bucket, offsets, tris, count}, push, (uint64_t(n) + CANONICAL_WG - 1) / CANONICAL_WG);
+    prof.end(rec);
+    rec.submit();
+    if (gpu_ms) *gpu_ms = prof.results().front().ms;
+    gpu::download(ctx_, count, counts, 8);
+  }
+  if (counts[1]) {  // a bucket too large for one invocation (a vertex with a huge fan): the radix sort
+    const Buffer& keys = buffers.get(ctx_, kSlots8[0], uint64_t(slots) * 8, "canonical keys");
+    const Buffer& payload = buffers.get(ctx_, kSlots4[0], uint64_t(slots) * 4, "canonical payload");
+    const Buffer& keys2 = buffers.get(ctx_, kSlots8[1], uint64_t(slots) * 8, "canonical keys 2");
+    const Buffer& payload2 = buffers.get(ctx_, kSlots4[1], uint64_t(slots) * 4, "canonical payload 2");
+    Recorder rec(ctx_);
+    Profiler prof(ctx_, 1);
+    prof.begin(rec, "canonical order");
+    rec.fill(count, 0);
     rec.dispatch_groups(keys_, {tri.verts, keys, payload, count}, push, groups);
     prims_.radix_sort(rec, keys, payload, slots, 64, 2 * push.shift, {&keys2, &payload2});
     rec.dispatch_groups(write_, {keys, payload, tris, count}, push, groups);
     prof.end(rec);
     rec.submit();
-    if (gpu_ms) *gpu_ms = prof.results().front().ms;
+    if (gpu_ms) *gpu_ms += prof.results().front().ms;
   }
-  uint32_t finite = 0;
-  gpu::download(ctx_, count, &finite, 4);
+  const uint32_t finite = counts[0];
   static_assert(sizeof(Triangle) == 12, "Triangle is three packed uint32");
   const auto t0 = std::chrono::steady_clock::now();
   resize_touched(out, finite);

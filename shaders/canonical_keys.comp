@@ -23,22 +23,18 @@ uvec2 pack(uint a, uint b) { return uvec2((a << p.shift) | b, a >> (32u - p.shif
 layout(std430, binding = 2) writeonly buffer Payload { uint payload[]; };
 layout(std430, binding = 3) buffer Count { uint count[]; };
 
+#include "canonical_common.glsl"
+
 void main() {
   uint t = linear_group_id() * CANONICAL_WG + gl_LocalInvocationIndex;
   if (t >= p.num_slots) return;
-  uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
-  if (v0 == INF_VERTEX || v1 == INF_VERTEX || v2 == INF_VERTEX) {
+  uvec3 tri;
+  if (!canonical_triangle(t, tri)) {
     keys[t] = pack(p.num_points, 0u);
     payload[t] = 0u;
     return;
   }
-  // Rotate so the smallest vertex comes first; the orientation is kept.
-  if (v1 < v0 && v1 < v2) {
-    uint a = v1; v1 = v2; v2 = v0; v0 = a;
-  } else if (v2 < v0 && v2 < v1) {
-    uint a = v2; v2 = v1; v1 = v0; v0 = a;
-  }
-  keys[t] = pack(v0, v1);
-  payload[t] = v2;
+  keys[t] = pack(tri.x, tri.y);
+  payload[t] = tri.z;
   SUBGROUP_ADD(count[0], 1u);
 }

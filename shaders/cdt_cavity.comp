@@ -11,8 +11,12 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_shader_explicit_arithmetic_types_int64 : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
 #include "layout_cdt.h"
 #include "common.glsl"
+#include "subgroup_append.glsl"
 #include "predicates.glsl"
 #include "cdt_common.glsl"
 
@@ -43,7 +47,6 @@ uint chain_v[2][CHAIN];
 uint chain_at[2][CHAIN];
 uint chain_out[2][CHAIN];
 uint chain_len[2];
-uint slots[CDT_CAVITY_MAX + 1u];
 
 void add_outer(uint side, uint t, uint e) {
   uint j = chain_len[side] - 2u;  // the edge ending at the chain's newest vertex
@@ -64,11 +67,11 @@ void main() {
   uint base = offsets[c];
   uint64_t okey = cdt_owner_key(p.round, c);
 
-  // T_0 .. T_K from the rows; all must be c's.
-  slots[0] = NBR_TRI(table[base].edge);
-  for (uint i = 0u; i < k_rows; ++i) slots[i + 1u] = NBR_TRI(beyond(table[base + i].edge));
-  for (uint i = 0u; i <= k_rows; ++i)
-    if (owner[slots[i]] != okey) return;
+  // T_0 .. T_K: T_i holds row i's edge (i < K), T_K is beyond the last one; all must be c's.
+  uint t_last = NBR_TRI(beyond(table[base + k_rows - 1u].edge));
+  if (owner[t_last] != okey) return;
+  for (uint i = 0u; i < k_rows; ++i)
+    if (owner[NBR_TRI(table[base + i].edge)] != okey) return;
   for (uint i = 0u; i < k_rows; ++i) {  // a crossed constraint: refused, as in cdt_insert_claim
     uint e = table[base + i].edge;
     if (((cflags[NBR_TRI(e)] >> NBR_EDGE(e)) & 1u) != 0u) {
@@ -79,7 +82,7 @@ void main() {
 
   // The chains. T_0 = (a, R, L) from a's corner k; the segment leaves it across R-L.
   uint a = cons[c].x, b = cons[c].y;
-  uint t = slots[0], k = NBR_EDGE(table[base].edge);
+  uint t = NBR_TRI(table[base].edge), k = NBR_EDGE(table[base].edge);
   uint right = verts[3u * t + cdt_next(k)], left = verts[3u * t + cdt_prev(k)];
   chain_len[0] = 0u;
   chain_len[1] = 0u;
@@ -111,7 +114,12 @@ void main() {
   // Each polygon split from its base down: left as a .. b (base a-b), right as b .. a (base b-a), so every new
   // triangle (chain[i], chain[j], apex) is counter-clockwise, its edge 2 the base, edge 1 apex-chain[i] and edge 0
   // chain[j]-apex. A stack of intervals (i, j) with the code of the edge across their base.
-  uint fix_at = atomicAdd(ctl[CDT_CTL_FIXES], k_rows + 3u);
+  uint fix_at = 0u;
+  {  // this invocation's k_rows + 3 outer edges in the fix list, one atomic per subgroup
+    uint n = k_rows + 3u, sum = subgroupAdd(n), first = 0u;
+    if (subgroupElect()) first = atomicAdd(ctl[CDT_CTL_FIXES], sum);
+    fix_at = subgroupBroadcastFirst(first) + subgroupExclusiveAdd(n);
+  }
   uint made = 0u, outer = 0u, top = 0u;
   uint st_i[CHAIN], st_j[CHAIN], st_code[CHAIN];
   for (uint side = 0u; side < 2u; ++side) {
@@ -132,7 +140,8 @@ void main() {
         if (pred_incircle_perturbed(pts[vi], pts[vj], pts[va], pts[vx]) > 0) apex = x;
       }
       uint vapex = chain_v[side][side == 0u ? apex : n - 1u - apex];
-      uint s = slots[made++];
+      uint s = made < k_rows ? NBR_TRI(table[base + made].edge) : t_last;  // the rows are not rewritten yet
+      ++made;
       verts[3u * s] = vi;
       verts[3u * s + 1u] = vj;
       verts[3u * s + 2u] = vapex;
@@ -179,5 +188,5 @@ void main() {
 
   start[c] = CDT_NEVER;
   for (uint i = 0u; i < k_rows; ++i) table[base + i].cons = CDT_NEVER;
-  atomicAdd(ctl[CDT_CTL_CAVITIES], 1u);
+  SUBGROUP_ADD(ctl[CDT_CTL_CAVITIES], 1u);
 }

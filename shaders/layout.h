@@ -57,8 +57,9 @@ struct RadixPush {
 #define NBR_TRI(code) ((code) >> 2)
 #define NBR_EDGE(code) ((code) & 3u)
 
-// Canonical output order (gpu/canonical.cpp): one sort key per slot.
+// Canonical output order (gpu/canonical.cpp): buckets by smallest vertex, or one sort key per slot.
 #define CANONICAL_WG 256
+#define CANONICAL_BUCKET_MAX 64u  // larger buckets: the radix sort instead
 struct CanonicalKeysPush {
   uint num_slots;
   uint num_points;  // infinite slots get vertex num_points first, after every finite triangle

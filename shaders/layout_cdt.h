@@ -44,7 +44,7 @@ struct CdtCross {
 #define CDT_CTL_ARGS_FIXES 24u // dispatch over the cavity fix list
 #define CDT_CTL_WORDS 28u
 // Cavity insertion (cdt_cavity.comp): constraints crossing at most this many edges, owning them all.
-#define CDT_CAVITY_MAX 12u
+#define CDT_CAVITY_MAX 8u
 
 #define CDT_ERR_VERTEX_ON_CONSTRAINT 1u  // a walk met a vertex exactly on the open segment
 #define CDT_ERR_LOST 2u                  // a walk could not find its start or ran past its step bound

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -171,6 +172,25 @@ TEST(GpuPipeline, DegenerateInputs) {
   EXPECT_EQ(run({{0, 0, 0}, {1, 1, 0}, {2, 2, 0}, {3, 3, 0}}, {{{{0, 0, 0}, {3, 3, 0}}}}), 0u);  // collinear
   EXPECT_EQ(run({{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 0}}, {{{{0, 0, 0}, {2, 2, 0}}}, {{{2, 0, 0}, {0, 2, 0}}}}),
             4u);  // two crossing diagonals: one Steiner vertex
+  no_validation_messages();
+}
+
+// The canonical order sorts triangles in buckets by their smallest vertex; a vertex with a huge fan of its own
+// (here the smallest vertex, at the centre of an arc of 300 points) sends the sort to the radix sort instead.
+TEST(GpuPipeline, HugeFanIsSortedToo) {
+  InputSet in;
+  in.points.push_back({0, 0, 0});
+  for (int i = 0; i < 300; ++i) {
+    const double t = -1.4 + 2.8 * i / 299.0;
+    in.points.push_back({std::round(1e6 * std::cos(t)) / 1e3, std::round(1e6 * std::sin(t)) / 1e3, 0});
+  }
+  PreparedInput p = prepare(in);
+  CdtResult got = cdt().triangulate(p);
+  CdtResult ref = triangulate_cgal(p);
+  EXPECT_EQ(got.mesh.triangles, ref.mesh.triangles);
+  size_t fan = std::count_if(ref.mesh.triangles.begin(), ref.mesh.triangles.end(),
+                             [](const Triangle& t) { return t[0] == 0; });
+  EXPECT_GT(fan, 64u) << "the fan must be larger than a bucket";
   no_validation_messages();
 }
 
