@@ -2,6 +2,7 @@
 // check the triangles against the reference backend, print the table and optionally write every figure as JSON.
 #include "bench/bench.hpp"
 #include "bench/e2e.hpp"
+#include "bench/grid.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -324,10 +325,12 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_option("--table", o.table,
                   "1 (1M..4M points, 500K constraints), 2 (2M points, 200K..1M constraints), long (long "
                   "constraints), terrain (DEM grid + contours), all (these four), dt (Delaunay only: 1M..8M "
-                  "uniform points and a grid, CGAL's Delaunay_triangulation_2), or e2e (`cdtgpu triangulate` "
-                  "as a child process, files in, PLY out: 20K..4M points + a quarter as many contour segments)")
+                  "uniform points and a grid, CGAL's Delaunay_triangulation_2), e2e (`cdtgpu triangulate` "
+                  "as a child process, files in, PLY out: 20K..4M points + a quarter as many contour segments), "
+                  "or grid (a terrain TIN's DEM grid and contours, CPU against GPU, and the whole process with "
+                  "--grid-out and --contours-out)")
       ->default_val("all")
-      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e"}));
+      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e", "grid"}));
   cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points; e2e: 20K and 200K) that finish in about a minute on 2 cores");
   cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
   cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
@@ -352,6 +355,8 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
                 "e2e: skip the run with empty shader and pipeline caches (minutes on lavapipe, which compiles every "
                 "pipeline then)");
   cmd->add_option("--keep", o.keep_dir, "e2e: write inputs, outputs, stats and logs into this folder and keep them");
+  cmd->add_option("--grid-cells", o.grid_cells,
+                  "grid: cells on the grid's long side (default 10000, a 10000 x 10000 grid; --quick: 1000)");
 }
 
 namespace {
@@ -534,6 +539,7 @@ void warm_pipelines(const gpu::Context& ctx) {
 
 int run_bench(const BenchOptions& o) {
   if (o.table == "e2e") return run_e2e(o);  // the child processes open their own devices
+  if (o.table == "grid") return run_grid(o);
   gpu::ContextOptions co;
   co.device = o.device;
   std::string device = "none (--cgal-only)", device_name;
