@@ -254,23 +254,37 @@ int run_triangulate(const TriangulateOptions& options) {
     if (!tin) tin = timed(stats, "tin upload", [&] { return gpu::upload_tin(start->context(), result.mesh); });
     return *tin;
   };
+  // A device that cannot hold the work (a mesh or a grid row beyond its buffer range) leaves it to the CPU,
+  // whose result is the same.
+  auto on_cpu = [&](const gpu::DeviceError& e, const char* what) {
+    spdlog::warn("{} on the CPU: {}", what, e.what());
+    stats.stage_ms.emplace_back(std::string(what) + ": on the CPU after a device refusal", 0.0);
+  };
   auto grid_of = [&](double cell, const char* name) {
-    if (!gpu_raster) return rasterise(result.mesh, cell);
     const GridSpec spec = grid_for(result.mesh, cell);
-    Raster r = gpu_raster->rasterise(device_tin(), spec);
-    stats.gpu_stage_ms[name] = gpu_raster->gpu_ms;
-    return r;
+    if (gpu_raster) try {
+        Raster r = gpu_raster->rasterise(device_tin(), spec);
+        stats.gpu_stage_ms[name] = gpu_raster->gpu_ms;
+        return r;
+      } catch (const gpu::DeviceError& e) {
+        on_cpu(e, name);
+      }
+    return rasterise(result.mesh, spec);
   };
   std::optional<Raster> grid;
   std::vector<Contour> contours;
   if (!options.grid_out.empty()) grid = timed(stats, "grid", [&] { return grid_of(options.cell, "grid"); });
   if (!options.contours_out.empty())
     contours = timed(stats, "contours", [&] {
-      if (!gpu_contours) return contour_lines(result.mesh, options.interval);
-      std::vector<Contour> lines = gpu_contours->lines(device_tin(), result.mesh, options.interval);
-      stats.gpu_stage_ms["contours"] = gpu_contours->gpu_ms;
-      stats.stage_ms.emplace_back("contours: host sort and chaining", gpu_contours->chain_ms);
-      return lines;
+      if (gpu_contours) try {
+          std::vector<Contour> lines = gpu_contours->lines(device_tin(), result.mesh, options.interval);
+          stats.gpu_stage_ms["contours"] = gpu_contours->gpu_ms;
+          stats.stage_ms.emplace_back("contours: host sort and chaining", gpu_contours->chain_ms);
+          return lines;
+        } catch (const gpu::DeviceError& e) {
+          on_cpu(e, "contours");
+        }
+      return contour_lines(result.mesh, options.interval);
     });
   std::optional<Raster> preview;
   if (!options.preview.empty())

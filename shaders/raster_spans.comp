@@ -5,7 +5,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "layout.h"
 #include "common.glsl"
-#include "predicates.glsl"
+#include "division.glsl"
 #include "raster_common.glsl"
 
 layout(local_size_x = RASTER_WG) in;
@@ -14,15 +14,17 @@ layout(std430, binding = 4) writeonly buffer Counts { uint counts[]; };
 layout(push_constant) uniform Push { RasterPush p; };
 
 // Smallest k with k * cell >= v, largest with k * cell <= v (core/raster.cpp's ceil_index, floor_index): the
-// quotient's rounding is corrected with the same product the centres use.
+// quotient's rounding is corrected with the same product the centres use. The quotient is the correctly
+// rounded one, as on the CPU, so the corrections take a step or two (a coarse device quotient could be
+// thousands of cells off at large coordinates).
 double ceil_k(double v, double cell) {
-  precise double k = ceil(v / cell);
+  precise double k = ceil(div_rn(v, cell));
   for (int i = 0; i < 64 && k * cell < v; ++i) k += 1.0lf;
   for (int i = 0; i < 64 && (k - 1.0lf) * cell >= v; ++i) k -= 1.0lf;
   return k;
 }
 double floor_k(double v, double cell) {
-  precise double k = floor(v / cell);
+  precise double k = floor(div_rn(v, cell));
   for (int i = 0; i < 64 && k * cell > v; ++i) k -= 1.0lf;
   for (int i = 0; i < 64 && (k + 1.0lf) * cell <= v; ++i) k += 1.0lf;
   return k;

@@ -21,6 +21,7 @@
 #include "core/prepare.hpp"
 #include "core/raster.hpp"
 #include "gpu/buffers.hpp"
+#include "gpu/check.hpp"
 #include "gpu/context.hpp"
 #include "gpu/contours.hpp"
 #include "gpu/passes.hpp"
@@ -128,6 +129,7 @@ size_t centres_where_the_tie_matters(const Mesh& m, double cell) {
 }
 
 TEST(GpuDivision, CoarseQuotientsAreCorrectedToTheNearest) {
+  EXPECT_TRUE(ctx().validation) << "the Khronos validation layer is not active";
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> mant(1, 2);
   std::uniform_int_distribution<int> expo(-60, 60), sign(0, 1);
@@ -228,6 +230,7 @@ TEST(GpuRaster, BandsOfAFewRowsEqualOneBand) {
   for (uint64_t rows : {1u, 7u, 100u})
     expect_same_grid(rasteriser().rasterise(tin, spec, spec.ncols * rows + 3), whole,
                      std::to_string(rows) + "-row bands");
+  EXPECT_THROW(rasteriser().rasterise(tin, spec, spec.ncols - 1), gpu::DeviceError);  // a row must fit a band
   const Mesh g = noisy_grid(12);
   const gpu::DeviceTin gt = gpu::upload_tin(ctx(), g);
   expect_same_grid(rasteriser().rasterise(gt, grid_for(g, 0.5), grid_for(g, 0.5).ncols * 3), rasterise(g, 0.5),
