@@ -1,6 +1,9 @@
 // cdtgpu bench --table grid (see grid.hpp).
 #include "bench/grid.hpp"
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <bit>
 #include <chrono>
@@ -9,16 +12,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <sys/wait.h>
-#include <unistd.h>
-
-#include <nlohmann/json.hpp>
 
 #include "bench/e2e_workload.hpp"
 #include "core/cdt_cgal.hpp"
@@ -39,7 +38,9 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using json = nlohmann::ordered_json;
 
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 double median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -85,9 +86,9 @@ Child run_child(const std::string& binary, const std::vector<std::string>& input
   for (const std::string& in : inputs) cmd += " " + quote(in);
   char numbers[128];
   std::snprintf(numbers, sizeof numbers, " --cell %.17g --interval %.17g", cell, interval);
-  cmd += " --crs none -q --backend " + backend + " -o " + quote(out + ".ply") + " --grid-out " + quote(out + ".asc") +
-         numbers + " --contours-out " + quote(out + ".wkt") + " --stats " + quote(out + ".json") + " > " +
-         quote(out + ".log") + " 2>&1";
+  cmd += " --crs none -q --backend " + backend + " -o " + quote(out + ".ply") + " --grid-out " +
+         quote(out + ".asc") + numbers + " --contours-out " + quote(out + ".wkt") + " --stats " +
+         quote(out + ".json") + " > " + quote(out + ".log") + " 2>&1";
   Child c;
   const auto t0 = Clock::now();
   const int status = std::system(cmd.c_str());
@@ -98,8 +99,9 @@ Child run_child(const std::string& binary, const std::vector<std::string>& input
 }
 
 double stage(const json& stats, const char* name) {
-  return stats.contains("stage_ms") && stats["stage_ms"].contains(name) ? stats["stage_ms"][name].get<double>()
-                                                                        : std::nan("");
+  return stats.contains("stage_ms") && stats["stage_ms"].contains(name)
+             ? stats["stage_ms"][name].get<double>()
+             : std::nan("");
 }
 
 }  // namespace
@@ -120,19 +122,25 @@ int run_grid(const BenchOptions& o) {
   const std::string binary = o.binary.empty() ? fs::read_symlink("/proc/self/exe").string() : o.binary;
 
   std::printf("cdtgpu bench --table grid, %s\n", bench_utc_now().c_str());
-  std::printf("CPU: %s, %u hardware threads\n", bench_cpu_model().c_str(), std::thread::hardware_concurrency());
+  std::printf("CPU: %s, %u hardware threads\n", bench_cpu_model().c_str(),
+              std::thread::hardware_concurrency());
   std::printf("GPU: %s, driver %s %s\n", ctx.info.name.c_str(), ctx.info.driver_name.c_str(),
               ctx.info.driver_info.c_str());
-  std::printf("TIN: the terrain workload (DEM grid 10 m apart + contour lines), CGAL backend; grid: %llu cells on the "
-              "long side; contours: 100 levels over the z range\n",
-              static_cast<unsigned long long>(cells));
-  std::printf("in-process: median of %d runs after 1 warm-up (CPU: all cores; GPU: wall clock of the call, "
-              "download included, and its device timestamps); process: `cdtgpu triangulate ... --grid-out "
-              "--contours-out` wall clock after 1 warm-up\n\n",
-              o.runs);
-  std::printf("| points | triangles | grid cells | CPU grid ms | GPU grid ms (device) | TIN upload ms | CPU contours ms "
-              "| GPU contours ms (device, host chaining) | lines | same | process cgal ms (grid, write) | process "
-              "gpu ms (grid, write) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "TIN: the terrain workload (DEM grid 10 m apart + contour lines), CGAL backend; grid: %llu cells on "
+      "the "
+      "long side; contours: 100 levels over the z range\n",
+      static_cast<unsigned long long>(cells));
+  std::printf(
+      "in-process: median of %d runs after 1 warm-up (CPU: all cores; GPU: wall clock of the call, "
+      "download included, and its device timestamps); process: `cdtgpu triangulate ... --grid-out "
+      "--contours-out` wall clock after 1 warm-up\n\n",
+      o.runs);
+  std::printf(
+      "| points | triangles | grid cells | CPU grid ms | GPU grid ms (device) | TIN upload ms | CPU contours "
+      "ms "
+      "| GPU contours ms (device, host chaining) | lines | same | process cgal ms (grid, write) | process "
+      "gpu ms (grid, write) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
 
   json rows = json::array();
@@ -170,7 +178,9 @@ int run_grid(const BenchOptions& o) {
       if (run) cpu_lines.push_back(ms_since(t));
       t = Clock::now();
       gpu_c = contourer.lines(tin, mesh, interval);
-      if (run) gpu_lines.push_back(ms_since(t)), gpu_lines_dev.push_back(contourer.gpu_ms), chain.push_back(contourer.chain_ms);
+      if (run)
+        gpu_lines.push_back(ms_since(t)), gpu_lines_dev.push_back(contourer.gpu_ms),
+            chain.push_back(contourer.chain_ms);
     }
     const bool same = same_grid(cpu_r, gpu_r) && wkt_of(cpu_c) == wkt_of(gpu_c);
     cpu_r = Raster{}, gpu_r = Raster{};
@@ -186,11 +196,13 @@ int run_grid(const BenchOptions& o) {
     for (int b = 0; b < 2; ++b) {
       run_child(binary, files.inputs, dir.string(), backends[b], cell, interval);  // warm-up
       proc[b] = run_child(binary, files.inputs, dir.string(), backends[b], cell, interval);
-      if (proc[b].code != 0) std::fprintf(stderr, "cdtgpu triangulate --backend %s failed (exit %d), see %s\n",
-                                          backends[b], proc[b].code, (dir / (std::string(backends[b]) + ".log")).c_str());
+      if (proc[b].code != 0)
+        std::fprintf(stderr, "cdtgpu triangulate --backend %s failed (exit %d), see %s\n", backends[b],
+                     proc[b].code, (dir / (std::string(backends[b]) + ".log")).c_str());
     }
-    const std::string cmp = "cmp -s " + quote((dir / "cgal.asc").string()) + " " + quote((dir / "gpu.asc").string()) +
-                            " && cmp -s " + quote((dir / "cgal.wkt").string()) + " " + quote((dir / "gpu.wkt").string());
+    const std::string cmp = "cmp -s " + quote((dir / "cgal.asc").string()) + " " +
+                            quote((dir / "gpu.asc").string()) + " && cmp -s " +
+                            quote((dir / "cgal.wkt").string()) + " " + quote((dir / "gpu.wkt").string());
     const bool same_files = proc[0].code == 0 && proc[1].code == 0 && std::system(cmp.c_str()) == 0;
     if (o.keep_dir.empty()) fs::remove_all(dir);
     if (!same || !same_files) ++failures;
@@ -202,31 +214,33 @@ int run_grid(const BenchOptions& o) {
     std::printf("| %llu | %zu | %llu x %llu | %s | %s (%s) | %s | %s | %s (%s, %s) | %zu | %s | %s | %s |\n",
                 static_cast<unsigned long long>(mesh.vertices.size()), mesh.triangles.size(),
                 static_cast<unsigned long long>(spec.ncols), static_cast<unsigned long long>(spec.nrows),
-                fmt(median(cpu_grid)).c_str(), fmt(median(gpu_grid)).c_str(), fmt(median(gpu_grid_dev)).c_str(),
-                fmt(median(upload)).c_str(), fmt(median(cpu_lines)).c_str(), fmt(median(gpu_lines)).c_str(),
+                fmt(median(cpu_grid)).c_str(), fmt(median(gpu_grid)).c_str(),
+                fmt(median(gpu_grid_dev)).c_str(), fmt(median(upload)).c_str(),
+                fmt(median(cpu_lines)).c_str(), fmt(median(gpu_lines)).c_str(),
                 fmt(median(gpu_lines_dev)).c_str(), fmt(median(chain)).c_str(), cpu_c.size(),
                 same && same_files ? "yes" : (same ? "files differ" : "NO"), process(proc[0]).c_str(),
                 process(proc[1]).c_str());
     std::fflush(stdout);
-    rows.push_back({{"points", mesh.vertices.size()},
-                    {"triangles", mesh.triangles.size()},
-                    {"ncols", spec.ncols},
-                    {"nrows", spec.nrows},
-                    {"cell", cell},
-                    {"interval", interval},
-                    {"cpu_grid_ms", cpu_grid},
-                    {"gpu_grid_ms", gpu_grid},
-                    {"gpu_grid_device_ms", gpu_grid_dev},
-                    {"tin_upload_ms", upload},
-                    {"cpu_contours_ms", cpu_lines},
-                    {"gpu_contours_ms", gpu_lines},
-                    {"gpu_contours_device_ms", gpu_lines_dev},
-                    {"gpu_contours_host_chaining_ms", chain},
-                    {"contour_lines", cpu_c.size()},
-                    {"same_in_process", same},
-                    {"same_files", same_files},
-                    {"process_cgal", {{"wall_ms", proc[0].wall_ms}, {"exit", proc[0].code}, {"stats", proc[0].stats}}},
-                    {"process_gpu", {{"wall_ms", proc[1].wall_ms}, {"exit", proc[1].code}, {"stats", proc[1].stats}}}});
+    rows.push_back(
+        {{"points", mesh.vertices.size()},
+         {"triangles", mesh.triangles.size()},
+         {"ncols", spec.ncols},
+         {"nrows", spec.nrows},
+         {"cell", cell},
+         {"interval", interval},
+         {"cpu_grid_ms", cpu_grid},
+         {"gpu_grid_ms", gpu_grid},
+         {"gpu_grid_device_ms", gpu_grid_dev},
+         {"tin_upload_ms", upload},
+         {"cpu_contours_ms", cpu_lines},
+         {"gpu_contours_ms", gpu_lines},
+         {"gpu_contours_device_ms", gpu_lines_dev},
+         {"gpu_contours_host_chaining_ms", chain},
+         {"contour_lines", cpu_c.size()},
+         {"same_in_process", same},
+         {"same_files", same_files},
+         {"process_cgal", {{"wall_ms", proc[0].wall_ms}, {"exit", proc[0].code}, {"stats", proc[0].stats}}},
+         {"process_gpu", {{"wall_ms", proc[1].wall_ms}, {"exit", proc[1].code}, {"stats", proc[1].stats}}}});
   }
   if (!o.json_path.empty()) {
     json j = {{"table", "grid"},

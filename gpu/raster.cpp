@@ -1,10 +1,10 @@
 // Bands, buffers and dispatches of the GPU rasteriser; the shaders (raster_*.comp) hold the rules.
 #include "gpu/raster.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <string>
-
-#include <spdlog/spdlog.h>
 
 #include "gpu/check.hpp"
 #include "gpu/profiler.hpp"
@@ -33,8 +33,9 @@ Raster GpuRasteriser::rasterise(const DeviceTin& tin, const GridSpec& g, uint64_
   uint64_t band_cells = std::min<uint64_t>(range / sizeof(double), uint64_t(1) << 31);
   if (max_band_cells) band_cells = std::min(band_cells, max_band_cells);
   if (g.ncols > band_cells || g.ncols > UINT32_MAX)
-    throw DeviceError("a grid row of " + std::to_string(g.ncols) + " cells is more than one device buffer holds (" +
-                      std::to_string(band_cells) + " cells)");
+    throw DeviceError("a grid row of " + std::to_string(g.ncols) +
+                      " cells is more than one device buffer holds (" + std::to_string(band_cells) +
+                      " cells)");
   // The scan of (triangle, row) items is 32-bit: a band of at most 2^32 / triangles rows cannot overflow it.
   const uint64_t nt64 = std::max<uint64_t>(tin.num_triangles, 1);
   const uint64_t band_rows =
@@ -94,7 +95,8 @@ Raster GpuRasteriser::rasterise(const DeviceTin& tin, const GridSpec& g, uint64_
     }
     uint32_t queued = 0;
     download(ctx_, queue_count, &queued, 4);
-    if (queued > queue_cap) {  // the queue was too short: again with one that holds them (atomicMin is idempotent)
+    if (queued >
+        queue_cap) {  // the queue was too short: again with one that holds them (atomicMin is idempotent)
       queue_cap = queued;
       queue = create_buffer(ctx_, uint64_t(queue_cap) * 16, "raster exact queue");
       push.queue_cap = queue_cap;
@@ -105,16 +107,17 @@ Raster GpuRasteriser::rasterise(const DeviceTin& tin, const GridSpec& g, uint64_
     }
     Recorder rec(ctx_);
     prof.begin(rec, "exact and values");
-    if (queued) rec.dispatch_groups(exact_, {grid, tin.xyz, tin.tris, spans, queue, queue_count, owner}, push,
-                                    (uint64_t(queued) + RASTER_WG - 1) / RASTER_WG);
+    if (queued)
+      rec.dispatch_groups(exact_, {grid, tin.xyz, tin.tris, spans, queue, queue_count, owner}, push,
+                          (uint64_t(queued) + RASTER_WG - 1) / RASTER_WG);
     rec.dispatch_groups(values_, {grid, tin.xyz, tin.tris, owner, z}, push,
                         (rows * g.ncols + RASTER_WG - 1) / RASTER_WG);
     prof.end(rec);
     rec.submit();
     for (const StageTime& s : prof.results()) {
       gpu_ms += s.ms;
-      spdlog::debug("gpu raster band at row {}: {} {:.2f} ms ({} centres decided exactly)", row0, s.name, s.ms,
-                    queued);
+      spdlog::debug("gpu raster band at row {}: {} {:.2f} ms ({} centres decided exactly)", row0, s.name,
+                    s.ms, queued);
     }
     download(ctx_, z, r.z.data() + row0 * g.ncols, rows * g.ncols * 8);
   }

@@ -26,8 +26,8 @@ namespace cdtgpu::gpu {
 class GpuRasteriser {
  public:
   GpuRasteriser(const Context& ctx, const Primitives& prims);
-  // max_band_cells: cells per band at most (0: as many as the device's buffer range holds); tests make it small
-  // to check that bands join seamlessly. Throws DeviceError when one grid row alone exceeds the range.
+  // max_band_cells: cells per band at most (0: as many as the device's buffer range holds); tests make it
+  // small to check that bands join seamlessly. Throws DeviceError when one grid row alone exceeds the range.
   Raster rasterise(const DeviceTin& tin, const GridSpec& spec, uint64_t max_band_cells = 0) const;
   // Milliseconds of the last call on the device (timestamps, all bands).
   mutable double gpu_ms = 0;

@@ -114,8 +114,8 @@ size_t centres_where_the_tie_matters(const Mesh& m, double cell) {
       bool found = false;
       for (const Triangle& t : m.triangles) {
         const Point3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
-        if (p.x < std::min({a.x, b.x, c.x}) || p.x > std::max({a.x, b.x, c.x}) || p.y < std::min({a.y, b.y, c.y}) ||
-            p.y > std::max({a.y, b.y, c.y}))
+        if (p.x < std::min({a.x, b.x, c.x}) || p.x > std::max({a.x, b.x, c.x}) ||
+            p.y < std::min({a.y, b.y, c.y}) || p.y > std::max({a.y, b.y, c.y}))
           continue;
         if (pred::orient2d({a.x, a.y}, {b.x, b.y}, p) < 0 || pred::orient2d({b.x, b.y}, {c.x, c.y}, p) < 0 ||
             pred::orient2d({c.x, c.y}, {a.x, a.y}, p) < 0)
@@ -210,7 +210,8 @@ TEST(GpuRaster, AHoleInTheMeshIsNodataOnBoth) {
   const gpu::DeviceTin tin = gpu::upload_tin(ctx(), m);
   for (double cell : {1.0, 0.5, 0.3}) {
     const Raster want = rasterise(m, cell);
-    expect_same_grid(rasteriser().rasterise(tin, grid_for(m, cell)), want, "holed grid, cell " + std::to_string(cell));
+    expect_same_grid(rasteriser().rasterise(tin, grid_for(m, cell)), want,
+                     "holed grid, cell " + std::to_string(cell));
     // The hole's middle is NODATA, its rim (on the remaining triangles' edges) is not.
     const GridSpec& g = want.spec;
     const uint64_t col = uint64_t(std::llround(1000 / cell)) - uint64_t(g.ix0);
@@ -233,8 +234,8 @@ TEST(GpuRaster, BandsOfAFewRowsEqualOneBand) {
   EXPECT_THROW(rasteriser().rasterise(tin, spec, spec.ncols - 1), gpu::DeviceError);  // a row must fit a band
   const Mesh g = noisy_grid(12);
   const gpu::DeviceTin gt = gpu::upload_tin(ctx(), g);
-  expect_same_grid(rasteriser().rasterise(gt, grid_for(g, 0.5), grid_for(g, 0.5).ncols * 3), rasterise(g, 0.5),
-                   "grid DEM in 3-row bands");
+  expect_same_grid(rasteriser().rasterise(gt, grid_for(g, 0.5), grid_for(g, 0.5).ncols * 3),
+                   rasterise(g, 0.5), "grid DEM in 3-row bands");
   no_validation_messages();
 }
 
