@@ -64,7 +64,7 @@ Raster GpuRasteriser::rasterise(const DeviceTin& tin, const GridSpec& g, uint64_
 
   for (uint64_t row0 = 0; row0 < g.nrows; row0 += band_rows) {
     const uint64_t rows = std::min(band_rows, g.nrows - row0);
-    RasterPush push{nt, uint32_t(g.ncols), uint32_t(row0), uint32_t(rows), 0};
+    RasterPush push{nt, uint32_t(g.ncols), uint32_t(row0), uint32_t(rows), 0, 0};
     Profiler prof(ctx_, 3);
     uint32_t items = 0;
     if (nt) {
