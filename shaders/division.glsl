@@ -58,6 +58,7 @@ double div_rn_from(double a, double b, double q0) {
   precise double A = abs(a);
   precise double B = abs(b);
   precise double q = abs(q0);
+  if (A == 0.0lf && B != 0.0lf && div_normal(B)) return packDouble2x32(uvec2(0u, sign));  // IEEE's signed zero
   if (!div_normal(A) || !div_normal(B) || !div_normal(q)) return q0;
   // Vulkan only promises double precision "at least that of single precision" (division: 2.5 single ulps).
   // Two Newton steps on the residual, q += (A - q*B) / B with q*B = p + e exactly (A - p exact while q is

@@ -157,6 +157,12 @@ TEST(GpuDivision, CoarseQuotientsAreCorrectedToTheNearest) {
     cases.insert(cases.end(), {a, b, std::nextafter(a / b, -INFINITY)});
     want.push_back(a / b);
   }
+  // Zero over either sign: a zero of the sign IEEE gives, whatever the device's quotient says.
+  for (double a : {0.0, -0.0})
+    for (double b : {3.0, -3.0}) {
+      cases.insert(cases.end(), {a, b, 0.0});
+      want.push_back(a / b);
+    }
   gpu::Pass eval = gpu::create_pass(ctx(), {"division_eval", 2, 0});
   gpu::Buffer in = gpu::upload_new(ctx(), cases, "division cases");
   gpu::Buffer out = gpu::create_buffer(ctx(), want.size() * 8, "division quotients");
