@@ -3,6 +3,7 @@
 #include "bench/bench.hpp"
 #include "bench/e2e.hpp"
 #include "bench/peer.hpp"
+#include "bench/grid.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -325,11 +326,13 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_option("--table", o.table,
                   "1 (1M..4M points, 500K constraints), 2 (2M points, 200K..1M constraints), long (long "
                   "constraints), terrain (DEM grid + contours), all (these four), dt (Delaunay only: 1M..8M "
-                  "uniform points and a grid, CGAL's Delaunay_triangulation_2), or e2e (`cdtgpu triangulate` "
-                  "as a child process, files in, PLY out: 20K..4M points + a quarter as many contour segments), or peer "
-                  "(GPU stages beside gDel2D's on the same vertices and segments, see --peer and --rows)")
+                  "uniform points and a grid, CGAL's Delaunay_triangulation_2), e2e (`cdtgpu triangulate` "
+                  "as a child process, files in, PLY out: 20K..4M points + a quarter as many contour segments), "
+                  "grid (a terrain TIN's DEM grid and contours, CPU against GPU, and the whole process with "
+                  "--grid-out and --contours-out), or peer (GPU stages beside gDel2D's on the same vertices and "
+                  "segments, see --peer and --rows)")
       ->default_val("all")
-      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e", "peer"}));
+      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e", "grid", "peer"}));
   cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points; e2e: 20K and 200K) that finish in about a minute on 2 cores");
   cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
   cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
@@ -359,6 +362,8 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
                   "no CGAL run (so no comparison) above this many points, where CGAL takes minutes (default 10M)")
       ->transform([](std::string s) { return std::to_string(parse_bench_size(s)); });
   cmd->add_option("--keep", o.keep_dir, "e2e: write inputs, outputs, stats and logs into this folder and keep them");
+  cmd->add_option("--grid-cells", o.grid_cells,
+                  "grid: cells on the grid's long side (default 10000, a 10000 x 10000 grid; --quick: 1000)");
 }
 
 namespace {
@@ -544,6 +549,7 @@ void warm_pipelines(const gpu::Context& ctx) {
 int run_bench(const BenchOptions& o) {
   if (o.table == "e2e") return run_e2e(o);  // the child processes open their own devices
   if (o.table == "peer") return run_peer(o);
+  if (o.table == "grid") return run_grid(o);
   gpu::ContextOptions co;
   co.device = o.device;
   std::string device = "none (--cgal-only)", device_name;

@@ -1,7 +1,7 @@
 // cdtgpu bench: times the CDT of the deterministic workloads (core/workloads.hpp) with a CGAL configured for
 // speed and with the GPU backend (gpu/cdt_pipeline.hpp), checks both give the same triangles, and prints a
 // table like the paper's (Chen et al. 2026); --ablation prints its Table 3; --table e2e (bench/e2e.hpp) times the
-// whole `cdtgpu triangulate` as a child process.
+// whole `cdtgpu triangulate` as a child process; --table grid (bench/grid.hpp) the DEM grid and contours.
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -31,7 +31,7 @@ struct BackendRun {
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
 
 struct BenchOptions {
-  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only), e2e or peer
+  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only), e2e, grid or peer
   bool quick = false;               // 20K..80K points instead of 1M..4M
   std::vector<std::string> sizes;   // point counts overriding the table's, e.g. 50000 or 1.5M
   int runs = 5;                     // timed runs per backend and workload (median), after one warm-up
@@ -48,6 +48,8 @@ struct BenchOptions {
   std::string binary;                 // the cdtgpu to time; empty: this executable (/proc/self/exe)
   std::string keep_dir;               // keep every input, output, stats file and log here; empty: a temp dir
   bool first_run = true;              // the run with empty caches (on lavapipe it compiles every pipeline: ~1 min)
+  // --table grid (bench/grid.hpp): CPU and GPU grid and contours of the terrain workload's TIN
+  uint64_t grid_cells = 0;            // cells on the grid's long side; 0: 10000 (--quick: 1000)
   // --table peer (bench/peer.hpp)
   std::vector<std::string> rows;      // "POINTS+SEGMENTS" each, e.g. 2M+500K; empty: the five rows
   std::string peer;                   // gDel2D's executable; empty: our columns only

@@ -22,6 +22,9 @@
 #include "core/verify_regions.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "gpu/check.hpp"
+#include "gpu/contours.hpp"
+#include "gpu/raster.hpp"
+#include "gpu/tin.hpp"
 #include "io/atomic_file.hpp"
 #include "io/gis_writers.hpp"
 #include "io/input_spec.hpp"
@@ -208,6 +211,13 @@ int run_triangulate(const TriangulateOptions& options) {
                   start->context().info.driver_info);
   }
   spdlog::debug("backend {}: {}", stats.backend, reason);
+  // With the GPU backend, grids (and the preview's grid) and contour lines are made on the GPU too, with the
+  // CPU's values bit for bit. Their pipelines are asked for now, so they compile while the CDT runs.
+  std::optional<gpu::GpuRasteriser> gpu_raster;
+  std::optional<gpu::GpuContourer> gpu_contours;
+  if (cdt && (!options.grid_out.empty() || !options.preview.empty()))
+    gpu_raster.emplace(start->context(), cdt->primitives());
+  if (cdt && !options.contours_out.empty()) gpu_contours.emplace(start->context(), cdt->primitives());
 
   CdtResult result = timed(stats, "triangulate", [&] {
     if (!cdt) return triangulate_cgal(l.prepared);
@@ -239,16 +249,46 @@ int run_triangulate(const TriangulateOptions& options) {
                      ? "no triangles: boundaries, holes and --max-edge dropped them all"
                      : "no triangles: fewer than 3 distinct points, or all points collinear");
   // Derived outputs are computed before anything is written: a grid that cannot be made writes nothing.
+  std::optional<gpu::DeviceTin> tin;  // the final mesh on the device, uploaded once for all of them
+  auto device_tin = [&]() -> const gpu::DeviceTin& {
+    if (!tin) tin = timed(stats, "tin upload", [&] { return gpu::upload_tin(start->context(), result.mesh); });
+    return *tin;
+  };
+  // A device that cannot hold the work (a mesh or a grid row beyond its buffer range) leaves it to the CPU,
+  // whose result is the same.
+  auto on_cpu = [&](const gpu::DeviceError& e, const char* what) {
+    spdlog::warn("{} on the CPU: {}", what, e.what());
+    stats.stage_ms.emplace_back(std::string(what) + ": on the CPU after a device refusal", 0.0);
+  };
+  auto grid_of = [&](double cell, const char* name) {
+    const GridSpec spec = grid_for(result.mesh, cell);
+    if (gpu_raster) try {
+        Raster r = gpu_raster->rasterise(device_tin(), spec);
+        stats.gpu_stage_ms[name] = gpu_raster->gpu_ms;
+        return r;
+      } catch (const gpu::DeviceError& e) {
+        on_cpu(e, name);
+      }
+    return rasterise(result.mesh, spec);
+  };
   std::optional<Raster> grid;
   std::vector<Contour> contours;
-  if (!options.grid_out.empty())
-    grid = timed(stats, "grid", [&] { return rasterise(result.mesh, options.cell); });
+  if (!options.grid_out.empty()) grid = timed(stats, "grid", [&] { return grid_of(options.cell, "grid"); });
   if (!options.contours_out.empty())
-    contours = timed(stats, "contours", [&] { return contour_lines(result.mesh, options.interval); });
+    contours = timed(stats, "contours", [&] {
+      if (gpu_contours) try {
+          std::vector<Contour> lines = gpu_contours->lines(device_tin(), result.mesh, options.interval);
+          stats.gpu_stage_ms["contours"] = gpu_contours->gpu_ms;
+          stats.stage_ms.emplace_back("contours: host sort and chaining", gpu_contours->chain_ms);
+          return lines;
+        } catch (const gpu::DeviceError& e) {
+          on_cpu(e, "contours");
+        }
+      return contour_lines(result.mesh, options.interval);
+    });
   std::optional<Raster> preview;
   if (!options.preview.empty())
-    preview =
-        timed(stats, "preview", [&] { return rasterise(result.mesh, preview_cell(result.mesh, 1000)); });
+    preview = timed(stats, "preview", [&] { return grid_of(preview_cell(result.mesh, 1000), "preview"); });
   // A .prj beside a device, FIFO or /dev/stdout makes no sense (it would be /dev/stdout.prj): the CRS name
   // in the stream is all such an output gets.
   auto crs_for = [&](const std::string& path) {

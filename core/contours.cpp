@@ -18,24 +18,15 @@ namespace cdtgpu {
 
 namespace {
 
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
-}
-
 Point3 crossing(const Point3& u, const Point3& v, double level) {  // u below, v above
   if (v.z == level) return {v.x, v.y, level};
   const double t = (level - u.z) / (v.z - u.z);
   return {u.x + t * (v.x - u.x), u.y + t * (v.y - u.y), level};
 }
 
-struct Segment {
-  uint64_t from, to;  // edge keys
-  Point3 p, q;
-};
-
 // `tris`: the triangles, in mesh order, with a vertex below the level and one at or above it.
 std::vector<Contour> lines_at(const Mesh& mesh, double level, std::span<const uint32_t> tris) {
-  std::vector<Segment> segs;
+  std::vector<ContourSegment> segs;
   for (uint32_t t : tris) {
     const Triangle& tri = mesh.triangles[t];
     const Point3* p[3] = {&mesh.vertices[tri[0]], &mesh.vertices[tri[1]], &mesh.vertices[tri[2]]};
@@ -53,8 +44,8 @@ std::vector<Contour> lines_at(const Mesh& mesh, double level, std::span<const ui
       const int f = (e + 1) % 3;
       return above[e] ? crossing(*p[f], *p[e], level) : crossing(*p[e], *p[f], level);
     };
-    const auto key = [&](int e) { return edge_key(tri[e], tri[(e + 1) % 3]); };
-    Segment s{key(falling), key(rising), point(falling), point(rising)};
+    const auto key = [&](int e) { return contour_edge_key(tri[e], tri[(e + 1) % 3]); };
+    ContourSegment s{key(falling), key(rising), point(falling), point(rising)};
     // A clockwise triangle (never in a canonical mesh) walks the other way round.
     const Point3 &a = *p[0], &b = *p[1], &c = *p[2];
     if ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x) < 0) {
@@ -63,7 +54,16 @@ std::vector<Contour> lines_at(const Mesh& mesh, double level, std::span<const ui
     }
     segs.push_back(s);
   }
+  return chain_contours(level, segs);
+}
 
+}  // namespace
+
+uint64_t contour_edge_key(uint32_t a, uint32_t b) {
+  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
+}
+
+std::vector<Contour> chain_contours(double level, const std::vector<ContourSegment>& segs) {
   std::unordered_map<uint64_t, uint32_t> starting, ending;  // edge key -> segment
   starting.reserve(segs.size());
   ending.reserve(segs.size());
@@ -98,12 +98,30 @@ std::vector<Contour> lines_at(const Mesh& mesh, double level, std::span<const ui
   return out;
 }
 
+namespace {
+
+int64_t first_level_above(double z, double interval) {  // smallest k with k * interval > z
+  auto k = int64_t(std::floor(z / interval)) + 1;
+  while (double(k - 1) * interval > z) --k;
+  while (double(k) * interval <= z) ++k;
+  return k;
+}
+
+int64_t last_level_at_or_below(double z, double interval) {  // largest k with k * interval <= z
+  auto k = int64_t(std::floor(z / interval));
+  while (double(k) * interval > z) --k;
+  while (double(k + 1) * interval <= z) ++k;
+  return k;
+}
+
 }  // namespace
 
-std::vector<Contour> contour_lines(const Mesh& mesh, double interval, uint64_t max_levels) {
+ContourLevels contour_levels(const Mesh& mesh, double interval, uint64_t max_levels) {
   if (!(interval > 0) || !std::isfinite(interval))
     throw UsageError("the contour interval must be a positive number, not " + std::to_string(interval));
-  if (mesh.triangles.empty()) return {};
+  ContourLevels out;
+  out.interval = interval;
+  if (mesh.triangles.empty()) return out;
   double z0 = INFINITY, z1 = -INFINITY;
   for (const Triangle& t : mesh.triangles)
     for (uint32_t v : t) {
@@ -116,21 +134,18 @@ std::vector<Contour> contour_lines(const Mesh& mesh, double interval, uint64_t m
                      std::to_string(max_levels) + " levels between " + std::to_string(z0) + " and " +
                      std::to_string(z1) + ": choose a larger --interval");
   // Level k is at k * interval; a triangle crosses it when its lowest z < level <= its highest z.
-  auto first_above = [&](double z) {  // smallest k with k * interval > z
-    auto k = int64_t(std::floor(z / interval)) + 1;
-    while (double(k - 1) * interval > z) --k;
-    while (double(k) * interval <= z) ++k;
-    return k;
-  };
-  auto last_at_or_below = [&](double z) {  // largest k with k * interval <= z
-    auto k = int64_t(std::floor(z / interval));
-    while (double(k) * interval > z) --k;
-    while (double(k + 1) * interval <= z) ++k;
-    return k;
-  };
-  const int64_t k0 = first_above(z0), k1 = last_at_or_below(z1);
-  if (k1 < k0) return {};
-  const size_t levels = size_t(k1 - k0 + 1);
+  const int64_t k0 = first_level_above(z0, interval), k1 = last_level_at_or_below(z1, interval);
+  if (k1 >= k0) out.k0 = k0, out.count = size_t(k1 - k0 + 1);
+  return out;
+}
+
+std::vector<Contour> contour_lines(const Mesh& mesh, double interval, uint64_t max_levels) {
+  const ContourLevels lv = contour_levels(mesh, interval, max_levels);
+  if (lv.count == 0) return {};
+  const int64_t k0 = lv.k0;
+  const size_t levels = lv.count;
+  auto first_above = [&](double z) { return first_level_above(z, interval); };
+  auto last_at_or_below = [&](double z) { return last_level_at_or_below(z, interval); };
   // The triangles of each level, in mesh order (a CSR list).
   const size_t nt = mesh.triangles.size();
   std::vector<std::pair<int64_t, int64_t>> range(nt);
@@ -154,7 +169,7 @@ std::vector<Contour> contour_lines(const Mesh& mesh, double interval, uint64_t m
   std::vector<std::vector<Contour>> per(levels);
   std::transform(std::execution::par, ks.begin(), ks.end(), per.begin(), [&](size_t k) {
     const std::span<const uint32_t> tris(list.data() + start[k], start[k + 1] - start[k]);
-    return lines_at(mesh, double(k0 + int64_t(k)) * interval, tris);
+    return lines_at(mesh, lv.level(k), tris);
   });
   std::vector<Contour> all;
   for (auto& v : per)

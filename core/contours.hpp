@@ -17,6 +17,7 @@
 // - Order: by level, then open lines before closed ones, each by the mesh index of the triangle of its first
 //   segment (a closed line starts in the first triangle it crosses).
 #pragma once
+#include <cstdint>
 #include <vector>
 
 #include "core/model.hpp"
@@ -31,5 +32,27 @@ struct Contour {
 
 // Throws UsageError for an interval that is not a positive finite number or more than max_levels levels.
 std::vector<Contour> contour_lines(const Mesh& mesh, double interval, uint64_t max_levels = 100000);
+
+// The pieces contour_lines is made of, for other producers of segments (gpu/contours: marching triangles on
+// the GPU, chaining here) that must give the same lines.
+
+// The levels inside the mesh's z range: level i is double(k0 + i) * interval. Same errors as contour_lines.
+struct ContourLevels {
+  int64_t k0 = 0;
+  size_t count = 0;
+  double interval = 1;
+  double level(size_t i) const { return double(k0 + int64_t(i)) * interval; }
+};
+ContourLevels contour_levels(const Mesh& mesh, double interval, uint64_t max_levels = 100000);
+
+// A segment of one triangle at one level: from the edge it enters through to the edge it leaves through
+// (keys of contour_edge_key), higher ground on the left.
+struct ContourSegment {
+  uint64_t from, to;
+  Point3 p, q;
+};
+uint64_t contour_edge_key(uint32_t a, uint32_t b);
+// The lines of one level from its segments in mesh order of their triangles (contour_lines' chaining rules).
+std::vector<Contour> chain_contours(double level, const std::vector<ContourSegment>& segs);
 
 }  // namespace cdtgpu

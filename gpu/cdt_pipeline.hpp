@@ -59,6 +59,8 @@ class GpuCdt {
   unsigned resolve_threads = 0;
 
   const Context& context() const { return ctx_; }
+  // The scan and sort passes, for other GPU work of the same run (gpu/raster, gpu/contours).
+  const Primitives& primitives() const { return prims_; }
 
  private:
   const Context& ctx_;

@@ -1,6 +1,7 @@
 // Shared between C++ (gpu/*.cpp) and GLSL (shaders/*.comp): workgroup sizes, element structs and push-constant
-// blocks. One source of truth, so host and shader layouts cannot drift. Only 32-bit scalar members, so std430
-// (buffers) and the push-constant layout equal the C++ layout.
+// blocks. One source of truth, so host and shader layouts cannot drift. Only 32-bit scalar members (and, in
+// SegmentRecord, doubles at 8-byte offsets), so std430 (buffers) and the push-constant layout equal the C++
+// layout.
 #ifndef CDTGPU_SHADERS_LAYOUT_H
 #define CDTGPU_SHADERS_LAYOUT_H
 
@@ -64,6 +65,49 @@ struct CanonicalKeysPush {
   uint num_slots;
   uint num_points;  // infinite slots get vertex num_points first, after every finite triangle
   uint shift;       // bits of each vertex field in the key: the bit width of num_points (1..31)
+};
+
+
+// DEM grid of a TIN (gpu/raster.cpp). Band by band: raster_spans gives each triangle its rows and columns of
+// cell centres inside the band, a scan lays out one work item per (triangle, row), raster_claim keeps in
+// owner[cell] the smallest triangle whose closed area holds the centre (atomicMin: the CPU's "first triangle
+// in mesh order") where the orientation filters decide, and queues the (triangle, row, column) they cannot
+// decide for raster_exact; raster_values writes the winner's interpolated z (or NODATA).
+// Grid numbers in the params buffer (doubles, indices below): centre x of column c is (kx0 + c) * cell, centre
+// y of grid row r is (ky_top - r) * cell, integers held exactly in doubles (|k| < 2^53).
+#define RASTER_WG 64
+#define RASTER_CELL 0
+#define RASTER_KX0 1
+#define RASTER_KY_TOP 2
+#define RASTER_NODATA 3
+#define RASTER_PARAMS 4
+#define RASTER_NO_TRI 0xFFFFFFFFu
+struct RasterPush {
+  uint num_tris;
+  uint ncols;
+  uint row0;   // first grid row of the band
+  uint rows;   // rows in the band
+  uint items;      // (triangle, row) work items of the band (raster_claim)
+  uint queue_cap;  // entries the exact queue holds (raster_claim counts past it; the host then grows it)
+};
+
+// Contour lines (gpu/contours.cpp): contour_count gives each triangle the levels it crosses (first index and
+// count; levels[] ascending), a scan gives offsets, contour_write writes one SegmentRecord per (triangle,
+// level) in triangle order. `edges`: bits 0-1 the triangle edge (k -> k+1) the segment starts on, bits 2-3
+// the one it ends on (already swapped for a clockwise triangle).
+#define CONTOUR_WG 64
+struct ContourPush {
+  uint tri0;      // first triangle of this chunk
+  uint num_tris;  // triangles in the chunk
+  uint num_levels;
+};
+// 48 bytes: the doubles sit at 8-byte offsets, so std430 and C++ agree here too.
+struct SegmentRecord {
+  uint tri;
+  uint level;  // index into levels[]
+  uint edges;
+  uint pad;
+  double px, py, qx, qy;  // from point, to point
 };
 
 #ifdef __cplusplus

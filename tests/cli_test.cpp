@@ -353,6 +353,31 @@ TEST_F(Cli, GridContoursAndPreviewComeWithTheMeshInOneRun) {
   EXPECT_EQ(again.code, 0) << again.err;
 }
 
+// With the GPU backend the grid, the preview's grid and the contours are made on the GPU (gpu/raster,
+// gpu/contours): the files are the CPU's byte for byte, boundary and hole included (NODATA outside and in
+// the lake), and --stats has their device times.
+TEST_F(Cli, GridPreviewAndContoursOfTheGpuBackendAreTheCpusBytes) {
+  write_terrain();
+  write("area.wkt", "POLYGON ((500030 6000030, 500170 6000030, 500170 6000170, 500030 6000170, 500030 6000030))\n");
+  write("lake.wkt", "POLYGON ((500060 6000060, 500090 6000060, 500090 6000090, 500060 6000090, 500060 6000060))\n");
+  const std::string in = path("dem.csv") + " " + path("lines.wkt") + " " + path("area.wkt") + ":role=boundary " +
+                         path("lake.wkt") + ":role=hole --crs none -q";
+  for (const std::string b : {"cgal", "gpu"}) {
+    Result r = run("triangulate " + in + " --backend " + b + " -o " + path(b + ".ply") + " --grid-out " +
+                   path(b + ".asc") + " --cell 0.5 --contours-out " + path(b + ".geojson") + " --interval 0.5" +
+                   " --preview " + path(b + ".png") + " --stats " + path(b + ".json"));
+    ASSERT_EQ(r.code, 0) << b << ": " << r.err;
+  }
+  for (const char* ext : {".ply", ".asc", ".geojson", ".png"})
+    EXPECT_TRUE(slurp(path(std::string("gpu") + ext)) == slurp(path(std::string("cgal") + ext))) << ext;
+  const auto stats = nlohmann::json::parse(slurp(path("gpu.json")));
+  EXPECT_EQ(stats["backend"], "gpu");
+  for (const char* stage : {"grid", "contours", "preview"})
+    EXPECT_TRUE(stats["gpu_stage_ms"].contains(stage)) << stage;
+  const std::string asc = slurp(path("gpu.asc"));
+  EXPECT_GT(std::count(asc.begin(), asc.end(), '-'), 1000) << "NODATA outside the boundary and in the lake";
+}
+
 TEST_F(Cli, LandXmlAnd2dmGoToStdout) {
   write("pts.wkt", "MULTIPOINT ((0 0), (1 0), (0 1), (1 1))\n");
   Result r = run("triangulate " + path("pts.wkt") + " --crs none --backend cgal -q --format landxml -o -", path("o.xml"));

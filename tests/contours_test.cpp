@@ -15,9 +15,8 @@
 #include "core/cdt_cgal.hpp"
 #include "core/error.hpp"
 #include "core/prepare.hpp"
-#include "core/projection.hpp"
 #include "io/gis_writers.hpp"
-#include "io/readers.hpp"
+#include "sample_mesh.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -192,13 +191,7 @@ TEST(Contours, GeoJsonCarriesTheLevelsTheLinesAndTheEpsgCode) {
 
 // The sample has its contour lines' vertices exactly at multiples of 10: many vertices sit on the levels.
 TEST(Contours, OnTheSampleLinesEndOnlyOnTheMeshBoundaryAndRingsClose) {
-  InputSet in;
-  ReadOptions ro;
-  ro.z_field = "ELEV";
-  const std::string dir = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
-  read_inputs({dir + "contours.shp", dir + "dem.xyz", dir + "buildings.shp"}, ro, in);
-  project(in, choose_crs(in, parse_crs("auto")));
-  const Mesh m = triangulate_cgal(prepare(in)).mesh;
+  const Mesh& m = test::katoomba_mesh();
   // Boundary edges: those of one triangle only.
   std::map<std::pair<uint32_t, uint32_t>, int> uses;
   for (const Triangle& t : m.triangles)

@@ -13,9 +13,8 @@
 
 #include "core/cdt_cgal.hpp"
 #include "core/prepare.hpp"
-#include "core/projection.hpp"
-#include "io/readers.hpp"
 #include "io/write_png.hpp"
+#include "sample_mesh.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -48,13 +47,7 @@ TEST(Hillshade, SlopesFacingTheLightAreBrighter) {
 }
 
 TEST(Hillshade, TheSamplePreviewReadsBackThroughLibpng) {
-  InputSet in;
-  ReadOptions ro;
-  ro.z_field = "ELEV";
-  const std::string dir = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
-  read_inputs({dir + "contours.shp", dir + "dem.xyz", dir + "buildings.shp"}, ro, in);
-  project(in, choose_crs(in, parse_crs("auto")));
-  const Mesh m = triangulate_cgal(prepare(in)).mesh;
+  const Mesh& m = test::katoomba_mesh();
   const Raster dem = rasterise(m, preview_cell(m, 1000));
   const uint64_t w = dem.spec.ncols, h = dem.spec.nrows;
   EXPECT_GE(std::max(w, h), 1000u);

@@ -223,6 +223,26 @@ TEST_F(MeshFormatsTest, LandXmlIsWellFormed) {
   EXPECT_EQ(xpath("string(//*[local-name()='Metric']/@linearUnit)"), "meter");
 }
 
+// Validation against the LandXML 1.2 schema itself. The schema (LandXML-1.2.xsd, posted 2008-07-29 by
+// LandXML.org) carries no license statement, so it is not kept in tests/data: give its path in
+// CDTGPU_LANDXML_XSD to run this test (docs/outputs.md says where copies are).
+TEST_F(MeshFormatsTest, LandXmlValidatesAgainstTheSchemaWhenGivenOne) {
+  const char* xsd = std::getenv("CDTGPU_LANDXML_XSD");
+  if (!xsd || !*xsd) GTEST_SKIP() << "set CDTGPU_LANDXML_XSD to a copy of LandXML-1.2.xsd (not redistributable here)";
+  if (!have_xmllint()) GTEST_SKIP() << "xmllint not installed (Debian: libxml2-utils)";
+  ASSERT_TRUE(std::filesystem::exists(xsd)) << xsd;
+  Crs odd = mga56();
+  odd.name = "a<b & \"c\"\nd";
+  std::ofstream(path("odd.xml")) << landxml_text(awkward_mesh(), odd);
+  std::ofstream(path("big.xml")) << landxml_text(random_mesh(300, 5), mga56(), 86400 * 365);
+  std::ofstream(path("nocrs.xml")) << landxml_text(small_mesh(), Crs{});
+  for (const char* f : {"odd.xml", "big.xml", "nocrs.xml"}) {
+    const std::string cmd =
+        "xmllint --noout --schema '" + std::string(xsd) + "' " + path(f) + " 2>" + path("err.txt");
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << f << ": " << slurp(path("err.txt"));
+  }
+}
+
 TEST_F(MeshFormatsTest, SourceDateEpochFixesTheStamp) {
   ::setenv("SOURCE_DATE_EPOCH", "1700000000", 1);
   EXPECT_EQ(output_timestamp(), std::time_t(1700000000));

@@ -16,9 +16,9 @@
 #include "core/cdt_cgal.hpp"
 #include "core/error.hpp"
 #include "core/prepare.hpp"
-#include "core/projection.hpp"
 #include "io/gis_writers.hpp"
 #include "io/readers.hpp"
+#include "sample_mesh.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -27,15 +27,7 @@ using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 
 Mesh triangulate(const InputSet& in) { return triangulate_cgal(prepare(in)).mesh; }
 
-Mesh katoomba() {
-  InputSet in;
-  ReadOptions ro;
-  ro.z_field = "ELEV";
-  const std::string dir = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
-  read_inputs({dir + "contours.shp", dir + "dem.xyz", dir + "buildings.shp"}, ro, in);
-  project(in, choose_crs(in, parse_crs("auto")));
-  return triangulate(in);
-}
+const Mesh& katoomba() { return test::katoomba_mesh(); }
 
 // The formula of raster.hpp, written out again.
 double plane_through(const Point3& a, const Point3& b, const Point3& c, double x, double y) {

@@ -1,0 +1,21 @@
+// What the contour passes share (gpu/contours.cpp, layout.h): the TIN and the levels, ascending.
+#ifndef CDTGPU_CONTOUR_COMMON_GLSL
+#define CDTGPU_CONTOUR_COMMON_GLSL
+
+layout(std430, binding = 0) readonly buffer Levels { double levels[]; };
+layout(std430, binding = 1) readonly buffer Vertices { double xyz[]; };  // x, y, z per vertex
+layout(std430, binding = 2) readonly buffer Triangles { uint tris[]; };  // 3 per triangle, mesh order
+
+dvec3 vertex(uint v) { return dvec3(xyz[3u * v], xyz[3u * v + 1u], xyz[3u * v + 2u]); }
+
+// The first level index with levels[k] > z (num_levels if none).
+uint first_above(double z, uint n) {
+  uint lo = 0u, hi = n;
+  while (lo < hi) {
+    uint mid = (lo + hi) >> 1;
+    if (levels[mid] > z) hi = mid; else lo = mid + 1u;
+  }
+  return lo;
+}
+
+#endif
