@@ -43,21 +43,27 @@ layout(push_constant) uniform Push { CdtWalkPush p; };
 
 // Per chain (0 left of a->b, 1 right): vertices a .. b, and per chain edge j (vertices j, j + 1) the old outer
 // edge as (slot, edge), its neighbour code beyond and its constrained bit, read before any slot is rewritten.
-uint chain_v[2][CHAIN];
-uint chain_at[2][CHAIN];
-uint chain_out[2][CHAIN];
+// In shared memory, a column per invocation (no barriers: nobody reads another's column): private arrays indexed
+// at run time live in slow local memory.
+shared uint sh_v[2u * CHAIN * CDT_WG], sh_at[2u * CHAIN * CDT_WG], sh_out[2u * CHAIN * CDT_WG];
+shared uint sh_range[CHAIN * CDT_WG], sh_code[CHAIN * CDT_WG];  // the split stack: (i | j << 16), base code
+#define CHAIN_V(side, j) sh_v[((side) * CHAIN + (j)) * CDT_WG + gl_LocalInvocationIndex]
+#define CHAIN_AT(side, j) sh_at[((side) * CHAIN + (j)) * CDT_WG + gl_LocalInvocationIndex]
+#define CHAIN_OUT(side, j) sh_out[((side) * CHAIN + (j)) * CDT_WG + gl_LocalInvocationIndex]
+#define STACK_RANGE(k) sh_range[(k) * CDT_WG + gl_LocalInvocationIndex]
+#define STACK_CODE(k) sh_code[(k) * CDT_WG + gl_LocalInvocationIndex]
 uint chain_len[2];
 
 void add_outer(uint side, uint t, uint e) {
   uint j = chain_len[side] - 2u;  // the edge ending at the chain's newest vertex
-  chain_at[side][j] = NBR(t, e);
-  chain_out[side][j] = nbrs[3u * t + e] | (((cflags[t] >> e) & 1u) << 31);  // NBR codes use 30 bits
+  CHAIN_AT(side, j) = NBR(t, e);
+  CHAIN_OUT(side, j) = nbrs[3u * t + e] | (((cflags[t] >> e) & 1u) << 31);  // NBR codes use 30 bits
 }
 
 // The code of the same edge seen from the triangle beyond it.
 uint beyond(uint code) { return nbrs[3u * NBR_TRI(code) + NBR_EDGE(code)]; }
 
-void add_vertex(uint side, uint v) { chain_v[side][chain_len[side]++] = v; }
+void add_vertex(uint side, uint v) { CHAIN_V(side, chain_len[side]++) = v; }
 
 void main() {
   uint c = linear_group_id() * CDT_WG + gl_LocalInvocationIndex;
@@ -121,25 +127,23 @@ void main() {
     fix_at = subgroupBroadcastFirst(first) + subgroupExclusiveAdd(n);
   }
   uint made = 0u, outer = 0u, top = 0u;
-  uint st_i[CHAIN], st_j[CHAIN], st_code[CHAIN];
   for (uint side = 0u; side < 2u; ++side) {
     uint n = chain_len[side];
     uint sp = 0u;
-    st_i[0] = 0u;
-    st_j[0] = n - 1u;
-    st_code[0] = CDT_NEVER;  // the base a-b: the other polygon's top triangle
+    STACK_RANGE(0u) = (n - 1u) << 16;
+    STACK_CODE(0u) = CDT_NEVER;  // the base a-b: the other polygon's top triangle
     sp = 1u;
     while (sp > 0u) {
       --sp;
-      uint i = st_i[sp], j = st_j[sp], across = st_code[sp];
+      uint i = STACK_RANGE(sp) & 0xFFFFu, j = STACK_RANGE(sp) >> 16, across = STACK_CODE(sp);
       // Chain position x of this polygon: the left chain as is, the right one reversed.
-      uint vi = chain_v[side][side == 0u ? i : n - 1u - i], vj = chain_v[side][side == 0u ? j : n - 1u - j];
+      uint vi = CHAIN_V(side, side == 0u ? i : n - 1u - i), vj = CHAIN_V(side, side == 0u ? j : n - 1u - j);
       uint apex = i + 1u;
       for (uint x = i + 2u; x < j; ++x) {
-        uint va = chain_v[side][side == 0u ? apex : n - 1u - apex], vx = chain_v[side][side == 0u ? x : n - 1u - x];
+        uint va = CHAIN_V(side, side == 0u ? apex : n - 1u - apex), vx = CHAIN_V(side, side == 0u ? x : n - 1u - x);
         if (pred_incircle_perturbed(pts[vi], pts[vj], pts[va], pts[vx]) > 0) apex = x;
       }
-      uint vapex = chain_v[side][side == 0u ? apex : n - 1u - apex];
+      uint vapex = CHAIN_V(side, side == 0u ? apex : n - 1u - apex);
       uint s = made < k_rows ? NBR_TRI(table[base + made].edge) : t_last;  // the rows are not rewritten yet
       ++made;
       verts[3u * s] = vi;
@@ -167,18 +171,17 @@ void main() {
       for (uint e = 0u; e < 2u; ++e) {
         uint lo = e == 0u ? apex : i, hi = e == 0u ? j : apex;
         if (hi - lo >= 2u) {
-          st_i[sp] = lo;
-          st_j[sp] = hi;
-          st_code[sp] = NBR(s, e);
+          STACK_RANGE(sp) = lo | (hi << 16);
+          STACK_CODE(sp) = NBR(s, e);
           ++sp;
           continue;
         }
         // A chain edge: chain position lo of this polygon is chain edge lo (left) or n - 2 - lo (right).
         uint ce = side == 0u ? lo : n - 2u - lo;
-        uint old = chain_out[side][ce];
+        uint old = CHAIN_OUT(side, ce);
         nbrs[3u * s + e] = old & 0x7FFFFFFFu;
         flags |= (old >> 31) << e;
-        uint at = chain_at[side][ce];
+        uint at = CHAIN_AT(side, ce);
         remap[3u * NBR_TRI(at) + NBR_EDGE(at)] = NBR(s, e);
         fixes[fix_at + outer++] = NBR(s, e);
       }
