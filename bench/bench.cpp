@@ -2,6 +2,7 @@
 // check the triangles against the reference backend, print the table and optionally write every figure as JSON.
 #include "bench/bench.hpp"
 #include "bench/e2e.hpp"
+#include "bench/figures.hpp"
 #include "bench/peer.hpp"
 #include "bench/grid.hpp"
 
@@ -43,7 +44,11 @@ using Fb = CGAL::Constrained_triangulation_face_base_2<K>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
 using FastCdt = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predicates_tag>;
 using SortTraits = CGAL::Spatial_sort_traits_adapter_2<K, CGAL::Pointer_property_map<K::Point_2>::type>;
-using Clock = std::chrono::steady_clock;
+using figures::Clock;
+using figures::median;
+using figures::ms_since;
+
+std::string fmt_ms(double v) { return figures::fmt(v, 2); }
 using json = nlohmann::ordered_json;
 
 constexpr uint64_t kCheckLimit = 200000;  // points; the quick sizes are all below
@@ -59,13 +64,7 @@ const char* kCgalDtConfig =
     "CGAL " CGAL_VERSION_STR " Delaunay_triangulation_2<Epick, TDS with vertex index>, range insertion (spatial "
     "sort, then insertion with hints); time = construction, one thread";
 
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
-}
 
 struct Workload {
   std::string table, name;
@@ -242,11 +241,6 @@ std::string utc_now() {
   return buf;
 }
 
-std::string fmt_ms(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, v < 100 ? "%.2f" : "%.0f", v);
-  return buf;
-}
 
 // First differing triangle, or empty when the meshes are equal.
 std::string mesh_difference(const Mesh& a, const Mesh& b) {

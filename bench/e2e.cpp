@@ -1,6 +1,7 @@
 // The end-to-end table: writes each row's inputs, runs `cdtgpu triangulate` on them as a child process per
 // format and backend (first run with empty caches, a warm-up, then --runs timed runs), reads each run's stats
 // JSON, compares the PLY outputs byte for byte, prints one line per row x format x backend and writes JSON.
+#include "bench/figures.hpp"
 #include "bench/e2e.hpp"
 
 #include <spdlog/spdlog.h>
@@ -27,26 +28,14 @@ namespace cdtgpu {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
+using figures::Clock;
+using figures::median;
+using figures::ms_since;
+using figures::fmt;
 using json = nlohmann::ordered_json;
 
-double ms_since(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
-}
 
-std::string fmt(double v) {
-  if (std::isnan(v)) return "-";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, v < 100 ? "%.1f" : "%.0f", v);
-  return buf;
-}
 
 // The last line of a child's log that says something, for the table's failure note (CLI11's closing advice
 // to run --help says nothing: the line before it names the option).
@@ -96,7 +85,7 @@ struct RunFigures {
   double top_level_ms = 0;
 };
 
-RunFigures figures(const json& stats) {
+RunFigures run_figures(const json& stats) {
   RunFigures f;
   if (stats.contains("stage_ms"))
     for (const auto& [name, v] : stats["stage_ms"].items()) {
@@ -109,7 +98,7 @@ RunFigures figures(const json& stats) {
 }
 
 json figures_json(const ChildRun& r) {
-  RunFigures f = figures(r.stats);
+  RunFigures f = run_figures(r.stats);
   json s = json::object();
   for (const auto& [k, v] : f.stages) s[k] = v;
   json j = {{"wall_ms", r.wall_ms}, {"stage_ms", s}};
@@ -222,7 +211,7 @@ Cell run_cell(const BenchOptions& o, const std::string& binary, const std::strin
       failed("timed", r);
       return c;
     }
-    RunFigures f = figures(r.stats);
+    RunFigures f = run_figures(r.stats);
     c.wall.push_back(r.wall_ms);
     c.other.push_back(r.wall_ms - f.top_level_ms);
     if (!std::isnan(f.gpu_ms)) c.gpu.push_back(f.gpu_ms);

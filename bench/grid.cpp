@@ -1,4 +1,5 @@
 // cdtgpu bench --table grid (see grid.hpp).
+#include "bench/figures.hpp"
 #include "bench/grid.hpp"
 
 #include <sys/wait.h>
@@ -35,26 +36,14 @@ namespace cdtgpu {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
+using figures::Clock;
+using figures::median;
+using figures::ms_since;
+using figures::fmt;
 using json = nlohmann::ordered_json;
 
-double ms_since(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
-}
 
-std::string fmt(double v) {
-  if (std::isnan(v)) return "-";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, v < 100 ? "%.1f" : "%.0f", v);
-  return buf;
-}
 
 std::string wkt_of(const std::vector<Contour>& lines) {
   std::ostringstream out;

@@ -2,6 +2,7 @@
 // e2e workload (bench/e2e_workload.hpp: uniform points + x-monotone contour-like lines) is prepared once; its
 // vertices and constraint segments go to gDel2D as its binary input (BASE.vtx: int count + double pairs,
 // BASE.cst: int count + int pairs), so both triangulate the same vertices and the same segments.
+#include "bench/figures.hpp"
 #include "bench/peer.hpp"
 
 #include <spdlog/spdlog.h>
@@ -29,20 +30,11 @@ namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::ordered_json;
+using figures::median;
 
-double median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
-}
+std::string fmt(double v) { return figures::fmt(v, 2); }
 
-std::string fmt(double v) {
-  if (std::isnan(v)) return "-";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, v < 100 ? "%.2f" : "%.0f", v);
-  return buf;
-}
+
 
 struct Row {
   uint64_t points = 0, segments = 0;

@@ -61,10 +61,7 @@ std::vector<Contour> GpuContourer::lines(const DeviceTin& tin, const Mesh& mesh,
       prof.end(rec);
       rec.submit();
     }
-    uint32_t last[2] = {0, 0};
-    download(ctx_, offsets, &last[0], 4, uint64_t(n - 1) * 4);
-    download(ctx_, counts, &last[1], 4, uint64_t(n - 1) * 4);
-    const uint64_t total = uint64_t(last[0]) + last[1];
+    const uint64_t total = prims_.scanned_total(offsets, counts, n);
     if (total > seg_cap) {
       if (n == 1) throw DeviceError("contours: one triangle's segments do not fit one device buffer");
       chunk = std::max<uint32_t>(1, n / 2);  // this chunk again, smaller

@@ -53,6 +53,13 @@ void Primitives::compact(Recorder& rec, const Buffer& values, const Buffer& flag
                       div_up(n, COMPACT_WG));
 }
 
+uint64_t Primitives::scanned_total(const Buffer& offsets, const Buffer& counts, uint32_t n) const {
+  uint32_t last[2] = {0, 0};
+  download(ctx, offsets, &last[0], 4, uint64_t(n - 1) * 4);
+  download(ctx, counts, &last[1], 4, uint64_t(n - 1) * 4);
+  return uint64_t(last[0]) + last[1];
+}
+
 void Primitives::radix_sort(Recorder& rec, const Buffer& keys, const Buffer& payload, uint32_t n, uint32_t key_bits,
                             uint32_t sort_bits, SortScratch scratch) const {
   if (key_bits != 32 && key_bits != 64)

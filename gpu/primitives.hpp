@@ -22,6 +22,9 @@ struct Primitives {
 
   // out[i] = in[0] + ... + in[i-1] (mod 2^32) for i < n; `out` may be `in`. Cost: ~2 reads + 1 write per element.
   void exclusive_scan(Recorder& rec, const Buffer& in, const Buffer& out, uint32_t n) const;
+  // After an exclusive scan of n > 0 counts has run: the sum of all of them (the last offset plus the last
+  // count), read back, so the caller can size what the scan lays out.
+  uint64_t scanned_total(const Buffer& offsets, const Buffer& counts, uint32_t n) const;
   // Keeps values[i] where flags[i] != 0, in order, at out[0..count); writes count to count_out[0].
   void compact(Recorder& rec, const Buffer& values, const Buffer& flags, const Buffer& out, const Buffer& count_out,
                uint32_t n) const;

@@ -74,11 +74,7 @@ Raster GpuRasteriser::rasterise(const DeviceTin& tin, const GridSpec& g, uint64_
       prims_.exclusive_scan(rec, counts, offsets, nt);
       prof.end(rec);
       rec.submit();
-      // Items = the last offset plus the last count.
-      uint32_t last[2] = {0, 0};
-      download(ctx_, offsets, &last[0], 4, uint64_t(nt - 1) * 4);
-      download(ctx_, counts, &last[1], 4, uint64_t(nt - 1) * 4);
-      const uint64_t total = uint64_t(last[0]) + last[1];
+      const uint64_t total = prims_.scanned_total(offsets, counts, nt);
       if (total > UINT32_MAX) throw DeviceError("raster: more than 2^32 (triangle, row) items in one band");
       items = uint32_t(total);
     }

@@ -38,6 +38,7 @@
 #include "gpu/primitives.hpp"
 #include "gpu/triangulation.hpp"
 #include "io/readers.hpp"
+#include "gpu_test_context.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -45,14 +46,8 @@ namespace {
 using gpu::ConstraintOptions;
 using gpu::ConstraintStats;
 
-gpu::Context& ctx() {
-  static gpu::Context c = [] {
-    gpu::ContextOptions options;
-    options.validation = true;
-    return gpu::create_context(options);
-  }();
-  return c;
-}
+using test::ctx;
+using test::no_validation_messages;
 
 const gpu::ConstraintInserter& inserter() {
   static gpu::Primitives prims(ctx());
@@ -65,10 +60,6 @@ bool large() {
   return v && std::strcmp(v, "1") == 0;
 }
 
-void no_validation_messages() {
-  for (auto& m : ctx().messages()) ADD_FAILURE() << m;
-  ctx().clear_messages();
-}
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

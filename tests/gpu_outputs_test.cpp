@@ -32,19 +32,14 @@
 #include "gpu/recorder.hpp"
 #include "gpu/tin.hpp"
 #include "io/gis_writers.hpp"
+#include "gpu_test_context.hpp"
 #include "sample_mesh.hpp"
 
 namespace cdtgpu {
 namespace {
 
-gpu::Context& ctx() {
-  static gpu::Context c = [] {
-    gpu::ContextOptions options;
-    options.validation = true;
-    return gpu::create_context(options);
-  }();
-  return c;
-}
+using test::ctx;
+using test::no_validation_messages;
 
 const gpu::Primitives& prims() {
   static gpu::Primitives p(ctx());
@@ -61,10 +56,6 @@ const gpu::GpuContourer& contourer() {
   return c;
 }
 
-void no_validation_messages() {
-  for (auto& m : ctx().messages()) ADD_FAILURE() << m;
-  ctx().clear_messages();
-}
 
 // Every cell's bits equal; the first difference is reported.
 void expect_same_grid(const Raster& got, const Raster& want, const std::string& what) {

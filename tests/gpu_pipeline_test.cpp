@@ -24,28 +24,19 @@
 #include "core/workloads.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "io/readers.hpp"
+#include "gpu_test_context.hpp"
 
 namespace cdtgpu {
 namespace {
 
-gpu::Context& ctx() {
-  static gpu::Context c = [] {
-    gpu::ContextOptions options;
-    options.validation = true;
-    return gpu::create_context(options);
-  }();
-  return c;
-}
+using test::ctx;
+using test::no_validation_messages;
 
 const gpu::GpuCdt& cdt() {
   static gpu::GpuCdt c(ctx());
   return c;
 }
 
-void no_validation_messages() {
-  for (auto& m : ctx().messages()) ADD_FAILURE() << m;
-  ctx().clear_messages();
-}
 
 // GPU result equal to the reference backend's, and valid by verify. Returns the GPU stats (and the Steiner count).
 gpu::GpuCdtStats expect_equal_to_cgal(const std::string& name, const InputSet& in, uint64_t* steiner = nullptr) {
