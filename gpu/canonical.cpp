@@ -39,7 +39,9 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
   // instead of six radix passes over 64-bit keys.
   uint32_t counts[2] = {0, 0};
   {
-    const Buffer& bucket = buffers.get(ctx_, kPoints4[0], uint64_t(n) * 4, "canonical buckets");
+    // The vertex slots are not needed any more either: they hold the bucket sizes when the build left them.
+    const Buffer& bucket = tri.vertex_slots.buffer ? tri.vertex_slots
+                                                   : buffers.get(ctx_, kPoints4[0], uint64_t(n) * 4, "canonical buckets");
     const Buffer& offsets = buffers.get(ctx_, kPoints4[1], uint64_t(n) * 4, "canonical offsets");
     const Buffer& rank = buffers.get(ctx_, kSlots4[0], uint64_t(slots) * 4, "canonical ranks");
     Recorder rec(ctx_);

@@ -17,7 +17,8 @@ class TriangleSorter {
   TriangleSorter(const Context& ctx, const Primitives& prims);
   // Finite triangles, each starting at its smallest vertex, counter-clockwise, sorted. `gpu_ms`: device time of
   // the key pass and the sort (timestamps), if given.
-  // Overwrites tri.nbrs with the sorted triangles (the neighbours are not needed any more): no extra buffer.
+  // Overwrites tri.nbrs with the sorted triangles and tri.vertex_slots (if any) with bucket sizes: both are not
+  // needed any more, so no extra buffers.
   std::vector<Triangle> download(GpuTriangulation& tri, double* gpu_ms = nullptr) const;
 
   BufferCache* cache = nullptr;  // where the keys live between calls (shared keys); null: a cache of its own

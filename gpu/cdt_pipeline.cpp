@@ -93,7 +93,7 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats)
   result.mesh.triangles = sorter_.download(tri, &sort_ms);
   // During the sort: the triangulation and every scratch buffer the stages left in the cache (the sort takes
   // its own from there too).
-  const uint64_t sorting = tri.points.size + tri.verts.size + tri.nbrs.size + cache_.bytes();
+  const uint64_t sorting = tri.points.size + tri.verts.size + tri.nbrs.size + tri.vertex_slots.size + cache_.bytes();
   s.peak_device_bytes = std::max(s.peak_device_bytes, sorting);
   add_gpu(s, "", {{"canonical order", sort_ms}});
   stage("download", t);

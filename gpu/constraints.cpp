@@ -280,7 +280,9 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   const Buffer& cache_cap = get("cdt row cache room", uint64_t(m) * 4);
   const Buffer& first_row = get("cdt first candidate", uint64_t(m) * 8);
   // Per-point and per-slot scratch under the shared keys (the Delaunay build's, when the cache is shared).
-  const Buffer& vmap = get(kPoints4[0], uint64_t(tri.num_points) * 4, "cdt vertex map");
+  // The Delaunay build's vertex slots when it left them (kept up to date here), else a vertex map of our own.
+  const bool given_map = tri.vertex_slots.buffer != VK_NULL_HANDLE;
+  const Buffer& vmap = given_map ? tri.vertex_slots : get(kPoints4[0], uint64_t(tri.num_points) * 4, "cdt vertex map");
   const Buffer& owner = get(kSlots8[0], uint64_t(slots) * 8, "cdt owners");
   const Buffer& claim = get(kSlots8[1], uint64_t(slots) * 8, "cdt claims");
   const Buffer& stamp = get(kSlots4[0], uint64_t(slots) * 4, "cdt flip stamps");
@@ -353,7 +355,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     for (const Buffer* b : {&stamp, &qstamp}) rec.fill(*b, CDT_NEVER);
     rec.fill(result.flags, 0);
     rec.fill(ctl, 0);
-    vertex_map(rec);
+    if (!given_map) vertex_map(rec);
     walk(rec, CDT_WALK_INIT, round, 0, 0);
     prof.end(rec);
     prof.begin(rec, "crossing detection");
@@ -580,7 +582,8 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   if (stats) {
     st.stage_ms = std::move(clock.stages);
     st.peak_device_bytes =
-        tri.points.size + tri.verts.size + tri.nbrs.size + result.flags.size + sc.readback.size + needed + table_bytes;
+        tri.points.size + tri.verts.size + tri.nbrs.size + tri.vertex_slots.size + result.flags.size +
+        sc.readback.size + needed + table_bytes;
     *stats = std::move(st);
   }
   return result;

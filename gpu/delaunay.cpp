@@ -175,7 +175,7 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       init_(create_pass(ctx, {"dt_init", 6, sizeof(DtInitPush)})),
       renumber_(create_pass(ctx, {"dt_renumber", 6, sizeof(DtInitPush)})),
       hint_(create_pass(ctx, {"dt_hint", 1, sizeof(DtRoundPush)})),
-      number_back_(create_pass(ctx, {"dt_number_back", 4, sizeof(DtRoundPush)})),
+      number_back_(create_pass(ctx, {"dt_number_back", 5, sizeof(DtRoundPush)})),
       flags_(create_pass(ctx, {"dt_flags", 2, sizeof(DtRoundPush)})),
       relocate_(create_pass(ctx, {"dt_relocate", 10, sizeof(DtRoundPush)})),
       relocate_exact_(create_pass(ctx, {"dt_relocate_exact", 10, sizeof(DtRoundPush)})),
@@ -547,10 +547,11 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
 void DelaunayBuilder::number_back(State& st) const {
   const uint32_t n = st.n;
   st.tri.points = scratch(kPoints16[0], uint64_t(n) * 16, "points");
+  st.tri.vertex_slots = create_buffer(ctx_, uint64_t(n) * 4, "vertex slots");
   st.in_round = false;
   st.begin("number back");
   const DtRoundPush push{n, st.used, 0, 0, 0, 0, 0, {}};
-  st.rec.dispatch_groups(number_back_, {st.pts, st.perm, st.tri.verts, st.tri.points}, push,
+  st.rec.dispatch_groups(number_back_, {st.pts, st.perm, st.tri.verts, st.tri.points, st.tri.vertex_slots}, push,
                          groups(std::max<uint64_t>(n, uint64_t(st.used) * 3)));
   st.end();
   submit(st, false);

@@ -27,6 +27,9 @@ struct GpuTriangulation {
   uint32_t num_points = 0;
   uint32_t num_slots = 0;  // slots in use (finite and infinite triangles)
   uint32_t capacity = 0;   // slots allocated
+  // Optional, uint per vertex: a slot holding it (any one), as the Delaunay build leaves it; the constraint
+  // inserter starts its walks there instead of computing its own vertex map, and keeps it up to date.
+  Buffer vertex_slots;
 };
 
 // Host copy of the raw slots, for tests and for building a triangulation on the CPU.
