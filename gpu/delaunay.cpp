@@ -547,7 +547,7 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
 void DelaunayBuilder::number_back(State& st) const {
   const uint32_t n = st.n;
   st.tri.points = scratch(kPoints16[0], uint64_t(n) * 16, "points");
-  st.tri.vertex_slots = create_buffer(ctx_, uint64_t(n) * 4, "vertex slots");
+  st.tri.vertex_slots = scratch(kPoints4[0], uint64_t(n) * 4, "vertex slots");  // the build's loc, just given back
   st.in_round = false;
   st.begin("number back");
   const DtRoundPush push{n, st.used, 0, 0, 0, 0, 0, {}};
