@@ -42,6 +42,7 @@ class Sink {
     if (n_ + k > buf_.size()) flush();
   }
   void text(const char* s, size_t len) {
+    if (len == 0) return;  // s may be null then (an empty array's data()), which memcpy must not get
     if (len > buf_.size()) {
       flush();
       out_.write(s, std::streamsize(len));
