@@ -139,6 +139,12 @@ void write_stats(const RunStats& stats, const std::string& path) {
   write_file_atomically(path, [&](std::ostream& out) { out << stats.to_json().dump(2) << '\n'; });
 }
 
+// Why auto left the GPU for the CPU part-way (stats backend_reason, and a warning).
+std::string gpu_refused(const gpu::DeviceError& e) {
+  return std::string("the GPU could not take this input (") + e.what() +
+         "): the CPU backend computes the same triangulation";
+}
+
 }  // namespace
 
 int run_triangulate(const TriangulateOptions& options) {
@@ -166,7 +172,7 @@ int run_triangulate(const TriangulateOptions& options) {
   const uint64_t estimate = options.backend == "auto" ? estimate_input_points(input_paths) : 0;
   spdlog::debug("about {} input points in the files", estimate);
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= min_points))
-    start.emplace(options.device, options.backend == "auto");
+    start.emplace(options.device, options.backend == "auto" && options.device.empty());
 
   Loaded l = read_all(options.input, stats);
   std::string reason = "--backend " + options.backend;
@@ -178,7 +184,7 @@ int run_triangulate(const TriangulateOptions& options) {
       reason = std::to_string(n) + " input points, fewer than " + std::to_string(min_points) +
                ": the CPU is faster than the GPU's start-up";
     else if (!start)
-      start.emplace(options.device, true);
+      start.emplace(options.device, options.device.empty());  // a device named with --device is used as it is
   }
   // The GPU is waited for only where prepare first needs it, its duplicate merge, so that its start overlaps
   // reading and prepare's gathering. Auto falls back to the CPU when the start fails; a forced GPU throws.
@@ -195,9 +201,16 @@ int run_triangulate(const TriangulateOptions& options) {
       }
       stats.stage_ms.emplace_back("prepare: gpu start wait",
                                   std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-      use_gpu = true;
-      if (options.backend == "auto") reason = std::to_string(n) + " input points on a GPU";
-      return start->cdt().merger()(xy);  // duplicates merged on the GPU: the same result as the CPU's
+      try {
+        auto merged = start->cdt().merger()(xy);  // duplicates merged on the GPU: the same result as the CPU's
+        use_gpu = true;
+        if (options.backend == "auto") reason = std::to_string(n) + " input points on a GPU";
+        return merged;
+      } catch (const gpu::DeviceError& e) {
+        if (options.backend == "gpu") throw;
+        reason = gpu_refused(e);
+        return merge_points(xy);
+      }
     };
   prepare_all(l, stats, merge);
   gpu::GpuCdt* cdt = use_gpu ? &start->cdt() : nullptr;
@@ -222,7 +235,20 @@ int run_triangulate(const TriangulateOptions& options) {
   CdtResult result = timed(stats, "triangulate", [&] {
     if (!cdt) return triangulate_cgal(l.prepared);
     gpu::GpuCdtStats gs;
-    CdtResult r = cdt->triangulate(l.prepared, &gs);
+    CdtResult r;
+    try {
+      r = cdt->triangulate(l.prepared, &gs);
+    } catch (const gpu::DeviceError& e) {
+      if (options.backend == "gpu") throw;
+      // Auto: the CPU computes the same triangulation (a device too small for the input, or out of memory).
+      stats.backend = "cgal";
+      stats.backend_reason = gpu_refused(e);
+      spdlog::warn("{}", stats.backend_reason);
+      cdt = nullptr;
+      gpu_raster.reset();
+      gpu_contours.reset();
+      return triangulate_cgal(l.prepared);
+    }
     for (const auto& [name, ms] : gs.wall_ms) stats.stage_ms.emplace_back("triangulate: " + name, ms);
     auto& g = stats.gpu_stage_ms;
     for (const auto& [name, ms] : gs.gpu_ms) g[name] = (g.contains(name) ? g[name].get<double>() : 0.0) + ms;

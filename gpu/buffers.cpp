@@ -45,6 +45,20 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
       host ? memory_type(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_CACHED_BIT,
                          VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT)
            : memory_type(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  if (!host) {  // the context's cap (CDTGPU_DEVICE_MEMORY_LIMIT): refused as the device refuses what it lacks
+    MemoryBudget& m = *ctx.memory_budget;
+    const uint64_t after = m.used.fetch_add(req.size) + req.size;
+    if (m.limit && after > m.limit) {
+      m.used.fetch_sub(req.size);
+      vkDestroyBuffer(ctx.device, b.buffer, nullptr);
+      b.buffer = VK_NULL_HANDLE;
+      throw DeviceError("out of device memory: buffer '" + name + "' of " + std::to_string(req.size) +
+                        " bytes would bring the GPU backend to " + std::to_string(after) +
+                        " bytes, over CDTGPU_DEVICE_MEMORY_LIMIT = " + std::to_string(m.limit) + " bytes");
+    }
+    b.budget = ctx.memory_budget;
+    b.charged = req.size;
+  }
   VkResult r = vkAllocateMemory(ctx.device, &ai, nullptr, &b.memory);
   if (r != VK_SUCCESS)
     vk_fail(r, ("vkAllocateMemory for buffer '" + name + "' of " + std::to_string(bytes) + " bytes").c_str(),
@@ -114,7 +128,10 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
   if (this == &o) return *this;
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
   if (memory) vkFreeMemory(device, memory, nullptr);
+  if (budget) budget->used.fetch_sub(charged);
   device = o.device;
+  budget = std::move(o.budget);
+  charged = std::exchange(o.charged, 0);
   buffer = std::exchange(o.buffer, VK_NULL_HANDLE);
   memory = std::exchange(o.memory, VK_NULL_HANDLE);
   size = std::exchange(o.size, 0);
@@ -125,6 +142,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
 Buffer::~Buffer() {
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
   if (memory) vkFreeMemory(device, memory, nullptr);
+  if (budget) budget->used.fetch_sub(charged);
 }
 
 Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name) {

@@ -25,6 +25,8 @@ struct Buffer {
   VkDeviceMemory memory = VK_NULL_HANDLE;
   VkDeviceSize size = 0;
   std::string name;
+  std::shared_ptr<MemoryBudget> budget;  // device-local buffers: the context's budget, given back when freed
+  VkDeviceSize charged = 0;
 
   Buffer() = default;
   Buffer(Buffer&& o) noexcept;

@@ -19,6 +19,21 @@ namespace {
 
 const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 
+// "123", "64K", "512M", "2G" (powers of 1024).
+uint64_t parse_bytes(const char* v) {
+  char* end = nullptr;
+  const double x = std::strtod(v, &end);
+  uint64_t unit = 1;
+  if (end && *end) {
+    const char u = static_cast<char>(std::toupper(static_cast<unsigned char>(*end)));
+    unit = u == 'K' ? 1ull << 10 : u == 'M' ? 1ull << 20 : u == 'G' ? 1ull << 30 : 0;
+    if (!unit || end[1]) unit = 0;
+  }
+  if (end == v || !unit || !(x > 0) || x * double(unit) > 1e18)
+    throw DeviceError(std::string("CDTGPU_DEVICE_MEMORY_LIMIT=") + v + ": not a byte count (e.g. 512M, 2G)");
+  return static_cast<uint64_t>(x * double(unit));
+}
+
 bool env_validation() {
   const char* v = std::getenv("CDTGPU_VALIDATION");
   return v && std::strcmp(v, "1") == 0;
@@ -352,13 +367,20 @@ Context& Context::operator=(Context&& o) noexcept {
   pipeline_cache_file = std::move(o.pipeline_cache_file);
   pipeline_cache_loaded = o.pipeline_cache_loaded;
   pipeline_cache_hash = o.pipeline_cache_hash;
+  memory_budget = std::exchange(o.memory_budget, std::make_shared<MemoryBudget>());
   return *this;
 }
 
 Context::~Context() { release(*this); }
 
+uint64_t device_memory_limit_from_env() {
+  const char* v = std::getenv("CDTGPU_DEVICE_MEMORY_LIMIT");
+  return v && *v ? parse_bytes(v) : 0;
+}
+
 Context create_context(const ContextOptions& options) {
   Context ctx;
+  ctx.memory_budget->limit = device_memory_limit_from_env();
   bool want = options.validation || env_validation();
   bool have = validation_layer_available();
   if (env_validation() && !have)

@@ -9,6 +9,7 @@
 #pragma once
 #include <vulkan/vulkan.h>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -62,6 +63,15 @@ bool validation_layer_available();
 
 // Owns the Vulkan objects; move-only, destroyed in reverse order. Fields are plain so passes and buffers can
 // use them directly.
+// Device memory the buffers of one context hold, against an optional cap: CDTGPU_DEVICE_MEMORY_LIMIT (bytes, or
+// with a K, M or G suffix) limits what the GPU backend may allocate, as a smaller device would.
+struct MemoryBudget {
+  uint64_t limit = 0;  // 0: no cap
+  std::atomic<uint64_t> used{0};
+};
+// The cap from the environment: 0 when unset; DeviceError when it is not a byte count.
+uint64_t device_memory_limit_from_env();
+
 struct Context {
   VkInstance instance = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
@@ -102,6 +112,8 @@ struct Context {
   // Small scratch buffers Recorder::temp() hands out and takes back at submit (gpu/recorder.cpp): the constraint
   // rounds' scans made ~60 allocations per triangulation, each a driver call.
   mutable std::shared_ptr<void> temp_pool;
+  // Device-local bytes its buffers hold, and the cap (shared: a buffer gives its bytes back when it is freed).
+  std::shared_ptr<MemoryBudget> memory_budget = std::make_shared<MemoryBudget>();
 };
 
 // Saves the context's pipeline cache to its file when the run compiled something new (destroying the context

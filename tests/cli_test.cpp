@@ -171,6 +171,47 @@ TEST_F(Cli, AutoBackendPicksByInputSizeAndDevice) {
   EXPECT_EQ(slurp(path("nodev.ply")), slurp(path("cgal.ply")));
 }
 
+// CDTGPU_DEVICE_MEMORY_LIMIT caps what the GPU backend may hold on the device: a forced GPU run that needs more
+// fails (exit 3, the limit named, nothing written); auto leaves it to CGAL with the same bytes and says why. A
+// device named with --device is used by auto even when it is a CPU driver, which lets lavapipe test this.
+TEST_F(Cli, DeviceMemoryCapFailsAForcedGpuAndAutoFallsBack) {
+  write_terrain();
+  const std::string in = path("dem.csv") + " " + path("lines.wkt");
+  std::string device;
+  for (const cdtgpu::gpu::DeviceInfo& d : cdtgpu::gpu::list_devices())
+    if (device.empty() && d.missing.empty()) device = d.name;
+  ASSERT_FALSE(device.empty());
+  ASSERT_EQ(run("triangulate " + in + " -q --backend cgal -o " + path("cgal.ply")).code, 0);
+  ::setenv("CDTGPU_AUTO_MIN_POINTS", "1", 1);
+  ::setenv("CDTGPU_DEVICE_MEMORY_LIMIT", "64K", 1);
+  Result forced = run("triangulate " + in + " -q --backend gpu -o " + path("forced.ply"));
+  Result fell = run("triangulate " + in + " -q --device '" + device + "' -o " + path("auto.ply") + " --stats " +
+                    path("auto.json"));
+  ::setenv("CDTGPU_DEVICE_MEMORY_LIMIT", "8G", 1);
+  Result roomy = run("triangulate " + in + " -q --device '" + device + "' -o " + path("roomy.ply") + " --stats " +
+                     path("roomy.json"));
+  ::setenv("CDTGPU_DEVICE_MEMORY_LIMIT", "lots", 1);
+  Result bad = run("triangulate " + in + " -q --backend gpu -o " + path("bad.ply"));
+  ::unsetenv("CDTGPU_DEVICE_MEMORY_LIMIT");
+  ::unsetenv("CDTGPU_AUTO_MIN_POINTS");
+
+  EXPECT_EQ(forced.code, 3) << forced.err;
+  EXPECT_NE(forced.err.find("over CDTGPU_DEVICE_MEMORY_LIMIT = 65536 bytes"), std::string::npos) << forced.err;
+  EXPECT_NE(forced.err.find("--backend cgal"), std::string::npos) << forced.err;
+  EXPECT_FALSE(std::filesystem::exists(path("forced.ply")));
+  ASSERT_EQ(fell.code, 0) << fell.err;
+  auto stats = nlohmann::json::parse(slurp(path("auto.json")));
+  EXPECT_EQ(stats["backend"], "cgal");
+  EXPECT_NE(stats["backend_reason"].get<std::string>().find("out of device memory"), std::string::npos)
+      << stats["backend_reason"];
+  EXPECT_EQ(slurp(path("auto.ply")), slurp(path("cgal.ply")));
+  ASSERT_EQ(roomy.code, 0) << roomy.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(path("roomy.json")))["backend"], "gpu");
+  EXPECT_EQ(slurp(path("roomy.ply")), slurp(path("cgal.ply")));
+  EXPECT_EQ(bad.code, 3) << bad.err;
+  EXPECT_NE(bad.err.find("CDTGPU_DEVICE_MEMORY_LIMIT=lots: not a byte count"), std::string::npos) << bad.err;
+}
+
 TEST_F(Cli, StdinToStdoutAndStats) {
   write("pts.wkt", "MULTIPOINT ((0 0), (1 0), (0 1), (1 1), (0.5 0.5))\nPOINT (1 1)\n");
   Result r = run("triangulate - --crs none --format wkt -o - --stats " + path("s.json") + " < " + path("pts.wkt"),
