@@ -476,8 +476,10 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
                      "truncated: " + std::to_string(index.records()) + " entries for " +
                          std::to_string(count) + " records");
   const Box box = header_box(shp.get(), type);
-  const auto [prj_path, prj_text] = own_prj(base);
-  const bool geographic = says_geographic(prj_text);
+  // Not a structured binding: lambdas below capture the path, which clang before 16 refuses (the fuzz build).
+  const std::pair<std::string, std::string> prj = own_prj(base);
+  const std::string& prj_path = prj.first;
+  const bool geographic = says_geographic(prj.second);
 
   std::optional<ZField> z_field;
   if (!options.z_field.empty()) {

@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# Builds the reader fuzz targets (fuzz/, clang + libFuzzer + ASan + UBSan) in build-fuzz/ and runs each for
-# SECONDS (default 60) from seed corpora made of tests/data and samples/. Crashes land in
-# build-fuzz/artifacts/<target>/; add each to tests/data/fuzz/<target>/ (tests/fuzz_regression_test.cpp
-# replays them). Usage: scripts/fuzz.sh [seconds] [target...]   (targets: wkt xyz ascii_grid mesh shapefile)
+# Builds the reader fuzz targets (fuzz/, clang + libFuzzer + ASan + UBSan) in $FUZZ_DIR (default build-fuzz/) and
+# runs each for SECONDS (default 60) from seed corpora made of tests/data and samples/. Crashes land in
+# $FUZZ_DIR/artifacts/<target>/; add each to tests/data/fuzz/<target>/ (tests/fuzz_regression_test.cpp replays
+# them). Prints per target: executions, coverage (cov, ft) and crash files; exits 1 when any target crashed.
+#   scripts/fuzz.sh [seconds] [target...]      targets: wkt xyz ascii_grid mesh shapefile (default all)
+# Environment: JOBS (build jobs, default 2); FORK=N (N worker processes per target, libFuzzer -fork);
+# RUNS=N (stop each target after N executions instead of the time); FUZZ_BIN=dir (fuzz_* binaries built
+# elsewhere, e.g. packed for a many-core machine without a compiler: no build here).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
@@ -11,11 +15,16 @@ targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(wkt xyz ascii_grid mesh shapefile)
 CXX=${CXX:-clang++-14}
 jobs=${JOBS:-2}
+dir=${FUZZ_DIR:-build-fuzz}
+bin=${FUZZ_BIN:-$dir}
 
-cmake -S . -B build-fuzz -DCDTGPU_FUZZ=ON -DCMAKE_CXX_COMPILER="$CXX" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build build-fuzz -j"$jobs" --target "${targets[@]/#/fuzz_}"
+if [ -z "${FUZZ_BIN:-}" ]; then
+  cmake -S . -B "$dir" -DCDTGPU_FUZZ=ON -DCMAKE_CXX_COMPILER="$CXX" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+  cmake --build "$dir" -j"$jobs" --target "${targets[@]/#/fuzz_}"
+fi
+mkdir -p "$dir"
 
-seeds=build-fuzz/seeds
+seeds=$dir/seeds
 rm -rf "$seeds"
 mkdir -p "$seeds"/{wkt,xyz,ascii_grid,mesh,shapefile}
 cp tests/data/readers/*.wkt "$seeds"/wkt/
@@ -44,13 +53,22 @@ for name, flags in (("buildings", 0), ("buildings", 4), ("contours", 1)):
 PY
 
 status=0
+limit=(-max_total_time="$seconds")
+[ -n "${RUNS:-}" ] && limit=(-runs="$RUNS")
+fork=()
+[ -n "${FORK:-}" ] && fork=(-fork="$FORK" -ignore_crashes=1)
 for t in "${targets[@]}"; do
-  mkdir -p build-fuzz/corpus/"$t" build-fuzz/artifacts/"$t"
-  echo "== fuzz_$t for ${seconds}s"
-  build-fuzz/fuzz_"$t" build-fuzz/corpus/"$t" "$seeds"/"$t" -max_total_time="$seconds" -timeout=10 \
-    -rss_limit_mb=2048 -malloc_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
-    -artifact_prefix=build-fuzz/artifacts/"$t"/ 2>build-fuzz/fuzz_"$t".log || status=1
-  grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb|cov:" build-fuzz/fuzz_"$t".log | tail -3
+  mkdir -p "$dir"/corpus/"$t" "$dir"/artifacts/"$t"
+  echo "== fuzz_$t: ${RUNS:+$RUNS executions}${RUNS:-${seconds}s}${FORK:+, $FORK workers}"
+  start=$(date +%s)
+  "$bin"/fuzz_"$t" "$dir"/corpus/"$t" "$seeds"/"$t" "${limit[@]}" "${fork[@]}" -timeout=10 -rss_limit_mb=2048 \
+    -malloc_limit_mb=1024 -max_len=65536 -print_final_stats=1 -artifact_prefix="$dir"/artifacts/"$t"/ \
+    >"$dir"/fuzz_"$t".log 2>&1 || status=1
+  # The last status line ("#N ... cov: C ft: F ...") holds the totals, in fork mode too.
+  last=$(grep -E '^#[0-9]+' "$dir"/fuzz_"$t".log | tail -1 || true)
+  crashes=$(find "$dir"/artifacts/"$t" -type f | wc -l)
+  runs=$(echo "$last" | grep -oE '^#[0-9]+' | tr -d '#' || true)
+  echo "   $(( $(date +%s) - start ))s, executions ${runs:-?}, $(echo "$last" | grep -oE 'cov: [0-9]+ ft: [0-9]+' || true), crash files: $crashes"
+  [ "$crashes" -eq 0 ] || status=1
 done
-ls build-fuzz/artifacts/*/ 2>/dev/null || true
 exit $status

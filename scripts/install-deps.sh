@@ -10,4 +10,5 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   libcgal-dev libtbb-dev libgmp-dev libmpfr-dev libboost-dev \
   libgeographiclib-dev libshp-dev libpng-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools \
-  libgtest-dev libgmock-dev libbenchmark-dev python3-matplotlib libxml2-utils >/dev/null
+  libgtest-dev libgmock-dev libbenchmark-dev python3-matplotlib \
+  clang-14 libfuzzer-14-dev libclang-rt-14-dev libxml2-utils >/dev/null
