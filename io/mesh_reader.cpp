@@ -90,7 +90,7 @@ void for_lines(std::string_view text, F&& f, size_t& pos, uint64_t& line_no) {
     if (end == std::string_view::npos) end = text.size();
     ++line_no;
     const std::string_view line = text.substr(pos, end - pos);
-    pos = end + 1;
+    pos = std::min(end + 1, text.size());  // a last line without '\n' ends at the end, not past it
     if (!f(line, line_no)) return;
   }
 }

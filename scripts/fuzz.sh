@@ -58,6 +58,8 @@ limit=(-max_total_time="$seconds")
 fork=()
 [ -n "${FORK:-}" ] && fork=(-fork="$FORK" -ignore_crashes=1)
 for t in "${targets[@]}"; do
+  # Crash files of earlier runs are gone: each run reports its own (those worth keeping are in tests/data/fuzz).
+  rm -rf "$dir"/artifacts/"$t"
   mkdir -p "$dir"/corpus/"$t" "$dir"/artifacts/"$t"
   echo "== fuzz_$t: ${RUNS:+$RUNS executions}${RUNS:-${seconds}s}${FORK:+, $FORK workers}"
   start=$(date +%s)
