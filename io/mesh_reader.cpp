@@ -291,8 +291,15 @@ class AsciiReader {
 };
 
 template <class Reader>
-void read_ply_body(const std::string& path, const std::vector<Element>& elements, Reader& r, Mesh& m) {
+void read_ply_body(const std::string& path, const std::vector<Element>& elements, Reader& r, Mesh& m,
+                   uint64_t body_bytes) {
   for (const Element& e : elements) {
+    // Every value takes at least a byte, so a row count beyond the body's size is damage (and would be a loop of
+    // trillions of rows or a huge reservation). Rows without properties hold nothing to read.
+    if (e.properties.empty()) continue;
+    if (e.count > body_bytes / e.properties.size())
+      throw InputError(path, 0, "PLY element '" + e.name + "' declares " + std::to_string(e.count) +
+                                    " rows, more than the rest of the file can hold");
     const bool vertex = e.name == "vertex", face = e.name == "face";
     int xyz[3] = {-1, -1, -1};
     int indices = -1;
@@ -401,10 +408,10 @@ Mesh read_ply(const std::string& path, std::string_view text) {
   Mesh m;
   if (format == PlyFormat::Ascii) {
     AsciiReader r(path, text, pos, line_no);
-    read_ply_body(path, elements, r, m);
+    read_ply_body(path, elements, r, m, text.size() - pos);
   } else {
     BinaryReader r(path, text, pos, format == PlyFormat::BinaryBe);
-    read_ply_body(path, elements, r, m);
+    read_ply_body(path, elements, r, m, text.size() - pos);
   }
   return m;
 }
