@@ -3,7 +3,7 @@
 // a crash or a sanitizer report is a bug.
 //
 //   fuzz_wkt(data, size);        // read_wkt on the bytes
-//   fuzz_shapefile(data, size);  // [flags][shp length u32][shx length u32] shp shx dbf, via temp files
+//   fuzz_shapefile(data, size);  // [flags][shp length u32][shx length u32] shp shx dbf, from memory
 #pragma once
 #include <unistd.h>
 
@@ -16,6 +16,7 @@
 #include <string_view>
 
 #include "core/error.hpp"
+#include "io/mapped_files.hpp"
 #include "io/readers.hpp"
 #include "io/writers.hpp"
 
@@ -105,22 +106,26 @@ inline void fuzz_shapefile(const uint8_t* data, size_t size) {
   size -= 9;
   shp = std::min(shp, size);
   shx = std::min(shx, size - shp);
-  const std::filesystem::path base = scratch() / "f";
-  put(base.string() + ".shp", data, shp);
-  put(base.string() + ".shx", data + shp, shx);
-  std::error_code ec;
-  std::filesystem::remove(base.string() + ".dbf", ec);
-  std::filesystem::remove(base.string() + ".prj", ec);
-  if (!(flags & 2)) put(base.string() + ".dbf", data + shp + shx, size - shp - shx);
+  // Held in memory under a path of their own (io/mapped_files.hpp): the reader opens them as files, and no
+  // byte goes through the file system.
+  const std::string base = "/cdtgpu-fuzz-memory-" + std::to_string(::getpid()) + "/f";
+  auto hold = [&](const char* ext, const uint8_t* bytes, size_t n) {
+    files::put_memory_file(base + ext, std::string(reinterpret_cast<const char*>(bytes), n));
+  };
+  hold(".shp", data, shp);
+  hold(".shx", data + shp, shx);
+  files::remove_memory_file(base + ".dbf");
+  files::remove_memory_file(base + ".prj");
+  if (!(flags & 2)) hold(".dbf", data + shp + shx, size - shp - shx);
   if (flags & 4) {
     static const char prj[] = "GEOGCS[\"GCS_WGS_1984\"]";
-    put(base.string() + ".prj", reinterpret_cast<const uint8_t*>(prj), sizeof prj - 1);
+    hold(".prj", reinterpret_cast<const uint8_t*>(prj), sizeof prj - 1);
   }
   expect_only_input_errors([&] {
     InputSet in;
     ReadOptions o;
     if (flags & 1) o.z_field = "ELEV";
-    read_shapefile(base.string() + ".shp", o, in);
+    read_shapefile(base + ".shp", o, in);
   });
 }
 

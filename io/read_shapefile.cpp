@@ -6,11 +6,7 @@
 // with its .shx entry, every coordinate must be finite and lie in the header's bounding box (and the record's
 // own box), and part indices must be in range. A shapefile with 100 bytes flipped used to triangulate without
 // a word, with points thousands of kilometres away.
-#include <fcntl.h>
 #include <shapefil.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cctype>
@@ -19,11 +15,8 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <utility>
@@ -31,6 +24,7 @@
 
 #include "core/error.hpp"
 #include "core/repair.hpp"
+#include "io/mapped_files.hpp"
 #include "io/readers.hpp"
 #include "io/text_source.hpp"
 
@@ -44,86 +38,8 @@ namespace fs = std::filesystem;
 thread_local std::string shapelib_error;
 void capture_error(const char* message) { shapelib_error = message ? message : "unknown error"; }
 
-// Files shapelib reads are mapped into memory and read through these hooks: with stdio, every SHPReadObject
-// was a seek and a read system call, and a 2M-point shapefile took 4 s to read on the H100 machine.
-struct MappedFile {
-  const char* data = nullptr;
-  size_t size = 0, pos = 0;
-  std::string owned;  // an empty or unmappable file's bytes
-};
-
-SAFile mapped_open(const char* name, const char* access) {
-  if (std::strpbrk(access, "wa+")) return nullptr;  // the reader never writes
-  const int fd = ::open(name, O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return nullptr;
-  struct stat st {};
-  auto* f = new MappedFile;
-  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
-    void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
-    if (p != MAP_FAILED) {
-      f->data = static_cast<const char*>(p);
-      f->size = size_t(st.st_size);
-    }
-  }
-  if (!f->data) {  // not mappable: read it whole
-    char buf[1 << 16];
-    for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) != 0;) {
-      if (n < 0 && errno == EINTR) continue;
-      if (n < 0) {
-        ::close(fd);
-        delete f;
-        return nullptr;
-      }
-      f->owned.append(buf, size_t(n));
-    }
-    f->data = f->owned.data();
-    f->size = f->owned.size();
-  }
-  ::close(fd);
-  return reinterpret_cast<SAFile>(f);
-}
-
-SAOffset mapped_read(void* p, SAOffset size, SAOffset n, SAFile file) {
-  auto* f = reinterpret_cast<MappedFile*>(file);
-  if (size == 0) return 0;
-  const SAOffset items = std::min<SAOffset>(n, (f->size - std::min(f->pos, f->size)) / size);
-  std::memcpy(p, f->data + f->pos, items * size);
-  f->pos += items * size;
-  return items;
-}
-
-SAOffset mapped_write(void*, SAOffset, SAOffset, SAFile) { return 0; }
-
-SAOffset mapped_seek(SAFile file, SAOffset offset, int whence) {
-  auto* f = reinterpret_cast<MappedFile*>(file);
-  const size_t base = whence == SEEK_SET ? 0 : whence == SEEK_CUR ? f->pos : f->size;
-  f->pos = base + offset;
-  return 0;
-}
-
-SAOffset mapped_tell(SAFile file) { return reinterpret_cast<MappedFile*>(file)->pos; }
-int mapped_flush(SAFile) { return 0; }
-
-int mapped_close(SAFile file) {
-  auto* f = reinterpret_cast<MappedFile*>(file);
-  if (f->owned.empty() && f->data) ::munmap(const_cast<char*>(f->data), f->size);
-  delete f;
-  return 0;
-}
-
-SAHooks capturing_hooks() {
-  SAHooks hooks;
-  SASetupDefaultHooks(&hooks);
-  hooks.FOpen = mapped_open;
-  hooks.FRead = mapped_read;
-  hooks.FWrite = mapped_write;
-  hooks.FSeek = mapped_seek;
-  hooks.FTell = mapped_tell;
-  hooks.FFlush = mapped_flush;
-  hooks.FClose = mapped_close;
-  hooks.Error = capture_error;
-  return hooks;
-}
+// shapelib reads mapped files (or the fuzzer's buffers) through these hooks (io/mapped_files.hpp).
+SAHooks capturing_hooks() { return files::hooks(capture_error); }
 
 std::string take_error() {
   std::string s = std::move(shapelib_error);
@@ -151,26 +67,28 @@ std::optional<std::string> companion(const fs::path& base, const std::string& ex
   for (const std::string& e : {ext, upper(ext)}) {
     fs::path p = base;
     p += e;
-    std::error_code ec;
-    if (fs::is_regular_file(p, ec)) return p.string();
+    if (files::is_file(p.string())) return p.string();
   }
   return std::nullopt;
 }
 
-uint64_t file_size(const std::string& path) {
-  std::error_code ec;
-  const uintmax_t n = fs::file_size(path, ec);
-  if (ec) throw InputError(path, 0, "cannot read: " + ec.message());
-  return n;
+// Opens a file the reader needs; InputError when it cannot be read.
+files::Open open_file(const std::string& path) {
+  files::Open f(files::open(path));
+  if (!f) throw InputError(path, 0, "cannot read: " + std::string(std::strerror(errno)));
+  return f;
 }
+
+uint64_t file_size(const std::string& path) { return open_file(path)->size; }
 
 // Checks the 100-byte header shared by .shp and .shx (file code 9994, big-endian length in 16-bit words)
 // against the file's real size.
 void check_main_header(const std::string& path) {
-  const uint64_t size = file_size(path);
+  const files::Open f = open_file(path);
+  const uint64_t size = f->size;
   unsigned char h[100] = {};
-  std::ifstream f(path, std::ios::binary);
-  if (size < 100 || !f.read(reinterpret_cast<char*>(h), 100))
+  if (size >= 100) std::memcpy(h, f->data, 100);
+  if (size < 100)
     throw InputError(path, 0,
                      "truncated: " + std::to_string(size) + " bytes, shorter than the 100-byte header");
   auto be32 = [&](int at) {
@@ -296,15 +214,14 @@ uint32_t be32(const unsigned char* p) {
 class RecordIndex {
  public:
   RecordIndex(const std::string& shp, const std::string& shx) : shp_path_(shp), shx_path_(shx) {
-    std::ifstream f(shx, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    const files::Open index_file = open_file(shx);
+    const std::string_view bytes = index_file->bytes();
     if (bytes.size() < 100) throw InputError(shx, 0, "truncated");
     index_.assign(bytes.begin() + 100, bytes.end() - std::ptrdiff_t((bytes.size() - 100) % 8));
-    shp_size_ = file_size(shp);
-    shp_ = mapped_open(shp.c_str(), "rb");
+    shp_.reset(files::open(shp));
     if (!shp_) throw InputError(shp, 0, "cannot open: " + std::string(std::strerror(errno)));
+    shp_size_ = shp_->size;
   }
-  ~RecordIndex() { mapped_close(shp_); }
   RecordIndex(const RecordIndex&) = delete;
   RecordIndex& operator=(const RecordIndex&) = delete;
   size_t records() const { return index_.size() / 8; }
@@ -321,7 +238,7 @@ class RecordIndex {
                            std::to_string(offset) + " to " + std::to_string(offset + 8 + length) +
                            ", outside the file (" + std::to_string(shp_size_) + " bytes)");
     unsigned char h[8] = {};
-    const auto* f = reinterpret_cast<const MappedFile*>(shp_);
+    const files::File* f = shp_.get();
     if (offset + 8 > f->size) throw InputError(shp_path_, record, "cannot read the record");
     std::memcpy(h, f->data + offset, 8);
     if (be32(h) != record || uint64_t(be32(h + 4)) * 2 != length)
@@ -336,7 +253,7 @@ class RecordIndex {
   std::string shp_path_, shx_path_;
   std::string index_;
   uint64_t shp_size_ = 0;
-  SAFile shp_ = nullptr;
+  files::Open shp_;
 };
 
 // A box with room for rounding: writers compute it from the same doubles, but some through float or text.
@@ -412,10 +329,8 @@ void check_coordinates(const SHPObject& o, const Box& file, bool z_from_geometry
 std::pair<std::string, std::string> own_prj(const fs::path& base) {
   const std::optional<std::string> prj = companion(base, ".prj");
   if (!prj) return {};
-  std::ifstream f(*prj, std::ios::binary);
-  std::ostringstream text;
-  text << f.rdbuf();
-  std::string s = text.str();
+  const files::Open f(files::open(*prj));
+  std::string s = f ? std::string(f->bytes()) : std::string();
   while (!s.empty() && std::isspace(static_cast<unsigned char>(s.back()))) s.pop_back();
   return {*prj, s};
 }
@@ -451,8 +366,7 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
 }
 
 void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in, ZFieldLookup* lookup) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) throw InputError(path, 0, "no such file");
+  if (!files::is_file(path)) throw InputError(path, 0, "no such file");
   const fs::path base = fs::path(path).replace_extension();
   const std::optional<std::string> shx = companion(base, ".shx");
   if (!shx) throw InputError(path, 0, "no index file " + base.string() + ".shx (a shapefile needs its .shx)");
