@@ -4,6 +4,7 @@
 
 #include <bit>
 #include <chrono>
+#include <functional>
 
 #include "core/touched.hpp"
 #include "gpu/profiler.hpp"
@@ -37,6 +38,17 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
   const CanonicalKeysPush push{slots, n, uint32_t(std::bit_width(n))};
   // Buckets by smallest vertex (count, scan, place, sort each bucket by its second vertex): a few light passes
   // instead of six radix passes over 64-bit keys.
+  // Records one way of sorting between the count's reset and the timestamps; returns its device time.
+  auto sort_on_gpu = [&](const std::function<void(Recorder&)>& record) {
+    Recorder rec(ctx_);
+    Profiler prof(ctx_, 1);
+    prof.begin(rec, "canonical order");
+    rec.fill(count, 0);
+    record(rec);
+    prof.end(rec);
+    rec.submit();
+    return prof.results().front().ms;
+  };
   uint32_t counts[2] = {0, 0};
   {
     // The vertex slots are not needed any more either: they hold the bucket sizes when the build left them.
@@ -44,18 +56,15 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
                                                    : buffers.get(ctx_, kPoints4[0], uint64_t(n) * 4, "canonical buckets");
     const Buffer& offsets = buffers.get(ctx_, kPoints4[1], uint64_t(n) * 4, "canonical offsets");
     const Buffer& rank = buffers.get(ctx_, kSlots4[0], uint64_t(slots) * 4, "canonical ranks");
-    Recorder rec(ctx_);
-    Profiler prof(ctx_, 1);
-    prof.begin(rec, "canonical order");
-    rec.fill(count, 0);
-    rec.fill(bucket, 0);
-    rec.dispatch_groups(count_, {tri.verts, bucket, rank, count}, push, groups);
-    prims_.exclusive_scan(rec, bucket, offsets, n);
-    rec.dispatch_groups(place_, {tri.verts, offsets, rank, tris}, push, groups);
-    rec.dispatch_groups(bucket_, {bucket, offsets, tris, count}, push, (uint64_t(n) + CANONICAL_WG - 1) / CANONICAL_WG);
-    prof.end(rec);
-    rec.submit();
-    if (gpu_ms) *gpu_ms = prof.results().front().ms;
+    const double ms = sort_on_gpu([&](Recorder& rec) {
+      rec.fill(bucket, 0);
+      rec.dispatch_groups(count_, {tri.verts, bucket, rank, count}, push, groups);
+      prims_.exclusive_scan(rec, bucket, offsets, n);
+      rec.dispatch_groups(place_, {tri.verts, offsets, rank, tris}, push, groups);
+      rec.dispatch_groups(bucket_, {bucket, offsets, tris, count}, push,
+                          (uint64_t(n) + CANONICAL_WG - 1) / CANONICAL_WG);
+    });
+    if (gpu_ms) *gpu_ms = ms;
     gpu::download(ctx_, count, counts, 8);
   }
   if (counts[1]) {  // a bucket too large for one invocation (a vertex with a huge fan): the radix sort
@@ -63,16 +72,12 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
     const Buffer& payload = buffers.get(ctx_, kSlots4[0], uint64_t(slots) * 4, "canonical payload");
     const Buffer& keys2 = buffers.get(ctx_, kSlots8[1], uint64_t(slots) * 8, "canonical keys 2");
     const Buffer& payload2 = buffers.get(ctx_, kSlots4[1], uint64_t(slots) * 4, "canonical payload 2");
-    Recorder rec(ctx_);
-    Profiler prof(ctx_, 1);
-    prof.begin(rec, "canonical order");
-    rec.fill(count, 0);
-    rec.dispatch_groups(keys_, {tri.verts, keys, payload, count}, push, groups);
-    prims_.radix_sort(rec, keys, payload, slots, 64, 2 * push.shift, {&keys2, &payload2});
-    rec.dispatch_groups(write_, {keys, payload, tris, count}, push, groups);
-    prof.end(rec);
-    rec.submit();
-    if (gpu_ms) *gpu_ms += prof.results().front().ms;
+    const double ms = sort_on_gpu([&](Recorder& rec) {
+      rec.dispatch_groups(keys_, {tri.verts, keys, payload, count}, push, groups);
+      prims_.radix_sort(rec, keys, payload, slots, 64, 2 * push.shift, {&keys2, &payload2});
+      rec.dispatch_groups(write_, {keys, payload, tris, count}, push, groups);
+    });
+    if (gpu_ms) *gpu_ms += ms;
   }
   const uint32_t finite = counts[0];
   static_assert(sizeof(Triangle) == 12, "Triangle is three packed uint32");

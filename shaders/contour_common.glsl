@@ -3,10 +3,7 @@
 #define CDTGPU_CONTOUR_COMMON_GLSL
 
 layout(std430, binding = 0) readonly buffer Levels { double levels[]; };
-layout(std430, binding = 1) readonly buffer Vertices { double xyz[]; };  // x, y, z per vertex
-layout(std430, binding = 2) readonly buffer Triangles { uint tris[]; };  // 3 per triangle, mesh order
-
-dvec3 vertex(uint v) { return dvec3(xyz[3u * v], xyz[3u * v + 1u], xyz[3u * v + 2u]); }
+#include "tin.glsl"
 
 // The first level index with levels[k] > z (num_levels if none).
 uint first_above(double z, uint n) {

@@ -4,10 +4,7 @@
 #define CDTGPU_RASTER_COMMON_GLSL
 
 layout(std430, binding = 0) readonly buffer Params { double params[]; };
-layout(std430, binding = 1) readonly buffer Vertices { double xyz[]; };  // x, y, z per vertex
-layout(std430, binding = 2) readonly buffer Triangles { uint tris[]; };  // 3 per triangle, mesh order
-
-dvec3 vertex(uint v) { return dvec3(xyz[3u * v], xyz[3u * v + 1u], xyz[3u * v + 2u]); }
+#include "tin.glsl"
 
 // Centres: ((kx0 + col) * cell, (ky_top - row) * cell). The integer sum is exact in double (|k| < 2^53), so
 // this is the CPU's double(ix0 + col) * cell.
