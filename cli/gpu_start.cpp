@@ -1,5 +1,7 @@
 #include "cli/gpu_start.hpp"
 
+#include "gpu/buffers.hpp"
+
 #include <cctype>
 #include <chrono>
 #include <cstdlib>
@@ -57,8 +59,8 @@ uint64_t estimate_input_points(const std::vector<std::string>& paths) {
   return total;
 }
 
-GpuStart::GpuStart(const std::string& device, bool hardware_only) {
-  pending_ = std::async(std::launch::async, [this, device, hardware_only] {
+GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points) {
+  pending_ = std::async(std::launch::async, [this, device, hardware_only, expected_points] {
     using Clock = std::chrono::steady_clock;
     auto ms = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
     auto r = std::make_unique<Ready>();
@@ -71,6 +73,11 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only) {
     t = Clock::now();
     r->cdt = std::make_unique<gpu::GpuCdt>(r->ctx);  // queues every pipeline's compile
     pipelines_ms = ms(t);
+    t = Clock::now();
+    // The download of ~2n triangles of 12 bytes is the largest copy; an eighth more for the estimate's error.
+    // At most 1 GiB: beyond that the copies grow it themselves.
+    gpu::reserve_staging(r->ctx, std::min<uint64_t>(expected_points * 27, uint64_t(1) << 30));
+    staging_ms = ms(t);
     return r;
   });
 }
@@ -91,6 +98,10 @@ void GpuStart::leave_for_exit() {
   if (!ready_) return;
   gpu::store_pipeline_cache(ready_->ctx);
   (void)ready_.release();  // deliberately never destroyed
+}
+
+bool GpuStart::ready() const {
+  return ready_ || pending_.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
 }
 
 gpu::GpuCdt& GpuStart::cdt() {

@@ -15,6 +15,7 @@
 #include "core/hillshade.hpp"
 #include "core/prepare.hpp"
 #include "core/regions.hpp"
+#include "core/resolve.hpp"
 #include "core/stats.hpp"
 #include "core/verify.hpp"
 #include "cli/gpu_start.hpp"
@@ -172,72 +173,84 @@ int run_triangulate(const TriangulateOptions& options) {
   const uint64_t estimate = options.backend == "auto" ? estimate_input_points(input_paths) : 0;
   spdlog::debug("about {} input points in the files", estimate);
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= min_points))
-    start.emplace(options.device, options.backend == "auto" && options.device.empty());
+    start.emplace(options.device, options.backend == "auto" && options.device.empty(),
+                  options.backend == "gpu" ? estimate_input_points(input_paths) : estimate);
 
   Loaded l = read_all(options.input, stats);
   std::string reason = "--backend " + options.backend;
   const uint64_t n = point_count(l.in);
-  bool want_gpu = options.backend == "gpu", use_gpu = false;
+  bool want_gpu = options.backend == "gpu";
   if (options.backend == "auto") {
     want_gpu = n >= min_points;
     if (!want_gpu)
       reason = std::to_string(n) + " input points, fewer than " + std::to_string(min_points) +
                ": the CPU is faster than the GPU's start-up";
     else if (!start)
-      start.emplace(options.device, options.device.empty());  // a device named with --device is used as it is
+      start.emplace(options.device, options.device.empty(), n);  // a device named with --device is used as it is
   }
-  // The GPU is waited for only where prepare first needs it, its duplicate merge, so that its start overlaps
-  // reading and prepare's gathering. Auto falls back to the CPU when the start fails; a forced GPU throws.
+  // The GPU is waited for as late as possible, so that its start (~180 ms on the H100 machine) overlaps the
+  // CPU's work: while it starts, the CPU merges duplicates (the same result as the GPU's merge) and resolves
+  // the constraints; a device that is ready merges them itself. Auto falls back to the CPU when the start
+  // fails or the device refuses the input; a forced GPU throws.
+  bool gpu_failed = false;
+  auto refused = [&](const gpu::DeviceError&, const std::string& why) {  // called in a catch block
+    if (options.backend == "gpu") throw;
+    gpu_failed = true;
+    reason = why;
+  };
   PointMerger merge = merge_points;
   if (want_gpu)
     merge = [&](std::span<const double> xy) {
-      const auto t0 = std::chrono::steady_clock::now();
+      if (!start->ready()) return merge_points(xy);
       try {
         start->cdt();
       } catch (const gpu::DeviceError& e) {
-        if (options.backend == "gpu") throw;
-        reason = std::string("no GPU to use (") + e.what() + ")";
+        refused(e, std::string("no GPU to use (") + e.what() + ")");
         return merge_points(xy);
       }
-      stats.stage_ms.emplace_back("prepare: gpu start wait",
-                                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       try {
-        auto merged = start->cdt().merger()(xy);  // duplicates merged on the GPU: the same result as the CPU's
-        use_gpu = true;
-        if (options.backend == "auto") reason = std::to_string(n) + " input points on a GPU";
-        return merged;
+        return start->cdt().merger()(xy);  // duplicates merged on the GPU: the same result as the CPU's
       } catch (const gpu::DeviceError& e) {
-        if (options.backend == "gpu") throw;
-        reason = gpu_refused(e);
+        refused(e, gpu_refused(e));
         return merge_points(xy);
       }
     };
   prepare_all(l, stats, merge);
-  gpu::GpuCdt* cdt = use_gpu ? &start->cdt() : nullptr;
-  stats.backend = use_gpu ? "gpu" : "cgal";
-  stats.backend_reason = reason;
-  if (cdt) {
+  std::optional<gpu::GpuRasteriser> gpu_raster;
+  std::optional<gpu::GpuContourer> gpu_contours;
+  gpu::GpuCdt* cdt = nullptr;
+  stats.backend = "cgal";
+  CdtResult result = timed(stats, "triangulate", [&] {
+    std::optional<ResolvedInput> resolved;
+    if (want_gpu && !gpu_failed) {
+      resolved = timed(stats, "triangulate: resolve", [&] { return resolve_constraints(l.prepared); });
+      timed(stats, "triangulate: gpu start wait", [&] {
+        try {
+          cdt = &start->cdt();
+          if (options.backend == "auto") reason = std::to_string(n) + " input points on a GPU";
+        } catch (const gpu::DeviceError& e) {
+          refused(e, std::string("no GPU to use (") + e.what() + ")");
+        }
+      });
+    }
+    stats.backend = cdt ? "gpu" : "cgal";
+    stats.backend_reason = reason;
+    spdlog::debug("backend {}: {}", stats.backend, reason);
+    if (!cdt) return triangulate_cgal(l.prepared);
     stats.stage_ms.emplace_back("gpu start: context (own thread)", start->context_ms);
     stats.stage_ms.emplace_back("gpu start: pipelines queued (own thread)", start->pipelines_ms);
+    stats.stage_ms.emplace_back("gpu start: staging memory (own thread)", start->staging_ms);
     stats.device = start->context().info.name;
     spdlog::debug("device: {} ({} {})", stats.device, start->context().info.driver_name,
                   start->context().info.driver_info);
-  }
-  spdlog::debug("backend {}: {}", stats.backend, reason);
-  // With the GPU backend, grids (and the preview's grid) and contour lines are made on the GPU too, with the
-  // CPU's values bit for bit. Their pipelines are asked for now, so they compile while the CDT runs.
-  std::optional<gpu::GpuRasteriser> gpu_raster;
-  std::optional<gpu::GpuContourer> gpu_contours;
-  if (cdt && (!options.grid_out.empty() || !options.preview.empty()))
-    gpu_raster.emplace(start->context(), cdt->primitives());
-  if (cdt && !options.contours_out.empty()) gpu_contours.emplace(start->context(), cdt->primitives());
-
-  CdtResult result = timed(stats, "triangulate", [&] {
-    if (!cdt) return triangulate_cgal(l.prepared);
+    // With the GPU backend, grids (and the preview's grid) and contour lines are made on the GPU too, with the
+    // CPU's values bit for bit. Their pipelines are asked for now, so they compile while the CDT runs.
+    if (!options.grid_out.empty() || !options.preview.empty()) gpu_raster.emplace(start->context(), cdt->primitives());
+    if (!options.contours_out.empty()) gpu_contours.emplace(start->context(), cdt->primitives());
     gpu::GpuCdtStats gs;
     CdtResult r;
     try {
-      r = cdt->triangulate(l.prepared, &gs);
+      r = cdt->triangulate(std::move(*resolved), &gs);
     } catch (const gpu::DeviceError& e) {
       if (options.backend == "gpu") throw;
       // Auto: the CPU computes the same triangulation (a device too small for the input, or out of memory).

@@ -1,7 +1,7 @@
 // prepare: merges exact duplicate (x, y) vertices and turns polylines into unique index segments.
-// Cost: two sorts (all occurrences by (x, y), all segments by index pair), O(n log n), no hashing, so the
-// result is the same on every run. The sorts run in parallel (std::execution::par, TBB underneath): both
-// orders are total, so any correct sort gives the same result. The merge of duplicates is a parameter: the
+// Cost: two sorts (all occurrences by (x, y) in core/merge_points.cpp, all segments by index pair), no hashing,
+// so the result is the same on every run. Both sorts run on all cores: both orders are total, so any correct
+// sort gives the same result. The merge of duplicates is a parameter: the
 // GPU backend passes gpu::merge_points, which gives the same answer (tests/gpu_dedupe_test.cpp).
 #include "core/prepare.hpp"
 #include "core/touched.hpp"
@@ -25,41 +25,12 @@ namespace cdtgpu {
 
 namespace {
 
-struct Occurrence {
-  double x, y;
-  uint32_t occ;  // position in reading order: in.points first, then the vertices of in.lines
-};
-
-bool xy_less(const Occurrence& a, const Occurrence& b) {
-  if (a.x != b.x) return a.x < b.x;
-  if (a.y != b.y) return a.y < b.y;
-  return a.occ < b.occ;  // the first occurrence leads its group
-}
-
 struct SegmentKey {
   uint64_t ab;    // a << 32 | b with a < b: sorting the key sorts by (a, b)
   uint32_t line;  // polyline index, so that a shared segment keeps its first line
 };
 
 }  // namespace
-
-PointMerge merge_points(std::span<const double> xy) {
-  const size_t n = xy.size() / 2;
-  std::vector<Occurrence> occ(n);
-  for (size_t i = 0; i < n; ++i) occ[i] = {xy[2 * i], xy[2 * i + 1], uint32_t(i)};
-  std::sort(std::execution::par, occ.begin(), occ.end(), xy_less);
-  PointMerge m;
-  m.vertex_of.resize(n);
-  for (size_t i = 0; i < n;) {
-    const Occurrence& first = occ[i];
-    const uint32_t v = uint32_t(m.first.size());
-    m.first.push_back(first.occ);
-    size_t j = i;
-    for (; j < n && occ[j].x == first.x && occ[j].y == first.y; ++j) m.vertex_of[occ[j].occ] = v;
-    i = j;
-  }
-  return m;
-}
 
 PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
   using Clock = std::chrono::steady_clock;

@@ -35,7 +35,7 @@ struct PointMerge {
 };
 using PointMerger = std::function<PointMerge(std::span<const double> xy)>;
 
-// On the CPU: one parallel sort. gpu::merge_points (gpu/dedupe.hpp) gives the same on the GPU.
+// On the CPU (core/merge_points.cpp): a bucket sort on all cores. gpu::merge_points (gpu/dedupe.hpp) gives the same on the GPU.
 PointMerge merge_points(std::span<const double> xy);
 
 // `merge` does the duplicate merging; everything else (z of merged vertices, conflicts, segments) is here.

@@ -182,6 +182,10 @@ Staging& staging_of(const Context& ctx, VkDeviceSize bytes) {
 
 }  // namespace
 
+void reserve_staging(const Context& ctx, VkDeviceSize bytes) {
+  if (bytes) staging_of(ctx, bytes);
+}
+
 void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, const std::function<void(void*)>& write,
                  VkDeviceSize offset) {
   check_range(dst, bytes, offset, "upload");

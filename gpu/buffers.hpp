@@ -42,6 +42,9 @@ Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& 
 // Synchronous copies through a host-visible staging buffer (each waits for the queue to finish).
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
+// Grows the staging buffer that upload() and download() share to at least `bytes` now: pinned host memory costs
+// about 0.3 ms per MB to allocate, which a caller can pay on another thread ahead of the copies.
+void reserve_staging(const Context& ctx, VkDeviceSize bytes);
 // upload() with the caller writing the mapped staging memory itself: no host copy of the data in between.
 // Large fresh host vectors cost a page fault per 4 KiB (tens of ms per 100 MB), more than the copy.
 void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, const std::function<void(void*)>& write,

@@ -24,11 +24,13 @@ TriangleSorter::TriangleSorter(const Context& ctx, const Primitives& prims)
       keys_(create_pass(ctx, {"canonical_keys", 4, sizeof(CanonicalKeysPush)})),
       write_(create_pass(ctx, {"canonical_write", 4, sizeof(CanonicalKeysPush)})) {}
 
-std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gpu_ms) const {
-  std::vector<Triangle> out;
+std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gpu_ms, std::vector<Triangle> out) const {
   if (gpu_ms) *gpu_ms = 0;
   const uint32_t slots = tri.num_slots;
-  if (slots == 0) return out;
+  if (slots == 0) {
+    out.clear();
+    return out;
+  }
   BufferCache& buffers = cache ? *cache : scratch_;
   const uint32_t n = tri.num_points;
   const Buffer& count = buffers.get(ctx_, "canonical count", 8);  // finite triangles, a bucket too large
@@ -82,7 +84,7 @@ std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gp
   const uint32_t finite = counts[0];
   static_assert(sizeof(Triangle) == 12, "Triangle is three packed uint32");
   const auto t0 = std::chrono::steady_clock::now();
-  resize_touched(out, finite);
+  resize_touched(out, finite);  // no work where `out` holds that many already
   const auto t1 = std::chrono::steady_clock::now();
   gpu::download(ctx_, tris, out.data(), uint64_t(finite) * sizeof(Triangle));
   spdlog::debug("canonical download: {:.1f} ms to allocate, {:.1f} ms to copy {} triangles",

@@ -19,7 +19,9 @@ class TriangleSorter {
   // the key pass and the sort (timestamps), if given.
   // Overwrites tri.nbrs with the sorted triangles and tri.vertex_slots (if any) with bucket sizes: both are not
   // needed any more, so no extra buffers.
-  std::vector<Triangle> download(GpuTriangulation& tri, double* gpu_ms = nullptr) const;
+  // `out`: storage to reuse (its pages already touched, say), resized to the finite triangles.
+  std::vector<Triangle> download(GpuTriangulation& tri, double* gpu_ms = nullptr,
+                                 std::vector<Triangle> out = {}) const;
 
   BufferCache* cache = nullptr;  // where the keys live between calls (shared keys); null: a cache of its own
 

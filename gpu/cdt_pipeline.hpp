@@ -20,6 +20,7 @@
 
 #include "core/cdt_cgal.hpp"
 #include "core/prepare.hpp"
+#include "core/resolve.hpp"
 #include "gpu/canonical.hpp"
 #include "gpu/constraints.hpp"
 #include "gpu/context.hpp"
@@ -49,6 +50,9 @@ class GpuCdt {
   explicit GpuCdt(const Context& ctx);
 
   CdtResult triangulate(const PreparedInput& prepared, GpuCdtStats* stats = nullptr) const;
+  // The same from the resolve stage's output: a caller may resolve on the CPU before the device is ready
+  // (cdtgpu triangulate does, while the GPU starts). The stats then have no "resolve" stage.
+  CdtResult triangulate(ResolvedInput in, GpuCdtStats* stats = nullptr) const;
 
   // Duplicate merging on the GPU for prepare(in, cdt.merger()); the same answer as the CPU's merge_points.
   PointMerger merger() const;
