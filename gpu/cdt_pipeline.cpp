@@ -5,6 +5,8 @@
 #include <future>
 
 #include <spdlog/spdlog.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "core/resolve.hpp"
 #include "core/touched.hpp"
@@ -84,9 +86,12 @@ CdtResult GpuCdt::triangulate(ResolvedInput in, GpuCdtStats* stats) const {
   // 2. GPU: the Delaunay triangulation of every vertex, left on the device.
   auto t = Clock::now();
   Buffer points = create_buffer(ctx_, uint64_t(n) * 16, "points");
-  upload_with(ctx_, points, uint64_t(n) * 16, [&](void* mapped) {
+  upload_with(ctx_, points, uint64_t(n) * 16, [&](void* mapped) {  // on all cores: 40 MB took 12-19 ms on one
     double* xy = static_cast<double*>(mapped);
-    for (uint32_t i = 0; i < n; ++i) xy[2 * i] = result.mesh.vertices[i].x, xy[2 * i + 1] = result.mesh.vertices[i].y;
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 1 << 16), [&](const tbb::blocked_range<uint32_t>& r) {
+      for (uint32_t i = r.begin(); i < r.end(); ++i)
+        xy[2 * i] = result.mesh.vertices[i].x, xy[2 * i + 1] = result.mesh.vertices[i].y;
+    });
   });
   stage("upload", t);
   t = Clock::now();
