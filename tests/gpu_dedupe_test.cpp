@@ -13,6 +13,7 @@
 #include "gpu/context.hpp"
 #include "gpu/dedupe.hpp"
 #include "gpu/primitives.hpp"
+#include "tests/merge_reference.hpp"
 
 using namespace cdtgpu;
 using namespace cdtgpu::gpu;
@@ -33,25 +34,15 @@ bool large() {
   return v && std::strcmp(v, "1") == 0;
 }
 
-// The CPU answer: a stable sort of the input indices by (x, y) with == as equality (so -0.0 == 0.0).
+// The CPU answer (tests/merge_reference.hpp), with each vertex's coordinates: its first occurrence's bits.
 DedupedHost cpu_dedupe(const std::vector<double>& xy) {
-  const size_t n = xy.size() / 2;
-  std::vector<uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  auto less = [&](uint32_t a, uint32_t b) {
-    return xy[2 * a] < xy[2 * b] || (xy[2 * a] == xy[2 * b] && xy[2 * a + 1] < xy[2 * b + 1]);
-  };
-  std::stable_sort(order.begin(), order.end(), less);
+  const PointMerge m = stable_sort_merge(xy);
   DedupedHost h;
-  h.map.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    uint32_t j = order[i];
-    if (i == 0 || less(order[i - 1], j)) {
-      h.xy.push_back(xy[2 * j]);
-      h.xy.push_back(xy[2 * j + 1]);
-      h.first.push_back(j);
-    }
-    h.map[j] = uint32_t(h.first.size() - 1);
+  h.map = m.vertex_of;
+  h.first = m.first;
+  for (uint32_t j : m.first) {
+    h.xy.push_back(xy[2 * j]);
+    h.xy.push_back(xy[2 * j + 1]);
   }
   return h;
 }

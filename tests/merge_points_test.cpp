@@ -6,36 +6,18 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <random>
 #include <vector>
 
 #include "core/prepare.hpp"
+#include "tests/merge_reference.hpp"
 
 using namespace cdtgpu;
 
 namespace {
 
-// The reference: input indices stably sorted by (x, y) with == as equality (-0.0 == 0.0).
-PointMerge reference(const std::vector<double>& xy) {
-  const size_t n = xy.size() / 2;
-  std::vector<uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  auto less = [&](uint32_t a, uint32_t b) {
-    return xy[2 * a] < xy[2 * b] || (xy[2 * a] == xy[2 * b] && xy[2 * a + 1] < xy[2 * b + 1]);
-  };
-  std::stable_sort(order.begin(), order.end(), less);
-  PointMerge m;
-  m.vertex_of.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    if (i == 0 || less(order[i - 1], order[i])) m.first.push_back(order[i]);
-    m.vertex_of[order[i]] = uint32_t(m.first.size() - 1);
-  }
-  return m;
-}
-
 void expect_reference(const std::vector<double>& xy, const char* what) {
-  const PointMerge got = merge_points(xy), want = reference(xy);
+  const PointMerge got = merge_points(xy), want = stable_sort_merge(xy);
   EXPECT_EQ(got.first, want.first) << what << ", " << xy.size() / 2 << " points";
   EXPECT_EQ(got.vertex_of, want.vertex_of) << what << ", " << xy.size() / 2 << " points";
 }
