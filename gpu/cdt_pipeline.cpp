@@ -45,21 +45,31 @@ PointMerger GpuCdt::merger() const {
 }
 
 CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats) const {
-  // 1. CPU: constraints that pass through vertices are split there, crossings get Steiner vertices, so the
-  //    GPU sees a planar straight-line graph on canonical vertices.
-  const auto t = Clock::now();
-  ResolvedInput in = resolve_constraints(prepared, resolve_threads);
-  const double resolve_ms = ms_since(t);
-  spdlog::debug("gpu backend: resolve: {:.1f} ms", resolve_ms);
-  GpuCdtStats local;
-  CdtResult r = triangulate(std::move(in), stats ? stats : &local);
-  GpuCdtStats& s = stats ? *stats : local;
-  s.wall_ms.insert(s.wall_ms.begin(), {"resolve", resolve_ms});
-  s.wall_total_ms += resolve_ms;
-  return r;
+  return triangulate(prepared, std::async(std::launch::async, [&] { return resolve_constraints(prepared, resolve_threads); }),
+                     stats);
 }
 
-CdtResult GpuCdt::triangulate(ResolvedInput in, GpuCdtStats* stats) const {
+GpuTriangulation GpuCdt::delaunay_of(const std::vector<Point3>& vertices, GpuCdtStats& s) const {
+  auto t = Clock::now();
+  const uint32_t n = static_cast<uint32_t>(vertices.size());
+  Buffer points = create_buffer(ctx_, uint64_t(n) * 16, "points");
+  upload_with(ctx_, points, uint64_t(n) * 16, [&](void* mapped) {  // on all cores: 40 MB took 12-19 ms on one
+    double* xy = static_cast<double*>(mapped);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 1 << 16), [&](const tbb::blocked_range<uint32_t>& r) {
+      for (uint32_t i = r.begin(); i < r.end(); ++i) xy[2 * i] = vertices[i].x, xy[2 * i + 1] = vertices[i].y;
+    });
+  });
+  s.wall_ms.emplace_back("upload", ms_since(t));
+  t = Clock::now();
+  GpuTriangulation tri = delaunay_.build(std::move(points), n, &s.delaunay);
+  s.wall_ms.emplace_back("delaunay", ms_since(t));
+  add_gpu(s, "dt ", s.delaunay.stage_ms);
+  s.peak_device_bytes = std::max(s.peak_device_bytes, s.delaunay.peak_device_bytes);
+  return tri;
+}
+
+CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<ResolvedInput> resolving,
+                              GpuCdtStats* stats) const {
   GpuCdtStats local;
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
@@ -68,37 +78,33 @@ CdtResult GpuCdt::triangulate(ResolvedInput in, GpuCdtStats* stats) const {
     s.wall_ms.emplace_back(name, ms_since(t0));
     spdlog::debug("gpu backend: {}: {:.1f} ms", name, s.wall_ms.back().second);
   };
-  s.split_at_vertices = in.split_at_vertices;
-
-  CdtResult result;
-  result.steiner_points = in.steiner_points;
-  result.mesh.vertices = std::move(in.vertices);
 
   // The host array for the triangles (at most 2n) gets its pages on other cores while the GPU works: fresh
   // memory costs a page fault per 4 KiB, ~15 ms for 2.5M points, which the download would otherwise wait for.
-  const uint32_t n = static_cast<uint32_t>(result.mesh.vertices.size());
+  const size_t n = prepared.vertices.size();
   std::future<std::vector<Triangle>> triangles = std::async(std::launch::async, [n] {
     std::vector<Triangle> v;
-    resize_touched(v, 2 * size_t(n));
+    resize_touched(v, 2 * n);
     return v;
   });
 
-  // 2. GPU: the Delaunay triangulation of every vertex, left on the device.
+  // 1. CPU, on other threads (`resolving`): constraints that pass through vertices are split there, crossings
+  //    get Steiner vertices, so that the GPU sees a planar straight-line graph on canonical vertices.
+  // 2. GPU, meanwhile: the Delaunay triangulation of the prepared vertices, left on the device. They are the
+  //    resolved vertices unless constraints cross somewhere; then the triangulation is built again from those.
+  GpuTriangulation tri = delaunay_of(prepared.vertices, s);
   auto t = Clock::now();
-  Buffer points = create_buffer(ctx_, uint64_t(n) * 16, "points");
-  upload_with(ctx_, points, uint64_t(n) * 16, [&](void* mapped) {  // on all cores: 40 MB took 12-19 ms on one
-    double* xy = static_cast<double*>(mapped);
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, 1 << 16), [&](const tbb::blocked_range<uint32_t>& r) {
-      for (uint32_t i = r.begin(); i < r.end(); ++i)
-        xy[2 * i] = result.mesh.vertices[i].x, xy[2 * i + 1] = result.mesh.vertices[i].y;
-    });
-  });
-  stage("upload", t);
-  t = Clock::now();
-  GpuTriangulation tri = delaunay_.build(std::move(points), n, &s.delaunay);
-  stage("delaunay", t);
-  add_gpu(s, "dt ", s.delaunay.stage_ms);
-  s.peak_device_bytes = s.delaunay.peak_device_bytes;
+  ResolvedInput in = resolving.get();
+  stage("resolve wait", t);
+  if (in.vertices.size() != prepared.vertices.size()) {  // Steiner vertices: resolve only ever adds vertices
+    tri = GpuTriangulation();
+    tri = delaunay_of(in.vertices, s);
+    s.delaunay_built_twice = true;
+  }
+  s.split_at_vertices = in.split_at_vertices;
+  CdtResult result;
+  result.steiner_points = in.steiner_points;
+  result.mesh.vertices = std::move(in.vertices);
 
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no

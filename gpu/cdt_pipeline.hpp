@@ -8,12 +8,14 @@
 //   CdtResult r = cdt.triangulate(prepared, &stats);
 //
 // Stages (gpu/cdt_pipeline.cpp reads as this list):
-//   resolve      CPU, core/resolve: split constraints at vertices, Steiner vertices at crossings
+//   resolve      CPU, core/resolve: split constraints at vertices, Steiner vertices at crossings; on other
+//                threads while the GPU builds the Delaunay triangulation (again after it where they cross)
 //   delaunay     GPU, gpu/delaunay: Delaunay triangulation of all vertices (docs/gpu-delaunay.md)
 //   constraints  GPU, gpu/constraints: the paper's insertion by flips, then legalisation (docs/gpu-constraints.md)
 //   download     GPU: finite triangles sorted into canonical order (gpu/canonical), then to the host
 #pragma once
 #include <cstdint>
+#include <future>
 #include <string>
 #include <utility>
 #include <vector>
@@ -31,7 +33,8 @@
 namespace cdtgpu::gpu {
 
 struct GpuCdtStats {
-  // Host wall clock per stage ("resolve", "upload", "delaunay", "constraints", "download"), in order.
+  // Host wall clock per stage ("upload", "delaunay", "resolve wait", "constraints", "download"), in order;
+  // "upload" and "delaunay" twice when the Delaunay triangulation was built again.
   std::vector<std::pair<std::string, double>> wall_ms;
   // Device timestamps per GPU stage, "dt ..." then "cdt ...", in order; gpu_total_ms is their sum.
   std::vector<std::pair<std::string, double>> gpu_ms;
@@ -40,6 +43,9 @@ struct GpuCdtStats {
   DelaunayStats delaunay;
   ConstraintStats constraints;
   uint64_t split_at_vertices = 0;
+  // Constraints crossed, so the Delaunay triangulation built beside the resolve stage (on the prepared
+  // vertices) was built again with the Steiner vertices; both builds are in the stages.
+  bool delaunay_built_twice = false;
   // The most device memory held at once: the larger of the two GPU stages' own peaks, or what the pipeline holds
   // during the canonical sort (the triangulation and the shared scratch cache, which the sort draws on too).
   uint64_t peak_device_bytes = 0;
@@ -50,9 +56,11 @@ class GpuCdt {
   explicit GpuCdt(const Context& ctx);
 
   CdtResult triangulate(const PreparedInput& prepared, GpuCdtStats* stats = nullptr) const;
-  // The same from the resolve stage's output: a caller may resolve on the CPU before the device is ready
-  // (cdtgpu triangulate does, while the GPU starts). The stats then have no "resolve" stage.
-  CdtResult triangulate(ResolvedInput in, GpuCdtStats* stats = nullptr) const;
+  // The same with the CPU's resolve stage already running (resolve_constraints(prepared) on other threads,
+  // started as early as the caller likes: cdtgpu triangulate starts it while the device starts). The GPU builds
+  // the Delaunay triangulation of the prepared vertices meanwhile. `prepared` must outlive the call.
+  CdtResult triangulate(const PreparedInput& prepared, std::future<ResolvedInput> resolving,
+                        GpuCdtStats* stats = nullptr) const;
 
   // Duplicate merging on the GPU for prepare(in, cdt.merger()); the same answer as the CPU's merge_points.
   PointMerger merger() const;
@@ -67,6 +75,9 @@ class GpuCdt {
   const Primitives& primitives() const { return prims_; }
 
  private:
+  // Upload and Delaunay build of `vertices`, their stages added to `s`.
+  GpuTriangulation delaunay_of(const std::vector<Point3>& vertices, GpuCdtStats& s) const;
+
   const Context& ctx_;
   // One scratch cache for the stages, which run one after another: the Delaunay build's per-slot buffers are
   // the inserter's and the canonical sort's (gpu/buffers.hpp, shared keys), allocated once and kept.
