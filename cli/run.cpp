@@ -346,6 +346,10 @@ int run_triangulate(const TriangulateOptions& options) {
   spdlog::info("{} vertices, {} triangles ({} constraints, {} Steiner points)", result.mesh.vertices.size(),
                result.mesh.triangles.size(), l.prepared.constraints.size(), result.steiner_points);
   if (cdt) stats.stage_ms.emplace_back("triangulate: pipeline waits", gpu::pipeline_wait_ms());
+  if (cdt) {
+    stats.stage_ms.emplace_back("gpu: memory allocation and release (all threads)", gpu::memory_ms());
+    spdlog::debug("gpu memory allocation and release: {:.1f} ms (all threads)", gpu::memory_ms());
+  }
   timed(stats, "release", [&] {
     if (start) start->leave_for_exit();
     start.reset();

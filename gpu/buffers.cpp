@@ -4,6 +4,8 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstring>
 #include <functional>
 #include <utility>
@@ -12,6 +14,16 @@
 
 namespace cdtgpu::gpu {
 namespace {
+
+std::atomic<uint64_t> memory_ns{0};
+
+// Adds the time from its construction to its end to memory_ns.
+struct MemoryClock {
+  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+  ~MemoryClock() {
+    memory_ns += uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count());
+  }
+};
 
 uint32_t memory_type(const Context& ctx, uint32_t type_bits, VkMemoryPropertyFlags want, VkMemoryPropertyFlags need) {
   for (int pass = 0; pass < 2; ++pass) {
@@ -24,6 +36,7 @@ uint32_t memory_type(const Context& ctx, uint32_t type_bits, VkMemoryPropertyFla
 
 // Raw buffer + memory; `host` makes it host-visible and coherent (staging).
 Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, bool host) {
+  MemoryClock clock;
   Buffer b;
   b.device = ctx.device;
   b.size = bytes;
@@ -139,7 +152,10 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
   return *this;
 }
 
+double memory_ms() { return double(memory_ns.load()) * 1e-6; }
+
 Buffer::~Buffer() {
+  MemoryClock clock;
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
   if (memory) vkFreeMemory(device, memory, nullptr);
   if (budget) budget->used.fetch_sub(charged);

@@ -39,6 +39,9 @@ struct Buffer {
 // Throws DeviceError when bytes > maxStorageBufferRange (message names the buffer, its size and the limit).
 Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name = "buffer");
 
+// Milliseconds the process has spent allocating and freeing buffer memory (device and staging), all threads.
+double memory_ms();
+
 // Synchronous copies through a host-visible staging buffer (each waits for the queue to finish).
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);

@@ -60,9 +60,11 @@ GpuTriangulation GpuCdt::delaunay_of(const std::vector<Point3>& vertices, GpuCdt
     });
   });
   s.wall_ms.emplace_back("upload", ms_since(t));
+  spdlog::debug("gpu backend: upload: {:.1f} ms", s.wall_ms.back().second);
   t = Clock::now();
   GpuTriangulation tri = delaunay_.build(std::move(points), n, &s.delaunay);
   s.wall_ms.emplace_back("delaunay", ms_since(t));
+  spdlog::debug("gpu backend: delaunay: {:.1f} ms", s.wall_ms.back().second);
   add_gpu(s, "dt ", s.delaunay.stage_ms);
   s.peak_device_bytes = std::max(s.peak_device_bytes, s.delaunay.peak_device_bytes);
   return tri;

@@ -66,9 +66,6 @@ struct Pass {
 
  private:
   friend Pass create_pass(const Context& ctx, const PassDesc& desc);
-
-// Milliseconds the process has spent in handle() waiting for pipelines still compiling.
-double pipeline_wait_ms();
   void release();
   mutable VkPipeline pipeline_ = VK_NULL_HANDLE;
   mutable std::shared_future<VkPipeline> compiling_;
