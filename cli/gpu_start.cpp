@@ -70,14 +70,14 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
     auto t = Clock::now();
     r->ctx = gpu::create_context(options);
     context_ms = ms(t);
-    // Memory for the triangulation, allocated on threads of their own while the input is read: the staging
-    // buffer (the largest copy is the download of ~2n triangles of 12 bytes) and a device pool (the GPU backend
-    // holds up to ~240 bytes a point), an eighth more each for the estimate's error. The staging at most 1 GiB:
-    // beyond it the copies grow it themselves.
-    gpu::reserve_memory(r->ctx, std::min<uint64_t>(expected_points * 27, uint64_t(1) << 30), expected_points * 270);
     t = Clock::now();
     r->cdt = std::make_unique<gpu::GpuCdt>(r->ctx);  // queues every pipeline's compile
     pipelines_ms = ms(t);
+    t = Clock::now();
+    // The download of ~2n triangles of 12 bytes is the largest copy; an eighth more for the estimate's error.
+    // At most 1 GiB: beyond that the copies grow it themselves.
+    gpu::reserve_staging(r->ctx, std::min<uint64_t>(expected_points * 27, uint64_t(1) << 30));
+    staging_ms = ms(t);
     return r;
   });
 }

@@ -228,6 +228,7 @@ int run_triangulate(const TriangulateOptions& options) {
     if (!cdt) return triangulate_cgal(l.prepared);
     stats.stage_ms.emplace_back("gpu start: context (own thread)", start->context_ms);
     stats.stage_ms.emplace_back("gpu start: pipelines queued (own thread)", start->pipelines_ms);
+    stats.stage_ms.emplace_back("gpu start: staging memory (own thread)", start->staging_ms);
     stats.device = start->context().info.name;
     spdlog::debug("device: {} ({} {})", stats.device, start->context().info.driver_name,
                   start->context().info.driver_info);

@@ -8,7 +8,6 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
-#include <future>
 #include <utility>
 
 #include "gpu/check.hpp"
@@ -72,15 +71,6 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
     }
     b.budget = ctx.memory_budget;
     b.charged = req.size;
-    if (ctx.pool_ready.valid()) ctx.pool_ready.wait();
-    if (ctx.device_pool && (req.memoryTypeBits & (1u << ctx.device_pool->type())))
-      if (const auto at = ctx.device_pool->take(req.size, req.alignment)) {
-        VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, ctx.device_pool->memory(), *at));
-        b.pool = ctx.device_pool;
-        b.pool_offset = *at;
-        b.pool_size = req.size;
-        return b;
-      }
   }
   VkResult r = vkAllocateMemory(ctx.device, &ai, nullptr, &b.memory);
   if (r != VK_SUCCESS)
@@ -151,11 +141,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
   if (this == &o) return *this;
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
   if (memory) vkFreeMemory(device, memory, nullptr);
-  if (pool) pool->give(pool_offset, pool_size);
   if (budget) budget->used.fetch_sub(charged);
-  pool = std::move(o.pool);
-  pool_offset = std::exchange(o.pool_offset, 0);
-  pool_size = std::exchange(o.pool_size, 0);
   device = o.device;
   budget = std::move(o.budget);
   charged = std::exchange(o.charged, 0);
@@ -172,7 +158,6 @@ Buffer::~Buffer() {
   MemoryClock clock;
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
   if (memory) vkFreeMemory(device, memory, nullptr);
-  if (pool) pool->give(pool_offset, pool_size);
   if (budget) budget->used.fetch_sub(charged);
 }
 
@@ -197,9 +182,7 @@ struct Staging {
   }
 };
 
-// `wait`: for the reservation in progress (reserve_memory); its own thread does not.
-Staging& staging_of(const Context& ctx, VkDeviceSize bytes, bool wait = true) {
-  if (wait && ctx.staging_ready.valid()) ctx.staging_ready.wait();
+Staging& staging_of(const Context& ctx, VkDeviceSize bytes) {
   auto& slot = ctx.staging;
   auto* s = static_cast<Staging*>(slot.get());
   if (!s || s->buffer.size < bytes) {
@@ -215,29 +198,8 @@ Staging& staging_of(const Context& ctx, VkDeviceSize bytes, bool wait = true) {
 
 }  // namespace
 
-void reserve_memory(const Context& ctx, VkDeviceSize staging_bytes, VkDeviceSize device_bytes) {
-  if (staging_bytes)
-    ctx.staging_ready = std::async(std::launch::async, [&ctx, staging_bytes] {
-                          try {
-                            staging_of(ctx, staging_bytes, false);
-                          } catch (const DeviceError&) {  // the copies allocate it themselves
-                          }
-                        }).share();
-  if (!device_bytes || ctx.memory_budget->limit) return;
-  // The memory type of a device-local storage buffer (every buffer create_buffer makes has the same usage).
-  Buffer probe = make(ctx, 4, "pool type probe", false);
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(ctx.device, probe.buffer, &req);
-  const uint32_t type = memory_type(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
-  const VkDeviceSize heap = ctx.memory.memoryHeaps[ctx.memory.memoryTypes[type].heapIndex].size;
-  device_bytes = std::min(device_bytes, heap / 2);
-  ctx.pool_ready = std::async(std::launch::async, [&ctx, device_bytes, type] {
-                     try {
-                       MemoryClock clock;
-                       ctx.device_pool = std::make_shared<DevicePool>(ctx, device_bytes, type);
-                     } catch (const DeviceError&) {  // buffers allocate their own memory
-                     }
-                   }).share();
+void reserve_staging(const Context& ctx, VkDeviceSize bytes) {
+  if (bytes) staging_of(ctx, bytes);
 }
 
 void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, const std::function<void(void*)>& write,

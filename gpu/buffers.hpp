@@ -14,7 +14,6 @@
 #include <vector>
 
 #include "gpu/context.hpp"
-#include "gpu/memory_pool.hpp"
 
 namespace cdtgpu::gpu {
 
@@ -28,10 +27,6 @@ struct Buffer {
   std::string name;
   std::shared_ptr<MemoryBudget> budget;  // device-local buffers: the context's budget, given back when freed
   VkDeviceSize charged = 0;
-  // A range of the context's device pool instead of `memory` of its own (gpu/memory_pool.hpp), given back when
-  // freed.
-  std::shared_ptr<DevicePool> pool;
-  VkDeviceSize pool_offset = 0, pool_size = 0;
 
   Buffer() = default;
   Buffer(Buffer&& o) noexcept;
@@ -50,12 +45,9 @@ double memory_ms();
 // Synchronous copies through a host-visible staging buffer (each waits for the queue to finish).
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
-// Starts allocating, each on a thread of its own, the staging buffer that upload() and download() share
-// (`staging_bytes`: pinned host memory, ~0.35 ms per MB on the lent H100 machine) and a device-local pool
-// (`device_bytes`, gpu/memory_pool.hpp) that create_buffer takes ranges from; both wait for these first. A
-// caller that knows its sizes early (cdtgpu triangulate, from the input files' sizes) pays this beside other
-// work. No pool where CDTGPU_DEVICE_MEMORY_LIMIT caps the context, or where the device refuses the block.
-void reserve_memory(const Context& ctx, VkDeviceSize staging_bytes, VkDeviceSize device_bytes);
+// Grows the staging buffer that upload() and download() share to at least `bytes` now: pinned host memory costs
+// about 0.3 ms per MB to allocate, which a caller can pay on another thread ahead of the copies.
+void reserve_staging(const Context& ctx, VkDeviceSize bytes);
 // upload() with the caller writing the mapped staging memory itself: no host copy of the data in between.
 // Large fresh host vectors cost a page fault per 4 KiB (tens of ms per 100 MB), more than the copy.
 void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, const std::function<void(void*)>& write,

@@ -11,7 +11,6 @@
 
 #include <atomic>
 #include <cstdint>
-#include <future>
 #include <memory>
 #include <string>
 #include <vector>
@@ -73,8 +72,6 @@ struct MemoryBudget {
 // The cap from the environment: 0 when unset; DeviceError when it is not a byte count.
 uint64_t device_memory_limit_from_env();
 
-class DevicePool;
-
 struct Context {
   VkInstance instance = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
@@ -112,10 +109,6 @@ struct Context {
   // The host-visible staging buffer upload() and download() reuse (gpu/buffers.cpp; grown as needed, freed
   // before the device): allocating and pinning host memory for every copy cost more than the copy itself.
   mutable std::shared_ptr<void> staging;
-  // Memory allocated ahead on threads of their own (reserve_memory in gpu/buffers.hpp): the staging buffer and a
-  // device-local pool buffers are taken from. Users wait for the futures before they look.
-  mutable std::shared_future<void> staging_ready, pool_ready;
-  mutable std::shared_ptr<DevicePool> device_pool;
   // Small scratch buffers Recorder::temp() hands out and takes back at submit (gpu/recorder.cpp): the constraint
   // rounds' scans made ~60 allocations per triangulation, each a driver call.
   mutable std::shared_ptr<void> temp_pool;
