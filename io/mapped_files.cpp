@@ -16,46 +16,7 @@
 #include <mutex>
 
 namespace cdtgpu::files {
-
-struct Mapping {
-  const char* data = nullptr;
-  size_t size = 0;
-  dev_t dev = 0;
-  ino_t ino = 0;
-  timespec mtime{};
-  ~Mapping() { ::munmap(const_cast<char*>(data), size); }
-};
-
 namespace {
-
-// The mappings in use, by path; an entry counts only while some File holds it and the file is unchanged.
-std::mutex mappings_mutex;
-std::map<std::string, std::weak_ptr<const Mapping>>& mappings() {
-  static std::map<std::string, std::weak_ptr<const Mapping>> m;
-  return m;
-}
-
-// A mapping of the regular file `fd` (whose status is `st`) opened as `path`: one in use if it maps the same
-// file unchanged, else a new one; null when it cannot be mapped.
-std::shared_ptr<const Mapping> mapping_of(const std::string& path, int fd, const struct stat& st) {
-  std::lock_guard lock(mappings_mutex);
-  auto& m = mappings();
-  if (auto held = m[path].lock())
-    if (held->dev == st.st_dev && held->ino == st.st_ino && held->size == size_t(st.st_size) &&
-        held->mtime.tv_sec == st.st_mtim.tv_sec && held->mtime.tv_nsec == st.st_mtim.tv_nsec)
-      return held;
-  void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
-  if (p == MAP_FAILED) return nullptr;
-  auto fresh = std::make_shared<Mapping>();
-  fresh->data = static_cast<const char*>(p);
-  fresh->size = size_t(st.st_size);
-  fresh->dev = st.st_dev;
-  fresh->ino = st.st_ino;
-  fresh->mtime = st.st_mtim;
-  for (auto it = m.begin(); it != m.end();) it = it->second.expired() ? m.erase(it) : std::next(it);
-  m[path] = fresh;
-  return fresh;
-}
 
 std::mutex memory_mutex;
 std::map<std::string, std::shared_ptr<const std::string>>& memory_files() {
@@ -132,11 +93,15 @@ File* open(const std::string& path) {
   if (fd < 0) return nullptr;
   struct stat st {};
   auto* f = new File;
-  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) f->mapping = mapping_of(path, fd, st);
-  if (f->mapping) {
-    f->data = f->mapping->data;
-    f->size = f->mapping->size;
-  } else {  // not mappable: read it whole
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+    void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
+    if (p != MAP_FAILED) {
+      f->data = static_cast<const char*>(p);
+      f->size = size_t(st.st_size);
+      f->mapped = true;
+    }
+  }
+  if (!f->mapped) {  // not mappable: read it whole
     char buf[1 << 16];
     for (ssize_t n; (n = ::read(fd, buf, sizeof buf)) != 0;) {
       if (n < 0 && errno == EINTR) continue;
@@ -157,7 +122,9 @@ File* open(const std::string& path) {
 }
 
 void close(File* f) {
-  delete f;  // the last File on a mapping unmaps it
+  if (!f) return;
+  if (f->mapped) ::munmap(const_cast<char*>(f->data), f->size);
+  delete f;
 }
 
 SAHooks hooks(void (*error)(const char*)) {

@@ -16,14 +16,11 @@
 
 namespace cdtgpu::files {
 
-// One mapping of a file on disk, shared by the Files open on it at once (see open()).
-struct Mapping;
-
 // An open file: its bytes and a read position for shapelib.
 struct File {
   const char* data = nullptr;
   size_t size = 0, pos = 0;
-  std::shared_ptr<const Mapping> mapping;      // unmapped when the last File on it closes
+  bool mapped = false;                         // munmap on close
   std::string owned;                           // an empty or unmappable file's bytes
   std::shared_ptr<const std::string> memory;   // a file held in memory stays alive while open
   std::string_view bytes() const { return {data, size}; }
@@ -35,10 +32,7 @@ void remove_memory_file(const std::string& path);
 
 // A file held in memory, or a regular file on disk.
 bool is_file(const std::string& path);
-// Opens for reading: nullptr (errno set) when there is no such file or it cannot be read. Files open on the
-// same unchanged file at once share one mapping: the shapefile reader opens a handle per range of records on
-// every core, and a mapping each (mmap, page faults and munmap under the process's one memory-map lock) kept
-// 16 cores at 325 MB/s.
+// Opens for reading: nullptr (errno set) when there is no such file or it cannot be read.
 File* open(const std::string& path);
 void close(File* f);
 // Owns an open file.
