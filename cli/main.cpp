@@ -5,7 +5,6 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
-#include <cstdlib>
 #include <iostream>
 
 #include "bench/bench.hpp"
@@ -116,11 +115,7 @@ int main(int argc, char** argv) {
     if (*t) {
       tri.device = device;
       tri.input.crs = crs_from(crs, utm_zone, epsg);
-      const int code = run_triangulate(tri);
-      // Every output is written, synced and closed: leave without the destructors and atexit handlers (the
-      // Vulkan driver's among them) that only give memory back to a process about to end.
-      std::fflush(nullptr);
-      std::_Exit(code);
+      return run_triangulate(tri);
     }
     if (*v) {
       ver.crs = crs_from(crs, utm_zone, epsg);
