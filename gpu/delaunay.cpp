@@ -187,7 +187,30 @@ DelaunayBuilder::DelaunayBuilder(const Context& ctx)
       split_fix_(create_pass(ctx, {"dt_split_fix", 13, sizeof(DtRoundPush)})),
       flip_check_(create_pass(ctx, {"dt_flip_check", 9, sizeof(DtFlipPush)})),
       flip_check_exact_(create_pass(ctx, {"dt_flip_check_exact", 8, sizeof(DtFlipPush)})),
-      flip_(create_pass(ctx, {"dt_flip", 9, sizeof(DtFlipPush)})) {}
+      flip_(create_pass(ctx, {"dt_flip", 9, sizeof(DtFlipPush)})) {
+  // The variants this device's defaults use, queued with the rest: a first run (empty pipeline caches) then
+  // compiles them while the input is read, not in the middle of its first build. The others stay lazy (each
+  // exact stage costs lavapipe seconds of compiling).
+  if (small_rounds) insert_small();
+  if (exact_checks != ExactChecks::separate) flip_check_inline();
+  if (tail_passes) flip_tail();
+}
+
+const Pass& DelaunayBuilder::insert_small() const {
+  if (!insert_small_) insert_small_.emplace(create_pass(ctx_, {"dt_insert_small", 12, sizeof(DtRoundPush)}));
+  return *insert_small_;
+}
+
+const Pass& DelaunayBuilder::flip_check_inline() const {
+  if (!flip_check_inline_)
+    flip_check_inline_.emplace(create_pass(ctx_, {"dt_flip_check_inline", 9, sizeof(DtFlipPush)}));
+  return *flip_check_inline_;
+}
+
+const Pass& DelaunayBuilder::flip_tail() const {
+  if (!flip_tail_) flip_tail_.emplace(create_pass(ctx_, {"dt_flip_tail", 9, sizeof(DtFlipPush)}));
+  return *flip_tail_;
+}
 
 GpuTriangulation DelaunayBuilder::build(std::span<const double> xy, DelaunayStats* stats) const {
   const uint32_t n = uint32_t(xy.size() / 2);
@@ -426,10 +449,8 @@ void DelaunayBuilder::insert_round(State& st) const {
   const Binding granted_at = bit_set(st.granted_at, point_words, st.round);
   if (small_rounds && st.used <= DT_SMALL_SLOTS) {
     ++st.small_rounds;
-    if (!insert_small_)
-      insert_small_.emplace(create_pass(ctx_, {"dt_insert_small", 12, sizeof(DtRoundPush)}));
     st.kernel("k:insert_small", [&] {
-      st.rec.dispatch_groups(*insert_small_,
+      st.rec.dispatch_groups(insert_small(),
                              {st.tri.verts, st.tri.nbrs, st.loc, st.pick, st.claim, st.bids, st.counters,
                               st.args, granted, st.partner, st.flip[0], st.list},
                              slots, 1);
@@ -501,14 +522,11 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
   const uint32_t cap = slot_capacity(st.n);
   const bool inlined = exact_checks == ExactChecks::inlined ||
                        (exact_checks == ExactChecks::adaptive && st.exact_last_round < kInlineExactBelow);
-  if (inlined && !flip_check_inline_)
-    flip_check_inline_.emplace(create_pass(ctx_, {"dt_flip_check_inline", 9, sizeof(DtFlipPush)}));
   // The tail's checks are exact inline, in one workgroup: worth it only while few checks need the exact
   // stage.
   const bool tail = tail_passes && (inlined || exact_checks == ExactChecks::separate);
-  if (tail && !flip_tail_) flip_tail_.emplace(create_pass(ctx_, {"dt_flip_tail", 9, sizeof(DtFlipPush)}));
-  const Pass& check = inlined ? *flip_check_inline_ : flip_check_;
-  const Pass& flip = tail ? *flip_tail_ : flip_;
+  const Pass& check = inlined ? flip_check_inline() : flip_check_;
+  const Pass& flip = tail ? flip_tail() : flip_;
   st.begin("flip");
   for (uint32_t k = 0; k < passes; ++k) {
     const uint32_t src = st.cur;

@@ -127,7 +127,11 @@ class DelaunayBuilder {
   Primitives prims_;
   Pass points_, init_, renumber_, hint_, number_back_, flags_, relocate_, relocate_exact_, compact_, claim_,
       grant_, rank_, split_, split_fix_, flip_check_, flip_check_exact_, flip_;
-  mutable std::optional<Pass> flip_check_inline_, flip_tail_, insert_small_;  // built on first use
+  // Variants queued where the defaults use them, else built on first use.
+  mutable std::optional<Pass> flip_check_inline_, flip_tail_, insert_small_;
+  const Pass& insert_small() const;
+  const Pass& flip_check_inline() const;
+  const Pass& flip_tail() const;
 };
 
 GpuTriangulation build_delaunay(const Context& ctx, std::span<const double> xy,
