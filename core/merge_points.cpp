@@ -1,8 +1,8 @@
 // merge_points on the CPU: a bucket sort by x on all cores, then the duplicates numbered on all cores.
-// Why not one std::sort(par) of every point: on the H100 machine's 16 cores it took ~150 ms for 2.5M points
-// (250 ms on 2), longer than the GPU start it overlaps; a bucket pass plus small sorts that stay in cache does
-// the same in a fraction of that (docs/performance.md). The order inside a bucket is the comparator it had, so
-// the result is the same, whatever the split.
+// Why not one std::sort(par) of every point: it took ~150 ms for 2.5M points on the H100 machine's 16 cores
+// and 230 ms on 2; a bucket pass plus small sorts that stay in cache take 31-44 ms and 77 ms
+// (docs/performance.md). Inside a bucket the order is the comparator's, so the result is the same whatever the
+// split.
 #include "core/prepare.hpp"
 #include "core/touched.hpp"
 
