@@ -1,7 +1,5 @@
 #include "cli/gpu_start.hpp"
 
-#include "gpu/buffers.hpp"
-
 #include <cctype>
 #include <chrono>
 #include <cstdlib>
@@ -9,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include "gpu/buffers.hpp"
 
 namespace cdtgpu {
 
@@ -98,10 +98,6 @@ void GpuStart::leave_for_exit() {
   if (!ready_) return;
   gpu::store_pipeline_cache(ready_->ctx);
   (void)ready_.release();  // deliberately never destroyed
-}
-
-bool GpuStart::ready() const {
-  return ready_ || pending_.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
 }
 
 gpu::GpuCdt& GpuStart::cdt() {

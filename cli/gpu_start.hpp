@@ -32,8 +32,6 @@ class GpuStart {
   ~GpuStart();
   // Waits for the start; rethrows its DeviceError.
   gpu::GpuCdt& cdt();
-  // Whether cdt() would return (or throw) without waiting.
-  bool ready() const;
   const gpu::Context& context();
   // For a process about to exit: saves the pipeline cache and leaves the device, its buffers and pipelines to
   // the operating system. Tearing them down took ~75 ms on the H100 machine, as long as a 2M-point CDT.

@@ -171,11 +171,10 @@ int run_triangulate(const TriangulateOptions& options) {
   // are large enough to hold auto_min_points() points).
   const uint64_t min_points = auto_min_points();
   std::optional<GpuStart> start;
-  const uint64_t estimate = options.backend == "auto" ? estimate_input_points(input_paths) : 0;
+  const uint64_t estimate = options.backend != "cgal" ? estimate_input_points(input_paths) : 0;
   spdlog::debug("about {} input points in the files", estimate);
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= min_points))
-    start.emplace(options.device, options.backend == "auto" && options.device.empty(),
-                  options.backend == "gpu" ? estimate_input_points(input_paths) : estimate);
+    start.emplace(options.device, options.backend == "auto" && options.device.empty(), estimate);
 
   Loaded l = read_all(options.input, stats);
   std::string reason = "--backend " + options.backend;

@@ -26,6 +26,12 @@ void add_gpu(GpuCdtStats& s, const std::string& prefix, const std::vector<std::p
   }
 }
 
+// Host wall clock of a stage since t0, into the stats and the -v log.
+void record_stage(GpuCdtStats& s, const char* name, Clock::time_point t0) {
+  s.wall_ms.emplace_back(name, ms_since(t0));
+  spdlog::debug("gpu backend: {}: {:.1f} ms", name, s.wall_ms.back().second);
+}
+
 }  // namespace
 
 GpuCdt::GpuCdt(const Context& ctx)
@@ -59,12 +65,10 @@ GpuTriangulation GpuCdt::delaunay_of(const std::vector<Point3>& vertices, GpuCdt
       for (uint32_t i = r.begin(); i < r.end(); ++i) xy[2 * i] = vertices[i].x, xy[2 * i + 1] = vertices[i].y;
     });
   });
-  s.wall_ms.emplace_back("upload", ms_since(t));
-  spdlog::debug("gpu backend: upload: {:.1f} ms", s.wall_ms.back().second);
+  record_stage(s, "upload", t);
   t = Clock::now();
   GpuTriangulation tri = delaunay_.build(std::move(points), n, &s.delaunay);
-  s.wall_ms.emplace_back("delaunay", ms_since(t));
-  spdlog::debug("gpu backend: delaunay: {:.1f} ms", s.wall_ms.back().second);
+  record_stage(s, "delaunay", t);
   add_gpu(s, "dt ", s.delaunay.stage_ms);
   s.peak_device_bytes = std::max(s.peak_device_bytes, s.delaunay.peak_device_bytes);
   return tri;
@@ -76,10 +80,6 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
-  auto stage = [&](const char* name, Clock::time_point t0) {
-    s.wall_ms.emplace_back(name, ms_since(t0));
-    spdlog::debug("gpu backend: {}: {:.1f} ms", name, s.wall_ms.back().second);
-  };
 
   // The host array for the triangles (at most 2n) gets its pages on other cores while the GPU works: fresh
   // memory costs a page fault per 4 KiB, ~15 ms for 2.5M points, which the download would otherwise wait for.
@@ -97,7 +97,7 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   GpuTriangulation tri = delaunay_of(prepared.vertices, s);
   auto t = Clock::now();
   ResolvedInput in = resolving.get();
-  stage("resolve wait", t);
+  record_stage(s, "resolve wait", t);
   if (in.vertices.size() != prepared.vertices.size()) {  // Steiner vertices: resolve only ever adds vertices
     tri = GpuTriangulation();
     tri = delaunay_of(in.vertices, s);
@@ -117,7 +117,7 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
   }
-  stage("constraints", t);
+  record_stage(s, "constraints", t);
 
   // 4. The finite triangles, sorted into canonical order on the GPU, then downloaded.
   t = Clock::now();
@@ -128,7 +128,7 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   const uint64_t sorting = tri.points.size + tri.verts.size + tri.nbrs.size + tri.vertex_slots.size + cache_.bytes();
   s.peak_device_bytes = std::max(s.peak_device_bytes, sorting);
   add_gpu(s, "", {{"canonical order", sort_ms}});
-  stage("download", t);
+  record_stage(s, "download", t);
   s.wall_total_ms = ms_since(t_all);
   return result;
 }
