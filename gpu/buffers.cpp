@@ -34,8 +34,9 @@ uint32_t memory_type(const Context& ctx, uint32_t type_bits, VkMemoryPropertyFla
   throw DeviceError("no suitable Vulkan memory type on " + ctx.info.name);
 }
 
-// Raw buffer + memory; `host` makes it host-visible and coherent (staging).
-Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, bool host) {
+// Raw buffer + memory; `host` makes it host-visible and coherent (staging); `addressed` gives it a device
+// address.
+Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, bool host, bool addressed = false) {
   MemoryClock clock;
   Buffer b;
   b.device = ctx.device;
@@ -47,12 +48,17 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
   bi.usage = host ? (VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT)
                   : (VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
                      VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
+  if (addressed) bi.usage |= VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
   bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
   VK_CHECK(vkCreateBuffer(ctx.device, &bi, nullptr, &b.buffer));
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(ctx.device, b.buffer, &req);
+  VkMemoryAllocateFlagsInfo flags{};
+  flags.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_FLAGS_INFO;
+  flags.flags = VK_MEMORY_ALLOCATE_DEVICE_ADDRESS_BIT;
   VkMemoryAllocateInfo ai{};
   ai.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+  if (addressed) ai.pNext = &flags;
   ai.allocationSize = req.size;
   ai.memoryTypeIndex =
       host ? memory_type(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_CACHED_BIT,
@@ -77,6 +83,12 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
     vk_fail(r, ("vkAllocateMemory for buffer '" + name + "' of " + std::to_string(bytes) + " bytes").c_str(),
             __FILE__, __LINE__);
   VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, b.memory, 0));
+  if (addressed) {
+    VkBufferDeviceAddressInfo info{};
+    info.sType = VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO;
+    info.buffer = b.buffer;
+    b.address = vkGetBufferDeviceAddress(ctx.device, &info);
+  }
   return b;
 }
 
@@ -148,6 +160,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
   buffer = std::exchange(o.buffer, VK_NULL_HANDLE);
   memory = std::exchange(o.memory, VK_NULL_HANDLE);
   size = std::exchange(o.size, 0);
+  address = std::exchange(o.address, 0);
   name = std::move(o.name);
   return *this;
 }
@@ -169,6 +182,10 @@ Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& 
                       std::to_string(ctx.info.max_storage_buffer_range >> 20) + " MiB) of " + ctx.info.name +
                       "; use a smaller input or a device with a larger limit");
   return make(ctx, bytes, name, false);
+}
+
+Buffer create_addressed_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
+  return make(ctx, bytes, name, false, true);
 }
 
 namespace {

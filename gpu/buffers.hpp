@@ -2,7 +2,9 @@
 //
 // Size policy: a buffer is bound whole as one storage-buffer descriptor, so a buffer larger than the device's
 // maxStorageBufferRange (128 MiB on lavapipe, 4 GiB on NVIDIA) is refused by create_buffer with a DeviceError
-// naming the limit. Callers split their data or run on a device with a larger range.
+// naming the limit. Callers split their data or run on a device with a larger range. The triangulation's
+// verts and nbrs are the exception: create_addressed_buffer makes buffers that shaders reach through their
+// device address (shaders/tri_refs.glsl), which has no range limit.
 #pragma once
 #include <vulkan/vulkan.h>
 
@@ -24,6 +26,7 @@ struct Buffer {
   VkBuffer buffer = VK_NULL_HANDLE;
   VkDeviceMemory memory = VK_NULL_HANDLE;
   VkDeviceSize size = 0;
+  VkDeviceAddress address = 0;  // create_addressed_buffer: what its bindings pass (gpu/recorder.hpp); else 0
   std::string name;
   std::shared_ptr<MemoryBudget> budget;  // device-local buffers: the context's budget, given back when freed
   VkDeviceSize charged = 0;
@@ -38,6 +41,8 @@ struct Buffer {
 
 // Throws DeviceError when bytes > maxStorageBufferRange (message names the buffer, its size and the limit).
 Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name = "buffer");
+// A buffer that every pass binds by its device address (Binding, Recorder::bind): no range limit.
+Buffer create_addressed_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name);
 
 // Milliseconds the process has spent allocating and freeing buffer memory (device and staging), all threads.
 double memory_ms();

@@ -131,6 +131,7 @@ DeviceInfo query(VkPhysicalDevice pd, uint32_t index) {
   d.float64 = f.features.shaderFloat64;
   d.int64 = f.features.shaderInt64;
   d.int64_atomics = f12.shaderBufferInt64Atomics;
+  d.buffer_address = f12.bufferDeviceAddress;
   uint32_t ts_bits = 0;
   int family = compute_family(pd, &ts_bits);
   d.timestamps = family >= 0 && ts_bits > 0 && p.limits.timestampPeriod > 0;
@@ -146,6 +147,7 @@ DeviceInfo query(VkPhysicalDevice pd, uint32_t index) {
   if (!d.subgroup_ops) missing.push_back("subgroup basic/arithmetic/ballot in compute");
   if (d.subgroup_size < 8 || d.subgroup_size > 64) missing.push_back("subgroup size 8..64");
   if (!d.push_descriptors) missing.push_back(VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);
+  if (!d.buffer_address) missing.push_back("bufferDeviceAddress");
   for (size_t i = 0; i < missing.size(); ++i) d.missing += (i ? ", " : "") + missing[i];
   return d;
 }
@@ -426,6 +428,7 @@ Context create_context(const ContextOptions& options) {
   f12.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES;
   f12.shaderBufferInt64Atomics = VK_TRUE;
   f12.shaderSharedInt64Atomics = VK_FALSE;
+  f12.bufferDeviceAddress = VK_TRUE;
   VkPhysicalDeviceFeatures2 f{};
   f.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2;
   f.pNext = &f12;

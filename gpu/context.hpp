@@ -33,6 +33,7 @@ struct DeviceInfo {
   bool timestamps = false;            // compute queue has timestampValidBits > 0
   bool subgroup_ops = false;          // basic + arithmetic + ballot subgroup ops in compute shaders
   bool push_descriptors = false;      // VK_KHR_push_descriptor
+  bool buffer_address = false;        // bufferDeviceAddress (the triangle buffers, shaders/tri_refs.glsl)
   uint64_t max_storage_buffer_range = 0;
   uint32_t subgroup_size = 0;
   uint32_t max_shared_memory = 0;     // maxComputeSharedMemorySize

@@ -233,8 +233,8 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     if (profile_kernels) st.pass_log = create_readback(ctx_, 4 * kPassLog, &st.pass_log_host);
   }
   if (n < 3 || !first_triangle(st)) {  // nothing to triangulate: no slots
-    st.tri.verts = create_buffer(ctx_, 0, "tri_verts");
-    st.tri.nbrs = create_buffer(ctx_, 0, "tri_nbrs");
+    st.tri.verts = create_addressed_buffer(ctx_, 0, "tri_verts");
+    st.tri.nbrs = create_addressed_buffer(ctx_, 0, "tri_nbrs");
     return std::move(st.tri);
   }
   start(st);
@@ -332,8 +332,8 @@ uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
 void DelaunayBuilder::start(State& st) const {
   const uint32_t n = st.n, slots = slot_capacity(n);
   st.tri.capacity = slots;
-  st.tri.verts = create_buffer(ctx_, uint64_t(slots) * 12, "tri_verts");
-  st.tri.nbrs = create_buffer(ctx_, uint64_t(slots) * 12, "tri_nbrs");
+  st.tri.verts = create_addressed_buffer(ctx_, uint64_t(slots) * 12, "tri_verts");
+  st.tri.nbrs = create_addressed_buffer(ctx_, uint64_t(slots) * 12, "tri_nbrs");
   st.loc = scratch(kPoints4[0], uint64_t(n) * 4, "dt loc");
   st.list = scratch(kPoints4[1], uint64_t(n) * 4, "dt list");
   st.flip[0] = scratch(kSlots4[1], uint64_t(slots) * 4, "dt flip list 0");

@@ -10,6 +10,8 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <unordered_map>
+#include <unordered_set>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -51,6 +53,7 @@ Pass& Pass::operator=(Pass&& o) noexcept {
   name = std::move(o.name);
   buffers = o.buffers;
   push_size = o.push_size;
+  addressed = o.addressed;
   set_layout = std::exchange(o.set_layout, VK_NULL_HANDLE);
   layout = std::exchange(o.layout, VK_NULL_HANDLE);
   pipeline_ = std::exchange(o.pipeline_, VK_NULL_HANDLE);
@@ -183,6 +186,44 @@ void print_statistics(const Context& ctx, const std::string& name, VkPipeline pi
   }
 }
 
+// Bit i set when the shader's binding i is a block holding a buffer reference (a PhysicalStorageBuffer
+// pointer): the recorder binds an address there, not the buffer (gpu/recorder.cpp).
+uint32_t addressed_bindings(std::span<const uint32_t> code) {
+  constexpr uint32_t kOpTypeStruct = 30, kOpTypePointer = 32, kOpVariable = 59, kOpDecorate = 71;
+  constexpr uint32_t kDecorationBinding = 33, kPhysicalStorageBuffer = 5349;
+  std::unordered_map<uint32_t, uint32_t> pointee, binding_of;  // pointer type -> pointee; variable -> binding
+  std::unordered_map<uint32_t, uint32_t> variable_type;
+  std::unordered_set<uint32_t> address_pointers, address_structs;
+  std::vector<std::pair<uint32_t, std::vector<uint32_t>>> structs;
+  for (size_t i = 5; i < code.size();) {  // after the header
+    const uint32_t words = code[i] >> 16, op = code[i] & 0xFFFF;
+    if (words == 0 || i + words > code.size()) break;
+    const uint32_t* w = &code[i];
+    if (op == kOpTypePointer && words >= 4) {
+      pointee[w[1]] = w[3];
+      if (w[2] == kPhysicalStorageBuffer) address_pointers.insert(w[1]);
+    } else if (op == kOpTypeStruct) {
+      structs.push_back({w[1], std::vector<uint32_t>(w + 2, w + words)});
+    } else if (op == kOpVariable && words >= 4) {
+      variable_type[w[2]] = w[1];
+    } else if (op == kOpDecorate && words >= 4 && w[2] == kDecorationBinding) {
+      binding_of[w[1]] = w[3];
+    }
+    i += words;
+  }
+  for (const auto& [id, members] : structs)
+    for (uint32_t m : members)
+      if (address_pointers.count(m)) address_structs.insert(id);
+  uint32_t mask = 0;
+  for (const auto& [var, binding] : binding_of) {
+    auto type = variable_type.find(var);
+    if (type == variable_type.end() || binding >= 32) continue;
+    auto block = pointee.find(type->second);
+    if (block != pointee.end() && address_structs.count(block->second)) mask |= 1u << binding;
+  }
+  return mask;
+}
+
 }  // namespace
 
 Pass create_pass(const Context& ctx, const PassDesc& desc) {
@@ -192,6 +233,7 @@ Pass create_pass(const Context& ctx, const PassDesc& desc) {
   pass.name = desc.name;
   pass.buffers = desc.buffers;
   pass.push_size = desc.push_size;
+  pass.addressed = addressed_bindings(code);
 
   std::vector<VkDescriptorSetLayoutBinding> bindings(desc.buffers);
   for (uint32_t i = 0; i < desc.buffers; ++i)

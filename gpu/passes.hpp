@@ -51,6 +51,7 @@ struct Pass {
   std::string name;
   uint32_t buffers = 0;
   uint32_t push_size = 0;
+  uint32_t addressed = 0;  // bit i: binding i holds a buffer's device address (shaders/tri_refs.glsl)
   VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
   VkPipelineLayout layout = VK_NULL_HANDLE;
 

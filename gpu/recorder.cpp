@@ -85,12 +85,25 @@ void Recorder::bind(const Pass& pass, std::initializer_list<Binding> bindings, c
     throw DeviceError("pass '" + pass.name + "' declares " + std::to_string(pass.buffers) + " buffers, given " +
                       std::to_string(bindings.size()));
   if (pass.push_size && !push) throw DeviceError("pass '" + pass.name + "' needs push constants");
-  barrier();
-  vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pass.handle());
   std::vector<VkDescriptorBufferInfo> infos;
-  std::vector<VkWriteDescriptorSet> writes;
   infos.reserve(bindings.size());
-  for (const Binding& b : bindings) infos.push_back({b.buffer, b.offset, b.range});
+  for (const Binding& b : bindings) {
+    const uint32_t i = uint32_t(infos.size());
+    const bool wants = (pass.addressed >> i) & 1u;
+    if (wants != (b.address != 0))
+      throw DeviceError("pass '" + pass.name + "' binding " + std::to_string(i) +
+                        (wants ? " takes a buffer address, given a plain buffer"
+                               : " takes a plain buffer, given one bound by its address"));
+    if (b.address) {
+      const VkDeviceSize at = address_cell(b.address);
+      infos.push_back({cells_->buffer, at, 8});
+    } else {
+      infos.push_back({b.buffer, b.offset, b.range});
+    }
+  }
+  barrier();  // also orders the cells' writes before the dispatch
+  vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pass.handle());
+  std::vector<VkWriteDescriptorSet> writes;
   for (uint32_t i = 0; i < infos.size(); ++i) {
     VkWriteDescriptorSet w{};
     w.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET;
@@ -104,6 +117,25 @@ void Recorder::bind(const Pass& pass, std::initializer_list<Binding> bindings, c
     ctx_.cmd_push_descriptor_set(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pass.layout, 0,
                                  static_cast<uint32_t>(writes.size()), writes.data());
   if (pass.push_size) vkCmdPushConstants(cmd_, pass.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, pass.push_size, push);
+}
+
+// Cells of one recording: written inline (vkCmdUpdateBuffer) before their first use, read-only afterwards.
+VkDeviceSize Recorder::address_cell(VkDeviceAddress address) {
+  for (const auto& [a, at] : cell_of_)
+    if (a == address) return at;
+  const VkDeviceSize stride = std::max<VkDeviceSize>(8, ctx_.props.limits.minStorageBufferOffsetAlignment);
+  const VkDeviceSize at = VkDeviceSize(cell_of_.size()) * stride;
+  if (!cells_ || at + 8 > cells_->size) {
+    // A fresh block: the one before keeps its cells until submit.
+    cells_ = &temp(4096, "address cells");
+    cell_of_.clear();
+    return address_cell(address);
+  }
+  begin();
+  vkCmdUpdateBuffer(cmd_, cells_->buffer, at, 8, &address);
+  any_ = true;
+  cell_of_.push_back({address, at});
+  return at;
 }
 
 void Recorder::dispatch(const Pass& pass, std::initializer_list<Binding> bindings, const void* push, uint32_t gx,
@@ -188,6 +220,8 @@ void Recorder::submit() {
   for (Buffer& b : temps_)
     if (b.size <= kPooledTempBytes) pool_of(ctx_).free.push_back(std::move(b));
   temps_.clear();
+  cells_ = nullptr;
+  cell_of_.clear();
 }
 
 }  // namespace cdtgpu::gpu

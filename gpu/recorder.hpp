@@ -9,6 +9,8 @@
 #include <deque>
 #include <initializer_list>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "gpu/buffers.hpp"
 #include "gpu/context.hpp"
@@ -17,12 +19,16 @@
 namespace cdtgpu::gpu {
 
 // A storage-buffer binding: a whole buffer or a range of it (offset must respect minStorageBufferOffsetAlignment).
+// A buffer made by create_addressed_buffer is bound by its address (plus the offset): the recorder writes it
+// into a small buffer of its own and binds that, and the pass must declare the binding so (Pass::addressed).
 struct Binding {
   VkBuffer buffer = VK_NULL_HANDLE;
   VkDeviceSize offset = 0;
   VkDeviceSize range = VK_WHOLE_SIZE;
-  Binding(const Buffer& b) : buffer(b.buffer) {}  // NOLINT: implicit on purpose, {a, b, c} reads well
-  Binding(const Buffer& b, VkDeviceSize offset, VkDeviceSize range) : buffer(b.buffer), offset(offset), range(range) {}
+  VkDeviceAddress address = 0;
+  Binding(const Buffer& b) : buffer(b.buffer), address(b.address) {}  // NOLINT: implicit on purpose, {a, b, c} reads well
+  Binding(const Buffer& b, VkDeviceSize offset, VkDeviceSize range)
+      : buffer(b.buffer), offset(offset), range(range), address(b.address ? b.address + offset : 0) {}
 };
 
 class Recorder {
@@ -79,6 +85,10 @@ class Recorder {
   bool recording_ = false;
   bool any_ = false;  // a command has been recorded since begin
   std::deque<Buffer> temps_;
+  // Addresses written for address bindings in this recording: one 8-byte cell each, in cells_.
+  const Buffer* cells_ = nullptr;
+  std::vector<std::pair<VkDeviceAddress, VkDeviceSize>> cell_of_;
+  VkDeviceSize address_cell(VkDeviceAddress address);
 };
 
 }  // namespace cdtgpu::gpu

@@ -61,8 +61,8 @@ GpuTriangulation upload_triangulation(const Context& ctx, const HostTriangulatio
   g.num_slots = uint32_t(host.verts.size() / 3);
   g.capacity = std::max(capacity, g.num_slots);
   g.points = upload_new(ctx, host.xy, "points");
-  g.verts = create_buffer(ctx, uint64_t(g.capacity) * 3 * sizeof(uint32_t), "tri_verts");
-  g.nbrs = create_buffer(ctx, uint64_t(g.capacity) * 3 * sizeof(uint32_t), "tri_nbrs");
+  g.verts = create_addressed_buffer(ctx, uint64_t(g.capacity) * 3 * sizeof(uint32_t), "tri_verts");
+  g.nbrs = create_addressed_buffer(ctx, uint64_t(g.capacity) * 3 * sizeof(uint32_t), "tri_nbrs");
   if (g.num_slots) {
     upload(ctx, g.verts, host.verts.data(), host.verts.size() * sizeof(uint32_t));
     upload(ctx, g.nbrs, host.nbrs.data(), host.nbrs.size() * sizeof(uint32_t));

@@ -7,10 +7,12 @@
 #include "layout.h"
 #include "common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CANONICAL_WG) in;
 layout(std430, binding = 0) readonly buffer Buckets { uint bucket[]; };
 layout(std430, binding = 1) readonly buffer Offsets { uint offsets[]; };
-layout(std430, binding = 2) buffer Triangles { uint tris[]; };
+layout(std430, binding = 2) restrict readonly buffer TrianglesAt { TriWords tris_at; };
+#define tris(i) TRI_WORD(TriWords, tris_at, i)
 layout(std430, binding = 3) buffer Count { uint count[]; };
 layout(push_constant) uniform Push { CanonicalKeysPush p; };
 
@@ -25,13 +27,13 @@ void main() {
   }
   uint base = offsets[a];
   for (uint i = 1u; i < n; ++i) {
-    uint b = tris[3u * (base + i) + 1u], c = tris[3u * (base + i) + 2u];
+    uint b = tris(3u * (base + i) + 1u), c = tris(3u * (base + i) + 2u);
     uint j = i;
-    for (; j > 0u && tris[3u * (base + j - 1u) + 1u] > b; --j) {
-      tris[3u * (base + j) + 1u] = tris[3u * (base + j - 1u) + 1u];
-      tris[3u * (base + j) + 2u] = tris[3u * (base + j - 1u) + 2u];
+    for (; j > 0u && tris(3u * (base + j - 1u) + 1u) > b; --j) {
+      tris(3u * (base + j) + 1u) = tris(3u * (base + j - 1u) + 1u);
+      tris(3u * (base + j) + 2u) = tris(3u * (base + j - 1u) + 2u);
     }
-    tris[3u * (base + j) + 1u] = b;
-    tris[3u * (base + j) + 2u] = c;
+    tris(3u * (base + j) + 1u) = b;
+    tris(3u * (base + j) + 2u) = c;
   }
 }

@@ -10,8 +10,10 @@
 #include "common.glsl"
 #include "subgroup_append.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CANONICAL_WG) in;
-layout(std430, binding = 0) readonly buffer Verts { uint verts[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { TriWordsR verts_at; };
+#define verts(i) TRI_WORD(TriWordsR, verts_at, i)
 layout(std430, binding = 1) buffer Buckets { uint bucket[]; };  // per vertex, zeroed before
 layout(std430, binding = 2) writeonly buffer Rank { uint rank[]; };
 layout(std430, binding = 3) buffer Count { uint count[]; };

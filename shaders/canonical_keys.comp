@@ -13,8 +13,10 @@
 #include "common.glsl"
 #include "subgroup_append.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CANONICAL_WG) in;
-layout(std430, binding = 0) readonly buffer Verts { uint verts[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { TriWordsR verts_at; };
+#define verts(i) TRI_WORD(TriWordsR, verts_at, i)
 layout(std430, binding = 1) writeonly buffer Keys { uvec2 keys[]; };  // (low word, high word)
 layout(push_constant) uniform Push { CanonicalKeysPush p; };
 

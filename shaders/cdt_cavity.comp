@@ -20,10 +20,13 @@
 #include "predicates.glsl"
 #include "cdt_common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
 layout(std430, binding = 0) readonly buffer Points { dvec2 pts[]; };
-layout(std430, binding = 1) buffer Verts { uint verts[]; };
-layout(std430, binding = 2) buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 1) restrict readonly buffer VertsAt { TriWords verts_at; };
+#define verts(i) TRI_WORD(TriWords, verts_at, i)
+layout(std430, binding = 2) restrict readonly buffer NbrsAt { TriWords nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWords, nbrs_at, i)
 layout(std430, binding = 3) readonly buffer Cons { uvec2 cons[]; };
 layout(std430, binding = 4) buffer Start { uint start[]; };
 layout(std430, binding = 5) readonly buffer Counts { uint counts[]; };
@@ -57,11 +60,11 @@ uint chain_len[2];
 void add_outer(uint side, uint t, uint e) {
   uint j = chain_len[side] - 2u;  // the edge ending at the chain's newest vertex
   CHAIN_AT(side, j) = NBR(t, e);
-  CHAIN_OUT(side, j) = nbrs[3u * t + e] | (((cflags[t] >> e) & 1u) << 31);  // NBR codes use 30 bits
+  CHAIN_OUT(side, j) = nbrs(3u * t + e) | (((cflags[t] >> e) & 1u) << 31);  // NBR codes use 30 bits
 }
 
 // The code of the same edge seen from the triangle beyond it.
-uint beyond(uint code) { return nbrs[3u * NBR_TRI(code) + NBR_EDGE(code)]; }
+uint beyond(uint code) { return nbrs(3u * NBR_TRI(code) + NBR_EDGE(code)); }
 
 void add_vertex(uint side, uint v) { CHAIN_V(side, chain_len[side]++) = v; }
 
@@ -89,7 +92,7 @@ void main() {
   // The chains. T_0 = (a, R, L) from a's corner k; the segment leaves it across R-L.
   uint a = cons[c].x, b = cons[c].y;
   uint t = NBR_TRI(table[base].edge), k = NBR_EDGE(table[base].edge);
-  uint right = verts[3u * t + cdt_next(k)], left = verts[3u * t + cdt_prev(k)];
+  uint right = verts(3u * t + cdt_next(k)), left = verts(3u * t + cdt_prev(k));
   chain_len[0] = 0u;
   chain_len[1] = 0u;
   add_vertex(0u, a);
@@ -101,7 +104,7 @@ void main() {
   for (uint i = 0u; i < k_rows; ++i) {
     // T_{i+1} = (w, L, R) from its apex corner ku, entered across L-R.
     uint code = beyond(table[base + i].edge);
-    uint u = NBR_TRI(code), ku = NBR_EDGE(code), w = verts[3u * u + ku];
+    uint u = NBR_TRI(code), ku = NBR_EDGE(code), w = verts(3u * u + ku);
     uint side = table[base + i].info & CDT_SIDE_MASK;
     if (side == CDT_SIDE_END) {
       add_vertex(0u, b);
@@ -146,9 +149,9 @@ void main() {
       uint vapex = CHAIN_V(side, side == 0u ? apex : n - 1u - apex);
       uint s = made < k_rows ? NBR_TRI(table[base + made].edge) : t_last;  // the rows are not rewritten yet
       ++made;
-      verts[3u * s] = vi;
-      verts[3u * s + 1u] = vj;
-      verts[3u * s + 2u] = vapex;
+      verts(3u * s) = vi;
+      verts(3u * s + 1u) = vj;
+      verts(3u * s + 2u) = vapex;
       stamp[s] = p.round;
       partner[s] = CDT_NEVER;
       vmap[vi] = s;
@@ -159,13 +162,13 @@ void main() {
         if (side == 0u) {
           top = s;
         } else {  // the constraint a-b, between the two top triangles
-          nbrs[3u * s + 2u] = NBR(top, 2u);
-          nbrs[3u * top + 2u] = NBR(s, 2u);
+          nbrs(3u * s + 2u) = NBR(top, 2u);
+          nbrs(3u * top + 2u) = NBR(s, 2u);
         }
         flags = 4u;
       } else {
-        nbrs[3u * s + 2u] = across;
-        nbrs[3u * NBR_TRI(across) + NBR_EDGE(across)] = NBR(s, 2u);
+        nbrs(3u * s + 2u) = across;
+        nbrs(3u * NBR_TRI(across) + NBR_EDGE(across)) = NBR(s, 2u);
       }
       // Edge 0 = chain[j]-apex (interval apex..j), edge 1 = apex-chain[i] (interval i..apex).
       for (uint e = 0u; e < 2u; ++e) {
@@ -179,7 +182,7 @@ void main() {
         // A chain edge: chain position lo of this polygon is chain edge lo (left) or n - 2 - lo (right).
         uint ce = side == 0u ? lo : n - 2u - lo;
         uint old = CHAIN_OUT(side, ce);
-        nbrs[3u * s + e] = old & 0x7FFFFFFFu;
+        nbrs(3u * s + e) = old & 0x7FFFFFFFu;
         flags |= (old >> 31) << e;
         uint at = CHAIN_AT(side, ce);
         remap[3u * NBR_TRI(at) + NBR_EDGE(at)] = NBR(s, e);

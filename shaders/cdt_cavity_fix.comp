@@ -7,8 +7,10 @@
 #include "layout_cdt.h"
 #include "common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
-layout(std430, binding = 0) buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 0) restrict readonly buffer NbrsAt { TriWords nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWords, nbrs_at, i)
 layout(std430, binding = 1) readonly buffer Remap { uint remap[]; };
 layout(std430, binding = 2) readonly buffer Stamp { uint stamp[]; };
 layout(std430, binding = 3) readonly buffer Fixes { uint fixes[]; };
@@ -20,10 +22,10 @@ void main() {
   if (i >= ctl[CDT_CTL_FIXES]) return;
   uint ours = fixes[i];
   uint t = NBR_TRI(ours), e = NBR_EDGE(ours);
-  uint code = nbrs[3u * t + e];
+  uint code = nbrs(3u * t + e);
   uint x = NBR_TRI(code), j = NBR_EDGE(code);
   if (stamp[x] == p.round)
-    nbrs[3u * t + e] = remap[3u * x + j];
+    nbrs(3u * t + e) = remap[3u * x + j];
   else
-    nbrs[3u * x + j] = ours;
+    nbrs(3u * x + j) = ours;
 }

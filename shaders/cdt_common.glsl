@@ -41,25 +41,25 @@ uint cdt_prev(uint k) { return k == 0u ? 2u : k - 1u; }
 // another flip is writing. Constrained-edge bits move with their edges. Caller owns both slots this round.
 void cdt_flip(uint t1, uint k1, uint t2, uint k2, uint round) {
   uint a1 = cdt_next(k1), b1 = cdt_prev(k1), a2 = cdt_next(k2), b2 = cdt_prev(k2);
-  uint p = verts[3u * t1 + k1], v1 = verts[3u * t1 + a1], v2 = verts[3u * t1 + b1], s = verts[3u * t2 + k2];
-  uint nA = nbrs[3u * t1 + b1];  // edge p-v1
-  uint nB = nbrs[3u * t1 + a1];  // edge v2-p
-  uint nC = nbrs[3u * t2 + b2];  // edge s-v2
-  uint nD = nbrs[3u * t2 + a2];  // edge v1-s
+  uint p = verts(3u * t1 + k1), v1 = verts(3u * t1 + a1), v2 = verts(3u * t1 + b1), s = verts(3u * t2 + k2);
+  uint nA = nbrs(3u * t1 + b1);  // edge p-v1
+  uint nB = nbrs(3u * t1 + a1);  // edge v2-p
+  uint nC = nbrs(3u * t2 + b2);  // edge s-v2
+  uint nD = nbrs(3u * t2 + a2);  // edge v1-s
   uint f1 = cflags[t1], f2 = cflags[t2];
   uint fA = (f1 >> b1) & 1u, fB = (f1 >> a1) & 1u, fC = (f2 >> b2) & 1u, fD = (f2 >> a2) & 1u;
-  verts[3u * t1] = p;
-  verts[3u * t1 + 1u] = v1;
-  verts[3u * t1 + 2u] = s;
-  verts[3u * t2] = s;
-  verts[3u * t2 + 1u] = v2;
-  verts[3u * t2 + 2u] = p;
-  nbrs[3u * t1] = nD;
-  nbrs[3u * t1 + 1u] = NBR(t2, 1u);
-  nbrs[3u * t1 + 2u] = nA;
-  nbrs[3u * t2] = nB;
-  nbrs[3u * t2 + 1u] = NBR(t1, 1u);
-  nbrs[3u * t2 + 2u] = nC;
+  verts(3u * t1) = p;
+  verts(3u * t1 + 1u) = v1;
+  verts(3u * t1 + 2u) = s;
+  verts(3u * t2) = s;
+  verts(3u * t2 + 1u) = v2;
+  verts(3u * t2 + 2u) = p;
+  nbrs(3u * t1) = nD;
+  nbrs(3u * t1 + 1u) = NBR(t2, 1u);
+  nbrs(3u * t1 + 2u) = nA;
+  nbrs(3u * t2) = nB;
+  nbrs(3u * t2 + 1u) = NBR(t1, 1u);
+  nbrs(3u * t2 + 2u) = nC;
   cflags[t1] = fD | (fA << 2);
   cflags[t2] = fB | (fC << 2);
   remap[3u * t1 + b1] = NBR(t1, 2u);

@@ -16,10 +16,13 @@
 #include "predicates.glsl"
 #include "cdt_common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
 layout(std430, binding = 0) readonly buffer Points { dvec2 pts[]; };
-layout(std430, binding = 1) readonly buffer Verts { uint verts[]; };
-layout(std430, binding = 2) readonly buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 1) restrict readonly buffer VertsAt { TriWordsR verts_at; };
+#define verts(i) TRI_WORD(TriWordsR, verts_at, i)
+layout(std430, binding = 2) restrict readonly buffer NbrsAt { TriWordsR nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWordsR, nbrs_at, i)
 layout(std430, binding = 3) buffer Table { CdtCross table[]; };
 layout(std430, binding = 4) readonly buffer Owner { uint64_t owner[]; };
 layout(std430, binding = 5) buffer Claim { uint64_t claim[]; };
@@ -34,7 +37,7 @@ void main() {
   CdtCross e = table[g];
   if (e.cons == CDT_NEVER) return;  // an empty row of the fixed-slot layout
   uint t1 = NBR_TRI(e.edge), k1 = NBR_EDGE(e.edge);
-  uint code2 = nbrs[3u * t1 + k1];
+  uint code2 = nbrs(3u * t1 + k1);
   uint t2 = NBR_TRI(code2), k2 = NBR_EDGE(code2);
   uint64_t okey = cdt_owner_key(p.round, e.cons);
   if (p.domain != 0u && (owner[t1] != okey || owner[t2] != okey)) return;
@@ -47,8 +50,8 @@ void main() {
   }
   uint side = e.info & CDT_SIDE_MASK;
   bool removes = (e.info & CDT_FIRST) != 0u || side == CDT_SIDE_END || (table[g - 1u].info & CDT_SIDE_MASK) == side;
-  dvec2 P = pts[verts[3u * t1 + k1]], V1 = pts[verts[3u * t1 + cdt_next(k1)]];
-  dvec2 V2 = pts[verts[3u * t1 + cdt_prev(k1)]], S = pts[verts[3u * t2 + k2]];
+  dvec2 P = pts[verts(3u * t1 + k1)], V1 = pts[verts(3u * t1 + cdt_next(k1))];
+  dvec2 V2 = pts[verts(3u * t1 + cdt_prev(k1))], S = pts[verts(3u * t2 + k2)];
   // New triangles (p, v1, s) and (s, v2, p): strictly counter-clockwise iff the quadrilateral is strictly convex.
   bool convex = true;
   for (uint j = 0u; j < 2u && convex; ++j) convex = pred_orient2d(j == 0u ? P : S, j == 0u ? V1 : V2, j == 0u ? S : P) > 0;

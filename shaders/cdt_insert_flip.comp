@@ -11,9 +11,12 @@
 #include "common.glsl"
 #include "subgroup_append.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
-layout(std430, binding = 0) buffer Verts { uint verts[]; };
-layout(std430, binding = 1) buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { TriWords verts_at; };
+#define verts(i) TRI_WORD(TriWords, verts_at, i)
+layout(std430, binding = 1) restrict readonly buffer NbrsAt { TriWords nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWords, nbrs_at, i)
 layout(std430, binding = 2) readonly buffer Table { CdtCross table[]; };
 layout(std430, binding = 3) readonly buffer Claim { uint64_t claim[]; };
 layout(std430, binding = 4) buffer CFlags { uint cflags[]; };
@@ -37,7 +40,7 @@ void main() {
   if (p.one_per_constraint != 0u && first_row[table[g].cons] != key) return;
   uint t1 = NBR_TRI(table[g].edge), k1 = NBR_EDGE(table[g].edge);
   if (claim[t1] != key) return;
-  uint code2 = nbrs[3u * t1 + k1];
+  uint code2 = nbrs(3u * t1 + k1);
   uint t2 = NBR_TRI(code2), k2 = NBR_EDGE(code2);
   if (claim[t2] != key) return;
   cdt_flip(t1, k1, t2, k2, p.round);

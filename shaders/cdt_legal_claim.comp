@@ -12,10 +12,13 @@
 #include "predicates.glsl"
 #include "cdt_common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
 layout(std430, binding = 0) readonly buffer Points { dvec2 pts[]; };
-layout(std430, binding = 1) readonly buffer Verts { uint verts[]; };
-layout(std430, binding = 2) readonly buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 1) restrict readonly buffer VertsAt { TriWordsR verts_at; };
+#define verts(i) TRI_WORD(TriWordsR, verts_at, i)
+layout(std430, binding = 2) restrict readonly buffer NbrsAt { TriWordsR nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWordsR, nbrs_at, i)
 layout(std430, binding = 3) readonly buffer CFlags { uint cflags[]; };
 layout(std430, binding = 4) readonly buffer QStamp { uint qstamp[]; };
 layout(std430, binding = 5) readonly buffer Queue { uint queue[]; };
@@ -30,11 +33,11 @@ void main() {
   uint t = queue[j / 3u], k = j % 3u;
   cand[j] = 0u;
   if (((cflags[t] >> k) & 1u) != 0u) return;
-  uint code = nbrs[3u * t + k];
+  uint code = nbrs(3u * t + k);
   uint u = NBR_TRI(code);
   if (qstamp[u] == p.round && u < t) return;
-  uint a = verts[3u * t + k], b = verts[3u * t + cdt_next(k)], c = verts[3u * t + cdt_prev(k)];
-  uint d = verts[3u * u + NBR_EDGE(code)];
+  uint a = verts(3u * t + k), b = verts(3u * t + cdt_next(k)), c = verts(3u * t + cdt_prev(k));
+  uint d = verts(3u * u + NBR_EDGE(code));
   if (a == INF_VERTEX || b == INF_VERTEX || c == INF_VERTEX || d == INF_VERTEX) return;
   if (pred_incircle_perturbed(pts[a], pts[b], pts[c], pts[d]) <= 0) return;
   uint64_t key = cdt_claim_key(p.round, 0u, NBR(t, k));

@@ -12,9 +12,12 @@
 #include "common.glsl"
 #include "subgroup_append.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
-layout(std430, binding = 0) buffer Verts { uint verts[]; };
-layout(std430, binding = 1) buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { TriWords verts_at; };
+#define verts(i) TRI_WORD(TriWords, verts_at, i)
+layout(std430, binding = 1) restrict readonly buffer NbrsAt { TriWords nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWords, nbrs_at, i)
 layout(std430, binding = 2) buffer CFlags { uint cflags[]; };
 layout(std430, binding = 3) writeonly buffer Remap { uint remap[]; };
 layout(std430, binding = 4) writeonly buffer Stamp { uint stamp[]; };
@@ -48,7 +51,7 @@ void main() {
   bool won = false;
   uint u = 0u, ku = 0u;
   if (claim[t] == key) {  // this slot is ours: its codes are stable
-    uint code = nbrs[3u * t + k];
+    uint code = nbrs(3u * t + k);
     u = NBR_TRI(code);
     ku = NBR_EDGE(code);
     won = claim[u] == key;

@@ -12,8 +12,10 @@
 #include "common.glsl"
 #include "subgroup_append.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
-layout(std430, binding = 0) readonly buffer Verts { uint verts[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { TriWordsR verts_at; };
+#define verts(i) TRI_WORD(TriWordsR, verts_at, i)
 layout(std430, binding = 1) readonly buffer Stamp { uint stamp[]; };
 layout(std430, binding = 2) writeonly buffer QStamp { uint qstamp[]; };
 layout(std430, binding = 3) writeonly buffer Queue { uint queue[]; };
@@ -25,7 +27,7 @@ void main() {
   uint t = linear_group_id() * CDT_WG + gl_LocalInvocationIndex;
   if (t >= p.n) return;
   if (p.all == 0u && (stamp[t] == CDT_NEVER || (stamp[t] == 1u && partner[t] == CDT_NEVER))) return;
-  if (verts[3u * t] == INF_VERTEX || verts[3u * t + 1u] == INF_VERTEX || verts[3u * t + 2u] == INF_VERTEX) return;
+  if (verts(3u * t) == INF_VERTEX || verts(3u * t + 1u) == INF_VERTEX || verts(3u * t + 2u) == INF_VERTEX) return;
   qstamp[t] = p.round;
   uint at;
   SUBGROUP_APPEND(at, ctl[CDT_CTL_NEXT]);

@@ -5,8 +5,10 @@
 #include "layout_cdt.h"
 #include "common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
-layout(std430, binding = 0) readonly buffer Verts { uint verts[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { TriWordsR verts_at; };
+#define verts(i) TRI_WORD(TriWordsR, verts_at, i)
 layout(std430, binding = 1) buffer VMap { uint vmap[]; };
 layout(push_constant) uniform Push { CdtSlotsPush p; };
 
@@ -14,7 +16,7 @@ void main() {
   uint t = linear_group_id() * CDT_WG + gl_LocalInvocationIndex;
   if (t >= p.n) return;
   for (uint k = 0u; k < 3u; ++k) {
-    uint v = verts[3u * t + k];
+    uint v = verts(3u * t + k);
     if (v != INF_VERTEX) atomicMin(vmap[v], t);
   }
 }

@@ -26,10 +26,13 @@
 #include "predicates.glsl"
 #include "cdt_common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = CDT_WG) in;
 layout(std430, binding = 0) readonly buffer Points { dvec2 pts[]; };
-layout(std430, binding = 1) readonly buffer Verts { uint verts[]; };
-layout(std430, binding = 2) readonly buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 1) restrict readonly buffer VertsAt { TriWordsR verts_at; };
+#define verts(i) TRI_WORD(TriWordsR, verts_at, i)
+layout(std430, binding = 2) restrict readonly buffer NbrsAt { TriWordsR nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWordsR, nbrs_at, i)
 layout(std430, binding = 3) readonly buffer Cons { uvec2 cons[]; };
 layout(std430, binding = 4) buffer Start { uint start[]; };
 layout(std430, binding = 5) buffer Counts { uint counts[]; };
@@ -50,15 +53,15 @@ void report(uint code, uint what) {
 }
 
 uint corner_of(uint t, uint v) {
-  if (verts[3u * t] == v) return 0u;
-  if (verts[3u * t + 1u] == v) return 1u;
-  if (verts[3u * t + 2u] == v) return 2u;
+  if (verts(3u * t) == v) return 0u;
+  if (verts(3u * t + 1u) == v) return 1u;
+  if (verts(3u * t + 2u) == v) return 2u;
   return 3u;
 }
 
 // The constrained bit of edge k of slot t, on both of its sides.
 void mark_edge(uint t, uint k) {
-  uint code = nbrs[3u * t + k];
+  uint code = nbrs(3u * t + k);
   atomicOr(cflags[t], 1u << k);
   atomicOr(cflags[NBR_TRI(code)], 1u << NBR_EDGE(code));
 }
@@ -106,7 +109,7 @@ void main() {
         table[base + i] = CdtCross(row.x, c, row.y, 0u);
         if (p.domain != 0u) atomicMin(owner[NBR_TRI(row.x)], okey);
       }
-      if (p.domain != 0u) atomicMin(owner[NBR_TRI(nbrs[3u * NBR_TRI(row.x) + NBR_EDGE(row.x)])], okey);  // T_K
+      if (p.domain != 0u) atomicMin(owner[NBR_TRI(nbrs(3u * NBR_TRI(row.x) + NBR_EDGE(row.x)))], okey);  // T_K
       return;
     }
   } else {
@@ -148,7 +151,7 @@ void main() {
     dvec2 q, r;
     uint ask;
     if (!walking) {
-      uint v1 = verts[3u * t + cdt_next(k)], v2 = verts[3u * t + cdt_prev(k)];
+      uint v1 = verts(3u * t + cdt_next(k)), v2 = verts(3u * t + cdt_prev(k));
       if (v1 == b || v2 == b) {
         edge_t = t;
         edge_k = v1 == b ? cdt_prev(k) : cdt_next(k);
@@ -169,7 +172,7 @@ void main() {
         continue;
       }
       if (decided) {  // turn to the next triangle around a, across the edge a-v2
-        uint code = nbrs[3u * t + cdt_next(k)];
+        uint code = nbrs(3u * t + cdt_next(k));
         t = NBR_TRI(code);
         k = cdt_next(NBR_EDGE(code));
         o1 = v2 == INF_VERTEX ? 2 : o2;
@@ -180,10 +183,10 @@ void main() {
       q = pts[ask == ASK_V1 ? v1 : v2];
       r = pb;
     } else {
-      uint code = nbrs[3u * t + ke];
+      uint code = nbrs(3u * t + ke);
       u = NBR_TRI(code);
       ku = NBR_EDGE(code);
-      uint w = verts[3u * u + ku];
+      uint w = verts(3u * u + ku);
       if (w == INF_VERTEX) {
         report(CDT_ERR_OUTSIDE, c);
         found = FOUND_ERROR;

@@ -7,8 +7,10 @@
 #include "layout_dt.h"
 #include "common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = DT_WG) in;
-layout(std430, binding = 0) readonly buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 0) restrict readonly buffer NbrsAt { TriWordsR nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWordsR, nbrs_at, i)
 layout(std430, binding = 1) readonly buffer Loc { uint loc[]; };
 layout(std430, binding = 2) buffer Pick { uint pickw[]; };  // pick[t] as words: [2t] point, [2t+1] key
 layout(std430, binding = 3) buffer Claim { uint64_t claim[]; };

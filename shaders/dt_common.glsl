@@ -130,8 +130,8 @@ uint dt_walk(uint t, dvec2 q, uint max_steps, out bool undecided) {
   bool enter = true;
   for (;;) {
     if (enter) {  // a new slot: its corners and neighbours in one round trip, the coordinates in a second
-      v = uvec3(verts[3u * t], verts[3u * t + 1u], verts[3u * t + 2u]);
-      nb = uvec3(nbrs[3u * t], nbrs[3u * t + 1u], nbrs[3u * t + 2u]);
+      v = uvec3(verts(3u * t), verts(3u * t + 1u), verts(3u * t + 2u));
+      nb = uvec3(nbrs(3u * t), nbrs(3u * t + 1u), nbrs(3u * t + 2u));
       inf = dt_inf_corner(v.x, v.y, v.z);
       c0 = v.x == INF_VERTEX ? q : xy[v.x];
       c1 = v.y == INF_VERTEX ? q : xy[v.y];
@@ -187,15 +187,15 @@ uint dt_walk(uint t, dvec2 q, uint max_steps, out bool undecided) {
 // choice changes the work, never the result.
 uint dt_bid_key(uint code, dvec2 q) {
   uint t = NBR_TRI(code), k = NBR_EDGE(code);
-  uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
+  uint v0 = verts(3u * t), v1 = verts(3u * t + 1u), v2 = verts(3u * t + 2u);
   uint inf = dt_inf_corner(v0, v1, v2);
   if (inf < 3u) {
-    dvec2 x = xy[verts[3u * t + dt_next(inf)]], y = xy[verts[3u * t + dt_prev(inf)]];
+    dvec2 x = xy[verts(3u * t + dt_next(inf))], y = xy[verts(3u * t + dt_prev(inf))];
     return dt_orderable(-float((y.x - x.x) * (q.y - x.y) - (y.y - x.y) * (q.x - x.x)));
   }
   dvec2 centre;
   if (k < 3u) {
-    centre = (xy[verts[3u * t + dt_next(k)]] + xy[verts[3u * t + dt_prev(k)]]) * 0.5lf;
+    centre = (xy[verts(3u * t + dt_next(k))] + xy[verts(3u * t + dt_prev(k))]) * 0.5lf;
   } else {
     dvec2 a = xy[v0], b = xy[v1] - a, c = xy[v2] - a;
     double dd = 2.0lf * (b.x * c.y - b.y * c.x);
@@ -241,9 +241,9 @@ int dt_check_slot(uint t, uint mode, uint m, out uint k_out, out uint uc_out) {
   uc_out = 0u;
   for (uint k = 0u; k < 3u; ++k) {
     if ((mode == DT_CHECK_ONLY && k != m) || (mode == DT_CHECK_SKIP && k == m)) continue;
-    uint c = verts[3u * t + k], a = verts[3u * t + dt_next(k)], b = verts[3u * t + dt_prev(k)];
-    uint uc = nbrs[3u * t + k];
-    uint d = verts[3u * NBR_TRI(uc) + NBR_EDGE(uc)];
+    uint c = verts(3u * t + k), a = verts(3u * t + dt_next(k)), b = verts(3u * t + dt_prev(k));
+    uint uc = nbrs(3u * t + k);
+    uint d = verts(3u * NBR_TRI(uc) + NBR_EDGE(uc));
     if (c == INF_VERTEX || d == INF_VERTEX) continue;
     bool finite = a != INF_VERTEX && b != INF_VERTEX;
     // (c, a, INF) has hull edge c->a; (c, INF, b) = (b, c, INF) has hull edge b->c.
@@ -424,17 +424,17 @@ bool dt_split_this_round(uint u) {
 }
 
 bool dt_fix_edge(uint q, uint e) {
-  uint c = nbrs[3u * q + e];
+  uint c = nbrs(3u * q + e);
   uint u = NBR_TRI(c), l = NBR_EDGE(c);
   if (!dt_split_this_round(u)) {
-    nbrs[3u * u + l] = NBR(q, e);
+    nbrs(3u * u + l) = NBR(q, e);
     return true;
   }
-  uint x = verts[3u * q + dt_next(e)], y = verts[3u * q + dt_prev(e)];
-  if (verts[3u * u + dt_next(l)] == y && verts[3u * u + dt_prev(l)] == x) return q < u;
+  uint x = verts(3u * q + dt_next(e)), y = verts(3u * q + dt_prev(e));
+  if (verts(3u * u + dt_next(l)) == y && verts(3u * u + dt_prev(l)) == x) return q < u;
   uint inf = info[u];
   uint f = NBR_EDGE(inf) == DT_INSIDE ? NBR(NBR_TRI(inf) + l - 1u, l) : inf;
-  nbrs[3u * q + e] = f;
+  nbrs(3u * q + e) = f;
   return q < NBR_TRI(f);
 }
 #endif

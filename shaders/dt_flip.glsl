@@ -24,17 +24,22 @@
 
 #ifdef DT_TAIL
 #define DT_COHERENT coherent
+#define DT_TRI_WORDS TriWordsC
 #define DT_EXACT 1
 #define DT_CHECK
 uint dt_epoch_now;  // the claim epoch of the pass being run (the tail's passes follow p.epoch)
 #define DT_EPOCH dt_epoch_now
 #else
 #define DT_COHERENT
+#define DT_TRI_WORDS TriWords
 #endif
 
+#include "tri_refs.glsl"
 layout(local_size_x = DT_WG) in;
-layout(std430, binding = 0) DT_COHERENT buffer Verts { uint verts[]; };
-layout(std430, binding = 1) DT_COHERENT buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { DT_TRI_WORDS verts_at; };
+#define verts(i) TRI_WORD(DT_TRI_WORDS, verts_at, i)
+layout(std430, binding = 1) restrict readonly buffer NbrsAt { DT_TRI_WORDS nbrs_at; };
+#define nbrs(i) TRI_WORD(DT_TRI_WORDS, nbrs_at, i)
 layout(std430, binding = 2) DT_COHERENT buffer Claim { uint64_t claim[]; };
 layout(std430, binding = 3) DT_COHERENT buffer Partner { uint partner[]; };
 layout(std430, binding = 4) DT_COHERENT buffer List0 { uint list0[]; };
@@ -102,8 +107,8 @@ uint dt_moved(uint n, uint l, out bool flips) {
 // the back pointer if that neighbour does not flip. Returns whether q's side checks the edge next pass: a
 // neighbour that flips too lists it from its side as well, and the smaller slot of the two checks it.
 bool link(uint q, uint e, uint c, uint f, bool flips) {
-  nbrs[3u * q + e] = f;
-  if (!flips) nbrs[3u * NBR_TRI(c) + NBR_EDGE(c)] = NBR(q, e);
+  nbrs(3u * q + e) = f;
+  if (!flips) nbrs(3u * NBR_TRI(c) + NBR_EDGE(c)) = NBR(q, e);
   return !flips || q < NBR_TRI(f);
 }
 
@@ -115,23 +120,23 @@ uint flip(uint src, uint i, out uint out_a, out uint out_b, out bool flipped) {
   uint entry = list_get(src, i);
   if (entry == DT_NONE || DT_ENTRY_MODE(entry) != DT_REQUEST) return 0u;
   uint t = DT_ENTRY_SLOT(entry), k = DT_ENTRY_EDGE(entry), k1 = dt_next(k), k2 = dt_prev(k);
-  uint c = verts[3u * t + k], tn1 = nbrs[3u * t + k1], tn2 = nbrs[3u * t + k2];  // read with the claim
+  uint c = verts(3u * t + k), tn1 = nbrs(3u * t + k1), tn2 = nbrs(3u * t + k2);  // read with the claim
   uint uc, w = winner_of(t, uc);
   if (w != NBR(t, k)) {  // lost: keep t unless a winner flips it
     out_a = DT_ENTRY(t, DT_CHECK_ALL, 0u);
     return w == DT_NONE ? 1u : 0u;
   }
   uint u = NBR_TRI(uc), j = NBR_EDGE(uc), j1 = dt_next(j), j2 = dt_prev(j);
-  uint d = verts[3u * u + j], un1 = nbrs[3u * u + j1], un2 = nbrs[3u * u + j2];
+  uint d = verts(3u * u + j), un1 = nbrs(3u * u + j1), un2 = nbrs(3u * u + j2);
   // Every read before the first write, so that the four neighbours' claim chains load side by side: a write
   // to nbrs could alias a later read of claim or partner as far as the compiler knows.
   bool f0, f1, f2, f3;
   uint m0 = dt_moved(NBR_TRI(un1), NBR_EDGE(un1), f0), m1 = dt_moved(NBR_TRI(tn2), NBR_EDGE(tn2), f1);
   uint m2 = dt_moved(NBR_TRI(tn1), NBR_EDGE(tn1), f2), m3 = dt_moved(NBR_TRI(un2), NBR_EDGE(un2), f3);
-  verts[3u * t + k2] = d;
-  verts[3u * u + j2] = c;
-  nbrs[3u * t + k1] = NBR(u, j1);
-  nbrs[3u * u + j1] = NBR(t, k1);
+  verts(3u * t + k2) = d;
+  verts(3u * u + j2) = c;
+  nbrs(3u * t + k1) = NBR(u, j1);
+  nbrs(3u * u + j1) = NBR(t, k1);
   bool ck = link(t, k, un1, m0, f0), ck2 = link(t, k2, tn2, m1, f1);
   bool cj = link(u, j, tn1, m2, f2), cj2 = link(u, j2, un2, m3, f3);
   flipped = true;

@@ -8,11 +8,14 @@
 #include "common.glsl"
 #include "dt_common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = DT_WG) in;
 layout(std430, binding = 0) readonly buffer Points { dvec2 xy[]; };
 layout(std430, binding = 1) readonly buffer Reduce { uint64_t red[]; };
-layout(std430, binding = 2) writeonly buffer Verts { uint verts[]; };
-layout(std430, binding = 3) writeonly buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 2) restrict readonly buffer VertsAt { TriWordsW verts_at; };
+#define verts(i) TRI_WORD(TriWordsW, verts_at, i)
+layout(std430, binding = 3) restrict readonly buffer NbrsAt { TriWordsW nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWordsW, nbrs_at, i)
 layout(std430, binding = 4) writeonly buffer Keys { uint keys[]; };
 layout(std430, binding = 5) writeonly buffer Ids { uint ids[]; };
 layout(push_constant) uniform Push { DtInitPush p; };
@@ -48,8 +51,8 @@ void main() {
                           NBR(1u, 1u), NBR(3u, 0u), NBR(0u, 1u),    //
                           NBR(2u, 1u), NBR(1u, 0u), NBR(0u, 2u));
     for (uint k = 0u; k < 12u; ++k) {
-      verts[k] = v[k];
-      nbrs[k] = n[k];
+      verts(k) = v[k];
+      nbrs(k) = n[k];
     }
   }
   dvec2 q = xy[i];

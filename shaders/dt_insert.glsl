@@ -14,7 +14,7 @@
 // list position).
 void dt_claim_bid(uint t) {
   uint k = NBR_EDGE(loc[pickw[2u * t]]);
-  uint sc = k < 3u ? nbrs[3u * t + k] : DT_NONE;
+  uint sc = k < 3u ? nbrs(3u * t + k) : DT_NONE;
   pickw[2u * t + 1u] = sc;
   atomicMin(claim[t], dt_claim_key(t));
   if (k < 3u) atomicMin(claim[NBR_TRI(sc)], dt_claim_key(t));
@@ -38,52 +38,52 @@ void dt_split_bid(uint t) {
   uint k = NBR_EDGE(loc[at]);
   uint X = p.base + 2u * DT_SPLIT_NUMBER(t, at), Y = X + 1u;
   if (k == DT_INSIDE) {
-    uint v0 = verts[3u * t], v1 = verts[3u * t + 1u], v2 = verts[3u * t + 2u];
-    uint n1 = nbrs[3u * t + 1u], n2 = nbrs[3u * t + 2u];
-    verts[3u * t] = pt;
-    nbrs[3u * t + 1u] = NBR(X, 0u);
-    nbrs[3u * t + 2u] = NBR(Y, 0u);
-    verts[3u * X] = v0;
-    verts[3u * X + 1u] = pt;
-    verts[3u * X + 2u] = v2;
-    nbrs[3u * X] = NBR(t, 1u);
-    nbrs[3u * X + 1u] = n1;
-    nbrs[3u * X + 2u] = NBR(Y, 1u);
-    verts[3u * Y] = v0;
-    verts[3u * Y + 1u] = v1;
-    verts[3u * Y + 2u] = pt;
-    nbrs[3u * Y] = NBR(t, 2u);
-    nbrs[3u * Y + 1u] = NBR(X, 2u);
-    nbrs[3u * Y + 2u] = n2;
+    uint v0 = verts(3u * t), v1 = verts(3u * t + 1u), v2 = verts(3u * t + 2u);
+    uint n1 = nbrs(3u * t + 1u), n2 = nbrs(3u * t + 2u);
+    verts(3u * t) = pt;
+    nbrs(3u * t + 1u) = NBR(X, 0u);
+    nbrs(3u * t + 2u) = NBR(Y, 0u);
+    verts(3u * X) = v0;
+    verts(3u * X + 1u) = pt;
+    verts(3u * X + 2u) = v2;
+    nbrs(3u * X) = NBR(t, 1u);
+    nbrs(3u * X + 1u) = n1;
+    nbrs(3u * X + 2u) = NBR(Y, 1u);
+    verts(3u * Y) = v0;
+    verts(3u * Y + 1u) = v1;
+    verts(3u * Y + 2u) = pt;
+    nbrs(3u * Y) = NBR(t, 2u);
+    nbrs(3u * Y + 1u) = NBR(X, 2u);
+    nbrs(3u * Y + 2u) = n2;
     info[t] = NBR(X, DT_INSIDE);
     return;
   }
   uint s = NBR_TRI(sc), j = NBR_EDGE(sc);
   uint i1 = dt_next(k), i2 = dt_prev(k), j1 = dt_next(j), j2 = dt_prev(j);
-  uint c = verts[3u * t + k], a = verts[3u * t + i1], b = verts[3u * t + i2], d = verts[3u * s + j];
-  uint tn1 = nbrs[3u * t + i1], sn1 = nbrs[3u * s + j1];
+  uint c = verts(3u * t + k), a = verts(3u * t + i1), b = verts(3u * t + i2), d = verts(3u * s + j);
+  uint tn1 = nbrs(3u * t + i1), sn1 = nbrs(3u * s + j1);
   // t = (c, a, p)
-  verts[3u * t + i2] = pt;
-  nbrs[3u * t + k] = NBR(Y, j);
-  nbrs[3u * t + i1] = NBR(X, i2);
+  verts(3u * t + i2) = pt;
+  nbrs(3u * t + k) = NBR(Y, j);
+  nbrs(3u * t + i1) = NBR(X, i2);
   // X = (c, p, b)
-  verts[3u * X + k] = c;
-  verts[3u * X + i1] = pt;
-  verts[3u * X + i2] = b;
-  nbrs[3u * X + k] = NBR(s, j);
-  nbrs[3u * X + i1] = tn1;
-  nbrs[3u * X + i2] = NBR(t, i1);
+  verts(3u * X + k) = c;
+  verts(3u * X + i1) = pt;
+  verts(3u * X + i2) = b;
+  nbrs(3u * X + k) = NBR(s, j);
+  nbrs(3u * X + i1) = tn1;
+  nbrs(3u * X + i2) = NBR(t, i1);
   // s = (d, b, p)
-  verts[3u * s + j2] = pt;
-  nbrs[3u * s + j] = NBR(X, k);
-  nbrs[3u * s + j1] = NBR(Y, j2);
+  verts(3u * s + j2) = pt;
+  nbrs(3u * s + j) = NBR(X, k);
+  nbrs(3u * s + j1) = NBR(Y, j2);
   // Y = (d, p, a)
-  verts[3u * Y + j] = d;
-  verts[3u * Y + j1] = pt;
-  verts[3u * Y + j2] = a;
-  nbrs[3u * Y + j] = NBR(t, k);
-  nbrs[3u * Y + j1] = sn1;
-  nbrs[3u * Y + j2] = NBR(s, j1);
+  verts(3u * Y + j) = d;
+  verts(3u * Y + j1) = pt;
+  verts(3u * Y + j2) = a;
+  nbrs(3u * Y + j) = NBR(t, k);
+  nbrs(3u * Y + j1) = sn1;
+  nbrs(3u * Y + j2) = NBR(s, j1);
   info[t] = NBR(X, i1);
   info[s] = NBR(Y, j1);
 }

@@ -15,9 +15,12 @@
 #include "layout_dt.h"
 #include "common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = DT_SMALL_WG) in;
-layout(std430, binding = 0) coherent buffer Verts { uint verts[]; };
-layout(std430, binding = 1) coherent buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { TriWordsC verts_at; };
+#define verts(i) TRI_WORD(TriWordsC, verts_at, i)
+layout(std430, binding = 1) restrict readonly buffer NbrsAt { TriWordsC nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWordsC, nbrs_at, i)
 layout(std430, binding = 2) coherent buffer Loc { uint loc[]; };
 layout(std430, binding = 3) coherent buffer Pick { uint pickw[]; };
 layout(std430, binding = 4) coherent buffer Claim { uint64_t claim[]; };

@@ -7,10 +7,12 @@
 #include "layout_dt.h"
 #include "common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = DT_WG) in;
 layout(std430, binding = 0) readonly buffer BuildPoints { dvec2 xy_build[]; };
 layout(std430, binding = 1) readonly buffer Perm { uint perm[]; };
-layout(std430, binding = 2) buffer Verts { uint verts[]; };
+layout(std430, binding = 2) restrict readonly buffer VertsAt { TriWords verts_at; };
+#define verts(i) TRI_WORD(TriWords, verts_at, i)
 layout(std430, binding = 3) writeonly buffer Points { dvec2 xy[]; };
 layout(std430, binding = 4) writeonly buffer VertexSlots { uint vertex_slots[]; };
 layout(push_constant) uniform Push { DtRoundPush p; };  // n: points, base: slots in use
@@ -18,9 +20,9 @@ layout(push_constant) uniform Push { DtRoundPush p; };  // n: points, base: slot
 void main() {
   uint i = linear_group_id() * DT_WG + gl_LocalInvocationIndex;
   if (i < 3u * p.base) {
-    uint v = verts[i];
+    uint v = verts(i);
     if (v != INF_VERTEX) {
-      verts[i] = perm[v];
+      verts(i) = perm[v];
       vertex_slots[perm[v]] = i / 3u;
     }
   }

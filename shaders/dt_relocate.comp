@@ -18,10 +18,13 @@
 #include "layout_dt.h"
 #include "common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = DT_WG) in;
 layout(std430, binding = 0) readonly buffer Points { dvec2 xy[]; };
-layout(std430, binding = 1) readonly buffer Verts { uint verts[]; };
-layout(std430, binding = 2) readonly buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 1) restrict readonly buffer VertsAt { TriWordsR verts_at; };
+#define verts(i) TRI_WORD(TriWordsR, verts_at, i)
+layout(std430, binding = 2) restrict readonly buffer NbrsAt { TriWordsR nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWordsR, nbrs_at, i)
 layout(std430, binding = 3) buffer Loc { uint loc[]; };
 layout(std430, binding = 4) readonly buffer List { uint list[]; };
 layout(std430, binding = 5) buffer Pick { uint64_t pick[]; };

@@ -15,9 +15,12 @@
 #include "layout_dt.h"
 #include "common.glsl"
 
+#include "tri_refs.glsl"
 layout(local_size_x = DT_WG) in;
-layout(std430, binding = 0) buffer Verts { uint verts[]; };
-layout(std430, binding = 1) buffer Nbrs { uint nbrs[]; };
+layout(std430, binding = 0) restrict readonly buffer VertsAt { TriWords verts_at; };
+#define verts(i) TRI_WORD(TriWords, verts_at, i)
+layout(std430, binding = 1) restrict readonly buffer NbrsAt { TriWords nbrs_at; };
+#define nbrs(i) TRI_WORD(TriWords, nbrs_at, i)
 layout(std430, binding = 2) readonly buffer Loc { uint loc[]; };
 layout(std430, binding = 3) readonly buffer Pick { uint pickw[]; };
 layout(std430, binding = 4) readonly buffer Granted { uint granted[]; };

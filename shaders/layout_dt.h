@@ -19,18 +19,20 @@ namespace cdtgpu::gpu::layout {
 // relative interior of edge k.
 #define DT_INSIDE 3u
 
-// Flip-list entries: a slot (28 bits), which of its edges to check (2 bits of mode, 2 of edge), or a request.
+// Flip-list entries: a slot (29 bits) and a code (3 bits) for which of its edges to check: mode * 3 + edge.
 // Edges known to be locally Delaunay are not checked: the spokes of a split (the new edges at the inserted
-// point) and the new diagonal of a flip (docs/gpu-delaunay.md).
-#define DT_CHECK_ALL 0u
-#define DT_CHECK_ONLY 1u  // only edge k (each triangle of a 1->3 split: its one outer edge)
-#define DT_CHECK_SKIP 2u  // all edges but k (a 2->4 spoke, a flip's new diagonal)
-#define DT_REQUEST 3u     // written by dt_flip_check: the slot asks to flip its edge k
-#define DT_ENTRY(slot, mode, k) (((mode) << 30) | ((slot) << 2) | (k))
-#define DT_ENTRY_SLOT(e) (((e) >> 2) & 0x0FFFFFFFu)
-#define DT_ENTRY_MODE(e) ((e) >> 30)
-#define DT_ENTRY_EDGE(e) ((e)&3u)
-#define DT_MAX_SLOTS 0x0FFFFFFFu  // slot ids below this (DT_NONE is no valid entry)
+// point) and the new diagonal of a flip (docs/gpu-delaunay.md). After a pass's checks every entry is a request
+// or DT_NONE, so a request shares the code of "only edge k": the flip pass reads nothing else. 29 bits hold the
+// slots of 2^28 points (two slots per point), the 3 bits every code; 2^29 - 1 would be DT_NONE.
+#define DT_CHECK_ONLY 0u  // only edge k (each triangle of a 1->3 split: its one outer edge)
+#define DT_CHECK_SKIP 1u  // all edges but k (a 2->4 spoke, a flip's new diagonal)
+#define DT_CHECK_ALL 2u   // all edges (k = 0)
+#define DT_REQUEST 0u     // written by the flip checks: the slot asks to flip its edge k
+#define DT_ENTRY(slot, mode, k) (((slot) << 3) | ((mode)*3u + (k)))
+#define DT_ENTRY_SLOT(e) ((e) >> 3)
+#define DT_ENTRY_MODE(e) (((e)&7u) / 3u)
+#define DT_ENTRY_EDGE(e) (((e)&7u) % 3u)
+#define DT_MAX_SLOTS 0x1FFFFFFFu  // slot ids below this (DT_NONE is no valid entry)
 
 // Words of the counters buffer. The two flip lists (0 and 1) alternate: a pass reads one and appends to the
 // other. The exact lists hold the cases the floating-point filters left undecided (relocation walks, flip

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "core/canonical.hpp"
 #include "core/cdt_cgal.hpp"
 #include "core/predicates.hpp"
 #include "core/prepare.hpp"
@@ -435,6 +436,46 @@ TEST(GpuCdt, LargePaperHeadline) {
   if (!large()) GTEST_SKIP() << "set CDTGPU_LARGE=1 (GPU machine): 2M points + 500K constraints";
   check_against_cgal("random 2M, 500K DT edges f=0.1", random_with_dt_edges(2000000, 500000, 0.1, 81), {}, 3);
   check_against_cgal("random 2M, 2K DT edges f=0.002", random_with_dt_edges(2000000, 2000, 0.002, 82), {}, 3);
+}
+
+TEST(GpuCdt, TriangleBuffersPassTheStorageBufferRange) {
+  // The triangulation's verts and nbrs are bound by device address (shaders/tri_refs.glsl), so they may pass
+  // maxStorageBufferRange: at 12 bytes per slot, 4 GiB on the H100 is ~358M slots (179M points), and lavapipe's
+  // 128 MiB is 11.2M. Here a grid's triangles fill past the range, and the canonical order, which reads every
+  // slot's corners and writes the sorted triples back into nbrs, must match the host's sort.
+  const uint64_t range = ctx().info.max_storage_buffer_range;
+  if (range > (uint64_t(512) << 20))
+    GTEST_SKIP() << "range " << range << " bytes: the 256M-point bench covers it (docs/performance.md)";
+  const uint64_t want = range / 12 + 50000;
+  const uint32_t side = uint32_t(std::ceil(std::sqrt(double(want) / 2))) + 1;
+  std::vector<Triangle> tris;
+  tris.reserve(size_t(2) * (side - 1) * (side - 1));
+  std::mt19937 rng(7);
+  for (uint32_t i = 0; i + 1 < side; ++i)
+    for (uint32_t j = 0; j + 1 < side; ++j) {
+      const uint32_t a = i * side + j, b = a + side, c = b + 1, d = a + 1;
+      tris.push_back({a, b, c});
+      tris.push_back({a, c, d});
+    }
+  std::shuffle(tris.begin(), tris.end(), rng);
+  for (Triangle& t : tris) std::rotate(t.begin(), t.begin() + rng() % 3, t.end());  // not canonical yet
+  Mesh expected;
+  expected.triangles = tris;
+  for (uint32_t k = 0; k < side * side; ++k) expected.vertices.push_back({double(k / side), double(k % side), 0});
+  canonicalize(expected);  // vertices are already in (x, y) order: ids stay
+
+  gpu::GpuTriangulation tri;
+  const uint64_t bytes = uint64_t(tris.size()) * 12;
+  ASSERT_GT(bytes, range);
+  tri.verts = gpu::create_addressed_buffer(ctx(), bytes, "tri_verts");
+  tri.nbrs = gpu::create_addressed_buffer(ctx(), bytes, "tri_nbrs");
+  gpu::upload(ctx(), tri.verts, tris.data(), bytes);
+  tri.num_points = side * side;
+  tri.num_slots = tri.capacity = uint32_t(tris.size());
+  gpu::Primitives prims(ctx());
+  gpu::TriangleSorter sorter(ctx(), prims);
+  EXPECT_TRUE(sorter.download(tri) == expected.triangles);
+  no_validation_messages();
 }
 
 }  // namespace cdtgpu

@@ -13,6 +13,8 @@
 #include "gpu/profiler.hpp"
 #include "gpu/recorder.hpp"
 #include "shaders/layout.h"
+#include "shaders/layout_cdt.h"
+#include "shaders/layout_dt.h"
 
 using namespace cdtgpu::gpu;
 
@@ -209,5 +211,38 @@ TEST(GpuContext, PassesAreEmbeddedAndArgumentsChecked) {
   EXPECT_THROW(rec.dispatch_groups(add, {a}, cdtgpu::gpu::layout::ScanAddPush{4}, 1), DeviceError);  // 1 buffer of 2
   EXPECT_THROW(rec.dispatch_groups(add, {a, a}, uint64_t{4}, 1), DeviceError);  // wrong push size
   rec.submit();
+  for (auto& m : ctx.messages()) ADD_FAILURE() << m;
+}
+
+TEST(GpuContext, AddressBindingsAreReadFromTheShaderAndChecked) {
+  // The triangle buffers are bound by device address (shaders/tri_refs.glsl): which bindings take one comes
+  // from the SPIR-V, and a plain buffer there (or an addressed one elsewhere) is refused before it is bound.
+  Context& ctx = shared_context();
+  ctx.clear_messages();
+  EXPECT_EQ(create_pass(ctx, {"dt_flip", 9, sizeof(cdtgpu::gpu::layout::DtFlipPush)}).addressed, 0b11u);
+  EXPECT_EQ(create_pass(ctx, {"canonical_place", 4, sizeof(cdtgpu::gpu::layout::CanonicalKeysPush)}).addressed,
+            0b1001u);
+  EXPECT_EQ(create_pass(ctx, {"scan_add", 2, sizeof(cdtgpu::gpu::layout::ScanAddPush)}).addressed, 0u);
+  Pass map = create_pass(ctx, {"cdt_vertex_map", 2, sizeof(cdtgpu::gpu::layout::CdtSlotsPush)});
+  Buffer verts = create_addressed_buffer(ctx, 12, "tri_verts");
+  Buffer plain = create_buffer(ctx, 16, "vmap");
+  EXPECT_NE(verts.address, 0u);
+  EXPECT_EQ(plain.address, 0u);
+  const cdtgpu::gpu::layout::CdtSlotsPush push{1, 0, 0};
+  Recorder rec(ctx);
+  try {
+    rec.dispatch_groups(map, {plain, plain}, push, 1);
+    ADD_FAILURE() << "a plain buffer where the shader takes an address must be refused";
+  } catch (const DeviceError& e) {
+    EXPECT_NE(std::string(e.what()).find("binding 0 takes a buffer address"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(rec.dispatch_groups(map, {verts, verts}, push, 1), DeviceError);
+  // Bound right, the pass reads the slot's corners through the address: vmap[v] = the slot (0) for each.
+  const uint32_t tri[3] = {2, 0, 1};
+  upload(ctx, verts, tri, sizeof tri);
+  fill(ctx, plain, 0xFFFFFFFFu);
+  rec.dispatch_groups(map, {verts, plain}, push, 1);
+  rec.submit();
+  EXPECT_EQ(download_vector<uint32_t>(ctx, plain, 4), (std::vector<uint32_t>{0, 0, 0, 0xFFFFFFFFu}));
   for (auto& m : ctx.messages()) ADD_FAILURE() << m;
 }
