@@ -1,13 +1,35 @@
 // canonicalize: one byte-exact order for a mesh, whatever backend or run produced it. Two sorts, O(n log n).
 #include "core/canonical.hpp"
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
 #include <numeric>
 
 namespace cdtgpu {
 
+namespace {
+
+bool sorted_and_unique(const std::vector<Point3>& v) {
+  for (size_t i = 1; i < v.size(); ++i)
+    if (v[i - 1].x > v[i].x || (v[i - 1].x == v[i].x && v[i - 1].y >= v[i].y)) return false;
+  return true;
+}
+
+}  // namespace
+
 void canonicalize(Mesh& mesh) {
   const std::vector<Point3>& v = mesh.vertices;
+  if (sorted_and_unique(v)) {  // the backends' vertices usually are: only the triangles move
+    tbb::parallel_for(size_t(0), mesh.triangles.size(), [&](size_t i) {
+      Triangle& t = mesh.triangles[i];
+      const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
+      t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
+    });
+    tbb::parallel_sort(mesh.triangles.begin(), mesh.triangles.end());
+    return;
+  }
   std::vector<uint32_t> order(v.size());
   std::iota(order.begin(), order.end(), 0u);
   // Ties (equal x, y: an invalid mesh) keep their old order, so even then the result is deterministic.

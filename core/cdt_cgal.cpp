@@ -148,4 +148,36 @@ CdtResult triangulate_cgal(const PreparedInput& prepared) {
   return result;
 }
 
+std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments) {
+  using GVb = CGAL::Triangulation_vertex_base_with_info_2<uint32_t, Epick>;
+  using GFb = CGAL::Constrained_triangulation_face_base_2<Epick>;
+  using GTds = CGAL::Triangulation_data_structure_2<GVb, GFb>;
+  using GraphCdt = CGAL::Constrained_Delaunay_triangulation_2<Epick, GTds, CGAL::No_constraint_intersection_tag>;
+  const size_t n = vertices.size();
+  std::vector<Epick::Point_2> points;
+  points.reserve(n);
+  for (const Point3& p : vertices) points.emplace_back(p.x, p.y);
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  using SortTraits =
+      CGAL::Spatial_sort_traits_adapter_2<Epick, CGAL::Pointer_property_map<Epick::Point_2>::type>;
+  CGAL::spatial_sort(order.begin(), order.end(), SortTraits(CGAL::make_property_map(points)));
+
+  GraphCdt cdt;
+  std::vector<GraphCdt::Vertex_handle> handle(n);
+  GraphCdt::Face_handle hint;
+  for (std::size_t i : order) {
+    handle[i] = cdt.insert(points[i], hint);
+    handle[i]->info() = uint32_t(i);
+    hint = handle[i]->face();
+  }
+  for (const Edge& e : segments) cdt.insert_constraint(handle[e[0]], handle[e[1]]);
+  std::vector<Triangle> triangles;
+  if (cdt.dimension() != 2) return triangles;
+  triangles.reserve(cdt.number_of_faces());
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+    triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+  return triangles;
+}
+
 }  // namespace cdtgpu

@@ -15,4 +15,10 @@ struct CdtResult {
 // interpolated along the lower-indexed constraint. Fewer than 3 vertices, or all collinear: no triangles.
 CdtResult triangulate_cgal(const PreparedInput& prepared);
 
+// The CDT of a planar straight-line graph (segments meet only at shared endpoints, none holds a vertex inside:
+// what resolve_constraints makes), with CGAL's plain Constrained_Delaunay_triangulation_2, which refuses a
+// crossing instead of constructing it. Counter-clockwise triangles in CGAL's face order; the same triangles as
+// triangulate_cgal on the input the graph was resolved from. Fewer than 3 vertices or all collinear: none.
+std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments);
+
 }  // namespace cdtgpu

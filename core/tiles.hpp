@@ -1,0 +1,70 @@
+// The tiled constrained Delaunay triangulation: any input size through a device of bounded size, or on every
+// CPU core, with exactly the triangles of the single run (../shared/notes/tiling.md, docs/tiles.md).
+//
+//   ResolvedInput in = resolve_constraints(prepared);      // crossings split on the whole, first
+//   TileOptions opt{.max_tile_points = 500'000};
+//   TileStats ts;
+//   CdtResult r = triangulate_tiled(std::move(in), opt, cgal_tile_triangulator(), &ts);   // canonical mesh
+//
+// Steps (core/tiles.cpp reads as this list):
+//   plan     k-d splits of the vertices by count (the median of the longer side's extent) until a tile holds at
+//            most max_tile_points; every tile is a closed rectangle, ±inf on the outside
+//   tiles    each tile's CDT of its vertices plus every segment meeting its rectangle (segments whole, with
+//            their endpoints: nothing is clipped, so a tile makes no vertex of its own); a triangle whose
+//            closed circumdisk lies in the tile's open interior is *final*, a triangle of the whole CDT
+//   merge    the CDT of what is left: the vertices not inside the final region, the segments among them, and
+//            the final region's border edges as constraints; its triangles on the final side are dropped.
+//            Tiled again while that shrinks it, else one call of the triangulator.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "core/cdt_cgal.hpp"
+#include "core/model.hpp"
+#include "core/resolve.hpp"
+
+namespace cdtgpu {
+
+// The CDT of a planar straight-line graph: vertices sorted by (x, y) and unique, segments (a < b) sorted,
+// meeting only at shared endpoints and holding no vertex inside. Returns counter-clockwise triangles in any
+// order. Called from several threads at once (a GPU triangulator serialises itself).
+using TileTriangulator =
+    std::function<std::vector<Triangle>(const std::vector<Point3>& vertices, const std::vector<Edge>& segments)>;
+
+// CGAL's constrained Delaunay triangulation (core/cdt_cgal.hpp, cdt_of_graph).
+TileTriangulator cgal_tile_triangulator();
+
+struct TileOptions {
+  uint64_t max_tile_points = 0;  // at most this many of a tile's own vertices; below 3 or >= the input: no tiles
+  // A merge tiled again only while it holds at most this share of its level's vertices (else one call).
+  double retile_share = 0.6;
+  // Tiles triangulated at once (0: all cores); 1 for a device that takes one at a time.
+  unsigned parallel_tiles = 0;
+};
+
+struct TileStats {
+  uint64_t tiles = 0;            // tiles of every level
+  uint64_t levels = 0;           // 1: tiles and one merge; 2: the merge was tiled once more; ...
+  uint64_t final_triangles = 0;  // found final in tiles, every level
+  uint64_t merge_vertices = 0;   // the last merge, the one triangulated in one call
+  uint64_t merge_segments = 0;   // its constraints (segments and final-region border edges)
+  uint64_t merge_triangles = 0;  // its triangles kept
+  double tiles_ms = 0, merge_ms = 0;  // wall time: tiles and their bookkeeping, the last merge's call
+};
+
+// The triangles of CDT(vertices, segments) (the graph as TileTriangulator takes it), tiled as `options` say.
+std::vector<Triangle> tiled_cdt(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+                                const TileOptions& options, const TileTriangulator& triangulate,
+                                TileStats* stats = nullptr);
+
+// The whole mesh of a resolved input, canonical: the bytes of triangulate_cgal(prepared) for the prepared input
+// `in` was resolved from.
+CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options, const TileTriangulator& triangulate,
+                            TileStats* stats = nullptr);
+
+// The tile size `--max-tile-points` auto picks for the CPU: 0 (no tiles) below min_points or on one core, else
+// vertices / (4 x cores), so that every core has a few tiles (docs/tiles.md has the measurements).
+uint64_t auto_cpu_tile_points(uint64_t vertices, unsigned cores);
+
+}  // namespace cdtgpu

@@ -1,0 +1,209 @@
+// The tiled CDT (core/tiles): with tiles of 16 to 500 points, on uniform, clustered, grid and degenerate layouts,
+// with crossing and long constraints, the mesh equals triangulate_cgal's (the single run) exactly; the tiles'
+// counts say the path really tiled.
+#include "core/tiles.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "core/cdt_cgal.hpp"
+#include "core/prepare.hpp"
+#include "core/resolve.hpp"
+#include "core/workloads.hpp"
+#include "io/readers.hpp"
+
+namespace cdtgpu {
+namespace {
+
+Polyline line(std::vector<Point3> pts, bool closed = false) {
+  Polyline l;
+  l.points = std::move(pts);
+  l.closed = closed;
+  return l;
+}
+
+// The tiled mesh against the single run, at several tile sizes; returns the stats of the smallest tiles.
+TileStats expect_same_as_single_run(const InputSet& in, std::vector<uint64_t> tile_points = {16, 50, 500}) {
+  const PreparedInput p = prepare(in);
+  const CdtResult single = triangulate_cgal(p);
+  TileStats smallest;
+  for (uint64_t tp : tile_points) {
+    TileStats ts;
+    TileOptions opt;
+    opt.max_tile_points = tp;
+    const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
+    EXPECT_EQ(tiled.steiner_points, single.steiner_points) << "tiles of " << tp;
+    EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << "tiles of " << tp;
+    EXPECT_EQ(tiled.mesh.triangles.size(), single.mesh.triangles.size()) << "tiles of " << tp;
+    EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << "tiles of " << tp;
+    if (p.vertices.size() > tp) {
+      EXPECT_GE(ts.tiles, 2u) << "tiles of " << tp;
+    }
+    if (tp == tile_points.front()) smallest = ts;
+  }
+  return smallest;
+}
+
+InputSet random_points(size_t n, uint64_t seed, double side = 1000) {
+  std::mt19937_64 rng(seed);
+  InputSet in;
+  for (size_t i = 0; i < n; ++i) in.points.push_back({unit_double(rng) * side, unit_double(rng) * side, double(i)});
+  return in;
+}
+
+TEST(Tiles, UniformPointsWithoutConstraints) {
+  const TileStats ts = expect_same_as_single_run(random_points(3000, 1));
+  EXPECT_GT(ts.final_triangles, 0u);
+}
+
+TEST(Tiles, UniformWithDelaunayEdgeConstraints) {
+  InputSet in = uniform_points(4000, 7);
+  add_dt_edge_constraints(in, 300, 0.05, 3);  // long ones: about 5 spacings each
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, CrossingConstraintsResolvedFirst) {
+  InputSet in = random_points(1500, 2);
+  std::mt19937_64 rng(5);
+  for (int i = 0; i < 60; ++i)
+    in.lines.push_back(line({{unit_double(rng) * 1000, unit_double(rng) * 1000, 1},
+                             {unit_double(rng) * 1000, unit_double(rng) * 1000, 2}}));
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, OneConstraintCrossesEveryTile) {
+  InputSet in = random_points(2000, 3);
+  in.lines.push_back(line({{-1, -1, 0}, {1001, 1001, 0}}));
+  in.lines.push_back(line({{-1, 1001, 0}, {1001, -1, 0}}));  // and crosses the first
+  in.lines.push_back(line({{-5, 500, 0}, {1005, 500.25, 0}}));
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, LongConstraintsWhoseCirclesSpanManyTiles) {
+  InputSet in = random_points(2000, 4);
+  for (int i = 0; i < 10; ++i)  // nearly parallel long lines: thin triangles with huge circumcircles
+    in.lines.push_back(line({{0, 100.0 * i + 3, 0}, {1000, 100.0 * i + 3.5, 0}}));
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, DemGridCoCircularEverywhere) {
+  InputSet in;
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) in.points.push_back({double(i), double(j), double((i * 7 + j * 3) % 11)});
+  expect_same_as_single_run(in, {16, 40, 100, 400});
+}
+
+TEST(Tiles, GridWithContoursAndBordersOnGridLines) {
+  TerrainOptions o;
+  o.grid = 48;
+  o.levels = 8;
+  expect_same_as_single_run(terrain_workload(o), {16, 64, 500});
+}
+
+TEST(Tiles, DuplicatesOnBothSidesOfABorder) {
+  InputSet in;
+  for (int i = 0; i < 30; ++i)
+    for (int j = 0; j < 30; ++j) {
+      in.points.push_back({double(i), double(j) * 0.5, 1});
+      in.points.push_back({double(i), double(j) * 0.5, 2});  // a duplicate, merged by prepare
+    }
+  in.lines.push_back(line({{0, 0, 0}, {29, 14.5, 0}}));
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, ClusteredPoints) {
+  std::mt19937_64 rng(9);
+  InputSet in;
+  for (int c = 0; c < 5; ++c) {
+    const double cx = unit_double(rng) * 1e5, cy = unit_double(rng) * 1e5;
+    for (int i = 0; i < 400; ++i)
+      in.points.push_back({cx + unit_double(rng), cy + unit_double(rng), 0});
+  }
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, CollinearAndNearlyCollinearRows) {
+  InputSet in;
+  for (int i = 0; i < 300; ++i) in.points.push_back({double(i), 0, 0});  // one row: flat triangles beside it
+  for (int i = 0; i < 300; ++i) in.points.push_back({double(i) + 0.5, 1e-9 * (i % 3), 0});
+  for (int i = 0; i < 50; ++i) in.points.push_back({double(i * 6), 50, 0});
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, AllCollinearGivesNoTriangles) {
+  InputSet in;
+  for (int i = 0; i < 100; ++i) in.points.push_back({double(i), 2.0 * i, 0});
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, FootprintRingsAcrossTiles) {
+  InputSet in = random_points(1500, 11);
+  for (int k = 0; k < 12; ++k) {
+    const double x = 80.0 * k + 10, y = 70.0 * k + 20;
+    in.lines.push_back(line({{x, y, 0}, {x + 120, y, 0}, {x + 120, y + 90, 0}, {x, y + 90, 0}}, true));
+  }
+  expect_same_as_single_run(in);
+}
+
+TEST(Tiles, SingleTileIsTheUntiledRun) {
+  InputSet in = random_points(200, 12);
+  const PreparedInput p = prepare(in);
+  TileStats ts;
+  TileOptions opt;
+  opt.max_tile_points = 1000;
+  const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
+  EXPECT_EQ(ts.tiles, 0u);
+  EXPECT_TRUE(tiled.mesh.triangles == triangulate_cgal(p).mesh.triangles);
+}
+
+TEST(Tiles, MergeTiledAgainOnLargerInputs) {
+  InputSet in = uniform_points(30000, 21);
+  add_dt_edge_constraints(in, 3000, 0.2, 4);
+  const TileStats ts = expect_same_as_single_run(in, {1000});
+  EXPECT_GE(ts.levels, 2u) << "the merge should have been tiled again";
+  EXPECT_LT(ts.merge_vertices, 30000u / 2);
+}
+
+TEST(Tiles, SameTrianglesWhateverTheThreadCount) {
+  InputSet in = random_points(2000, 13);
+  const PreparedInput p = prepare(in);
+  TileOptions one, all;
+  one.max_tile_points = all.max_tile_points = 100;
+  one.parallel_tiles = 1;
+  const CdtResult a = triangulate_tiled(resolve_constraints(p), one, cgal_tile_triangulator());
+  const CdtResult b = triangulate_tiled(resolve_constraints(p), all, cgal_tile_triangulator());
+  EXPECT_TRUE(a.mesh.triangles == b.mesh.triangles);
+}
+
+TEST(Tiles, AutoTileSizeForTheCpu) {
+  EXPECT_EQ(auto_cpu_tile_points(5'000'000, 1), 0u);
+  EXPECT_EQ(auto_cpu_tile_points(1000, 16), 0u);
+  EXPECT_GT(auto_cpu_tile_points(2'000'000, 2), 0u);
+  EXPECT_LT(auto_cpu_tile_points(2'000'000, 2), 2'000'000u);
+}
+
+// The peer inputs (artem-ogre/CDT's test suite) when ../shared/data is there: every one, tiles of 16 and 64.
+TEST(Tiles, PeerInputs) {
+  const char* env = std::getenv("CDTGPU_PEER_INPUTS");
+  const std::filesystem::path dir = env ? env : std::filesystem::path(CDTGPU_SHARED_DATA) / "cdt-peer-inputs";
+  if (!std::filesystem::is_directory(dir))
+    GTEST_SKIP() << dir << " is absent (artem-ogre/CDT's test inputs; CDTGPU_PEER_INPUTS may name a copy)";
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    if (e.path().extension() != ".txt") continue;
+    std::ifstream file(e.path(), std::ios::binary);
+    InputSet in;
+    read_peer_input(file, e.path().string(), in);
+    SCOPED_TRACE(e.path().filename().string());
+    expect_same_as_single_run(in, {16, 64});
+    ++files;
+  }
+  EXPECT_GT(files, 0);
+}
+
+}  // namespace
+}  // namespace cdtgpu
