@@ -5,6 +5,7 @@
 #include "bench/figures.hpp"
 #include "bench/peer.hpp"
 #include "bench/grid.hpp"
+#include "bench/tiles.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -327,10 +328,14 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
                   "as a child process, files in, PLY out: 20K..4M points + a quarter as many contour segments), "
                   "grid (a terrain TIN's DEM grid and contours, CPU against GPU, and the whole process with "
                   "--grid-out and --contours-out), or peer (GPU stages beside gDel2D's on the same vertices and "
-                  "segments, see --peer and --rows)")
+                  "segments, see --peer and --rows), or tiles (the tiled CDT against the single run, CPU and GPU, "
+                  "2M and 16M points + a quarter as many segments, in process)")
       ->default_val("all")
-      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e", "grid", "peer"}));
+      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e", "grid", "peer", "tiles"}));
   cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points; e2e: 20K and 200K) that finish in about a minute on 2 cores");
+  cmd->add_option("--tile-points", o.tile_points,
+                  "tiles: tiles of at most this many points (default: the CPU's auto size; the GPU: a quarter of the "
+                  "input, or what the device holds)");
   cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
   cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
       ->default_val(5)
@@ -549,6 +554,7 @@ int run_bench(const BenchOptions& o) {
   if (o.table == "e2e") return run_e2e(o);  // the child processes open their own devices
   if (o.table == "peer") return run_peer(o);
   if (o.table == "grid") return run_grid(o);
+  if (o.table == "tiles") return run_tiles(o);
   gpu::ContextOptions co;
   co.device = o.device;
   std::string device = "none (--cgal-only)", device_name;

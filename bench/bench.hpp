@@ -31,7 +31,7 @@ struct BackendRun {
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
 
 struct BenchOptions {
-  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only), e2e, grid or peer
+  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only), e2e, grid, peer or tiles
   bool quick = false;               // 20K..80K points instead of 1M..4M
   std::vector<std::string> sizes;   // point counts overriding the table's, e.g. 50000 or 1.5M
   int runs = 5;                     // timed runs per backend and workload (median), after one warm-up
@@ -53,6 +53,8 @@ struct BenchOptions {
   // --table peer (bench/peer.hpp)
   std::vector<std::string> rows;      // "POINTS+SEGMENTS" each, e.g. 2M+500K; empty: the five rows
   std::string peer;                   // gDel2D's executable; empty: our columns only
+  // --table tiles (bench/tiles.hpp)
+  uint64_t tile_points = 0;           // tiles of at most this many points; 0: the CPU's auto size, the GPU's quarter
   // Every table: no CGAL run (and so no comparison) for inputs of more points than this; CGAL takes minutes there.
   uint64_t cgal_max_points = 10000000;
 };

@@ -87,6 +87,11 @@ int main(int argc, char** argv) {
   t->add_option("--max-edge", tri.max_edge,
                  "drop triangles reached from outside across an unconstrained edge longer than this (concave hull)")
       ->check(CLI::PositiveNumber);
+  t->add_option("--max-tile-points", tri.max_tile_points,
+                 "triangulate in tiles of at most N input points, merged exactly (the same output); 0: never. "
+                 "Default: tiles on every core for the CPU backend at 100K points or more, and for the GPU when "
+                 "the input exceeds what the device holds")
+      ->check(CLI::NonNegativeNumber);
   add_input_options(t, tri.input, crs, utm_zone, epsg);
 
   std::string mesh_path;

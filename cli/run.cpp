@@ -7,6 +7,7 @@
 #include <future>
 #include <optional>
 #include <span>
+#include <thread>
 
 #include <spdlog/spdlog.h>
 
@@ -18,6 +19,7 @@
 #include "core/regions.hpp"
 #include "core/resolve.hpp"
 #include "core/stats.hpp"
+#include "core/tiles.hpp"
 #include "core/verify.hpp"
 #include "cli/gpu_start.hpp"
 #include "cli/progress.hpp"
@@ -26,6 +28,7 @@
 #include "gpu/check.hpp"
 #include "gpu/contours.hpp"
 #include "gpu/raster.hpp"
+#include "gpu/tile_triangulator.hpp"
 #include "gpu/tin.hpp"
 #include "io/atomic_file.hpp"
 #include "io/gis_writers.hpp"
@@ -147,6 +150,49 @@ std::string gpu_refused(const gpu::DeviceError& e) {
          "): the CPU backend computes the same triangulation";
 }
 
+// The tiled CDT (core/tiles) of a resolved input, its figures in the stats.
+CdtResult triangulate_in_tiles(ResolvedInput&& in, uint64_t tile_points, const TileTriangulator& triangulate,
+                               RunStats& stats) {
+  TileOptions opt;
+  opt.max_tile_points = tile_points;
+  TileStats ts;
+  CdtResult r = timed(stats, "triangulate: tiles and merge", [&] {
+    return triangulate_tiled(std::move(in), opt, triangulate, &ts);
+  });
+  stats.stage_ms.emplace_back("triangulate: tiles", ts.tiles_ms);
+  stats.stage_ms.emplace_back("triangulate: merge", ts.merge_ms);
+  auto& c = stats.counts;
+  c["tile_points"] = tile_points;
+  c["tiles"] = ts.tiles;
+  c["tile_levels"] = ts.levels;
+  c["tile_final_triangles"] = ts.final_triangles;
+  c["merge_vertices"] = ts.merge_vertices;
+  c["merge_segments"] = ts.merge_segments;
+  c["merge_triangles"] = ts.merge_triangles;
+  spdlog::info("{} tiles of at most {} points in {} level(s): {} triangles final in their tiles, a merge of {} "
+               "vertices and {} segments gave {}", ts.tiles, tile_points, ts.levels, ts.final_triangles,
+               ts.merge_vertices, ts.merge_segments, ts.merge_triangles);
+  return r;
+}
+
+// The CPU backend: the reference CDT in one piece, or tiles on every core (`--max-tile-points`, or auto: core/tiles'
+// auto_cpu_tile_points). Both give the same bytes.
+CdtResult triangulate_cpu(const PreparedInput& prepared, int64_t max_tile_points, RunStats& stats) {
+  const uint64_t n = prepared.vertices.size();
+  const uint64_t tile = max_tile_points >= 0 ? uint64_t(max_tile_points)
+                                             : auto_cpu_tile_points(n, std::thread::hardware_concurrency());
+  if (tile < 3 || n <= tile) return triangulate_cgal(prepared);
+  ResolvedInput in = timed(stats, "triangulate: resolve", [&] { return resolve_constraints(prepared); });
+  return triangulate_in_tiles(std::move(in), tile, cgal_tile_triangulator(), stats);
+}
+
+// The GPU's tile size: `--max-tile-points`, or auto: tiles only for an input beyond what the device holds.
+uint64_t gpu_tile_points(const gpu::Context& ctx, uint64_t vertices, int64_t max_tile_points) {
+  if (max_tile_points >= 0) return uint64_t(max_tile_points);
+  const uint64_t limit = gpu::max_tile_points(ctx);
+  return vertices > limit ? limit : 0;
+}
+
 }  // namespace
 
 int run_triangulate(const TriangulateOptions& options) {
@@ -224,7 +270,7 @@ int run_triangulate(const TriangulateOptions& options) {
     stats.backend = cdt ? "gpu" : "cgal";
     stats.backend_reason = reason;
     spdlog::debug("backend {}: {}", stats.backend, reason);
-    if (!cdt) return triangulate_cgal(l.prepared);
+    if (!cdt) return triangulate_cpu(l.prepared, options.max_tile_points, stats);
     stats.stage_ms.emplace_back("gpu start: context (own thread)", start->context_ms);
     stats.stage_ms.emplace_back("gpu start: pipelines queued (own thread)", start->pipelines_ms);
     stats.stage_ms.emplace_back("gpu start: staging memory (own thread)", start->staging_ms);
@@ -235,6 +281,23 @@ int run_triangulate(const TriangulateOptions& options) {
     // CPU's values bit for bit. Their pipelines are asked for now, so they compile while the CDT runs.
     if (!options.grid_out.empty() || !options.preview.empty()) gpu_raster.emplace(start->context(), cdt->primitives());
     if (!options.contours_out.empty()) gpu_contours.emplace(start->context(), cdt->primitives());
+    const uint64_t tile = gpu_tile_points(start->context(), l.prepared.vertices.size(), options.max_tile_points);
+    if (tile >= 3 && l.prepared.vertices.size() > tile) {
+      ResolvedInput in = timed(stats, "triangulate: resolve wait", [&] { return resolving.get(); });
+      stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+      try {
+        return triangulate_in_tiles(std::move(in), tile, gpu::gpu_tile_triangulator(*cdt), stats);
+      } catch (const gpu::DeviceError& e) {
+        if (options.backend == "gpu") throw;
+        stats.backend = "cgal";
+        stats.backend_reason = gpu_refused(e);
+        spdlog::warn("{}", stats.backend_reason);
+        cdt = nullptr;
+        gpu_raster.reset();
+        gpu_contours.reset();
+        return triangulate_cpu(l.prepared, options.max_tile_points, stats);
+      }
+    }
     gpu::GpuCdtStats gs;
     CdtResult r;
     try {
@@ -248,7 +311,7 @@ int run_triangulate(const TriangulateOptions& options) {
       cdt = nullptr;
       gpu_raster.reset();
       gpu_contours.reset();
-      return triangulate_cgal(l.prepared);
+      return triangulate_cpu(l.prepared, options.max_tile_points, stats);
     }
     stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
     for (const auto& [name, ms] : gs.wall_ms) stats.stage_ms.emplace_back("triangulate: " + name, ms);

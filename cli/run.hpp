@@ -29,6 +29,7 @@ struct TriangulateOptions {
   double interval = 10.0;    // their interval
   std::string preview;       // hillshaded PNG of the TIN (core/hillshade.hpp); empty: none
   double max_edge = 0;       // > 0: concave-hull trimming (core/regions.hpp)
+  int64_t max_tile_points = -1;  // tiles of at most this many points (core/tiles.hpp); 0: never; -1: auto
 };
 
 // Returns the process exit code; throws InputError / UsageError for bad input.

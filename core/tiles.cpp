@@ -172,7 +172,7 @@ struct TileResult {
 
 TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segments, const Plan& plan,
                     const Node& node, std::span<const uint32_t> tile_segments, const TileTriangulator& triangulate,
-                    std::vector<uint8_t>& in_final) {
+                    const std::string& name, std::vector<uint8_t>& in_final) {
   std::vector<uint32_t> ids(plan.order.begin() + node.lo, plan.order.begin() + node.hi);
   for (uint32_t s : tile_segments) ids.push_back(segments[s][0]), ids.push_back(segments[s][1]);
   std::sort(ids.begin(), ids.end());  // ids in (x, y) order: the local vertices stay sorted
@@ -185,7 +185,7 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   for (uint32_t s : tile_segments) local_segments.push_back({local_of(segments[s][0]), local_of(segments[s][1])});
   std::sort(local_segments.begin(), local_segments.end());
 
-  const std::vector<Triangle> triangles = triangulate(local, local_segments);
+  const std::vector<Triangle> triangles = triangulate(local, local_segments, name);
   TileResult r;
   {
     CGAL::Protect_FPU_rounding<true> upward;
@@ -258,16 +258,19 @@ std::vector<Triangle> outside_final(const std::vector<Triangle>& m, const std::v
 
 }  // namespace
 
-TileTriangulator cgal_tile_triangulator() { return cdt_of_graph; }
+TileTriangulator cgal_tile_triangulator() {
+  return [](const std::vector<Point3>& v, const std::vector<Edge>& s, std::string_view) { return cdt_of_graph(v, s); };
+}
 
 std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<Edge>& segments,
                                 const TileOptions& options, const TileTriangulator& triangulate, TileStats* stats) {
   TileStats local_stats;
   TileStats& s = stats ? *stats : local_stats;
   const uint64_t n = v.size();
+  const uint64_t level = s.levels + 1;
   if (options.max_tile_points < 3 || n <= options.max_tile_points) {
     const auto t = Clock::now();
-    std::vector<Triangle> all = triangulate(v, segments);
+    std::vector<Triangle> all = triangulate(v, segments, "the whole input");
     s.merge_ms = ms_since(t);
     s.merge_vertices = n;
     s.merge_segments = segments.size();
@@ -317,7 +320,9 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   arena.execute([&] {
     tbb::parallel_for(size_t(0), tiles, size_t(1), [&](size_t t) {
       const std::span<const uint32_t> mine(tile_segments.data() + first[t], first[t + 1] - first[t]);
-      results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, in_final);
+      const std::string name = "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " +
+                               std::to_string(level);
+      results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
     });
   });
 
@@ -360,7 +365,7 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
     merged = tiled_cdt(merge_vertices, merge_segments, options, triangulate, &s);
   } else {
     const auto t = Clock::now();
-    merged = triangulate(merge_vertices, merge_segments);
+    merged = triangulate(merge_vertices, merge_segments, "merge, level " + std::to_string(level));
     s.merge_ms = ms_since(t);
     s.merge_vertices = ids.size();
     s.merge_segments = merge_segments.size();

@@ -18,6 +18,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <string_view>
 #include <vector>
 
 #include "core/cdt_cgal.hpp"
@@ -28,9 +29,10 @@ namespace cdtgpu {
 
 // The CDT of a planar straight-line graph: vertices sorted by (x, y) and unique, segments (a < b) sorted,
 // meeting only at shared endpoints and holding no vertex inside. Returns counter-clockwise triangles in any
-// order. Called from several threads at once (a GPU triangulator serialises itself).
-using TileTriangulator =
-    std::function<std::vector<Triangle>(const std::vector<Point3>& vertices, const std::vector<Edge>& segments)>;
+// order. Called from several threads at once (a GPU triangulator serialises itself). `what` names the call for
+// messages ("tile 3 of 16, level 1", "merge, level 1").
+using TileTriangulator = std::function<std::vector<Triangle>(const std::vector<Point3>& vertices,
+                                                             const std::vector<Edge>& segments, std::string_view what)>;
 
 // CGAL's constrained Delaunay triangulation (core/cdt_cgal.hpp, cdt_of_graph).
 TileTriangulator cgal_tile_triangulator();

@@ -444,3 +444,52 @@ TEST_F(Cli, AGridTooFineOrABadCellIsAUsageErrorAndWritesNothing) {
 }
 
 }  // namespace
+
+// --max-tile-points: tiny tiles give the untiled run's bytes on both backends, with roles, draping, --max-edge,
+// the grid, contours and preview; --stats has the same counts plus the tiles'.
+TEST_F(Cli, TiledRunsWriteTheUntiledBytes) {
+  write_terrain();
+  write("area.wkt", "POLYGON ((500030 6000030, 500170 6000030, 500170 6000170, 500030 6000170, 500030 6000030))\n");
+  write("lake.wkt", "POLYGON ((500060 6000060, 500090 6000060, 500090 6000090, 500060 6000090, 500060 6000060))\n");
+  write("house.wkt", "POLYGON ((500150.5 6000100.5, 500160.5 6000100.5, 500160.5 6000110.5, 500150.5 6000110.5))\n");
+  const std::string in = path("dem.csv") + " " + path("lines.wkt") + " " + path("area.wkt") + ":role=boundary " +
+                         path("lake.wkt") + ":role=hole " + path("house.wkt") + ":z=drape --max-edge 40 -q";
+  auto outputs = [&](const std::string& name) {
+    return " -o " + path(name + ".ply") + " --grid-out " + path(name + ".asc") + " --cell 0.5 --contours-out " +
+           path(name + ".wkt") + " --interval 0.5 --preview " + path(name + ".png") + " --stats " +
+           path(name + ".json");
+  };
+  Result r = run("triangulate " + in + " --backend cgal --max-tile-points 0" + outputs("single"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto single = nlohmann::json::parse(slurp(path("single.json")));
+  EXPECT_FALSE(single["counts"].contains("tiles"));
+  for (const std::string backend : {"cgal", "gpu"})
+    for (const std::string tile : {"16", "50", "300"}) {
+      const std::string name = backend + tile;
+      r = run("triangulate " + in + " --backend " + backend + " --max-tile-points " + tile + outputs(name));
+      ASSERT_EQ(r.code, 0) << name << ": " << r.err;
+      for (const char* ext : {".ply", ".asc", ".wkt", ".png"})
+        EXPECT_TRUE(slurp(path(name + ext)) == slurp(path(std::string("single") + ext))) << name << ext;
+      auto stats = nlohmann::json::parse(slurp(path(name + ".json")));
+      EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2) << name;
+      EXPECT_GT(stats["counts"]["merge_vertices"].get<int>(), 0) << name;
+      for (const char* key : {"tile_points", "tiles", "tile_levels", "tile_final_triangles", "merge_vertices",
+                              "merge_segments", "merge_triangles", "constraint_splits_at_vertices",
+                              "gpu_delaunay_rounds", "gpu_delaunay_built_twice", "gpu_constraint_flip_rounds",
+                              "gpu_legalise_rounds", "gpu_peak_device_bytes"})
+        stats["counts"].erase(key);
+      EXPECT_EQ(stats["counts"], single["counts"]) << name;
+    }
+}
+
+// The bundled sample (real contours, DEM points and building footprints) tiled: the untiled bytes.
+TEST_F(Cli, TiledSampleIsTheUntiledSample) {
+  const std::string s = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
+  const std::string in = s + "contours.shp:z=ELEV " + s + "dem.xyz " + s + "buildings.shp:z=min -q --backend cgal";
+  ASSERT_EQ(run("triangulate " + in + " --max-tile-points 0 -o " + path("single.ply")).code, 0);
+  Result r = run("triangulate " + in + " --max-tile-points 400 -o " + path("tiled.ply") + " --stats " +
+                 path("t.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(slurp(path("tiled.ply")) == slurp(path("single.ply")));
+  EXPECT_GE(nlohmann::json::parse(slurp(path("t.json")))["counts"]["tiles"].get<int>(), 8);
+}

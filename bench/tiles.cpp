@@ -1,0 +1,172 @@
+#include "bench/tiles.hpp"
+
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <map>
+#include <optional>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/figures.hpp"
+#include "core/canonical.hpp"
+#include "core/cdt_cgal.hpp"
+#include "core/resolve.hpp"
+#include "core/tiles.hpp"
+#include "core/workloads.hpp"
+#include "gpu/cdt_pipeline.hpp"
+#include "gpu/tile_triangulator.hpp"
+#include "io/atomic_file.hpp"
+
+namespace cdtgpu {
+namespace {
+
+using figures::Clock;
+using figures::fmt;
+using figures::median;
+using figures::ms_since;
+using json = nlohmann::json;
+
+double peak_rss_gb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / (1024.0 * 1024.0);  // ru_maxrss is in KiB on Linux
+}
+
+struct Row {
+  std::string mode;  // "single" or "tiled"
+  std::string backend;
+  std::vector<double> total_ms, resolve_ms, tiles_ms, merge_ms;
+  TileStats tiles;
+  uint64_t tile_points = 0;
+  Mesh mesh;
+};
+
+// One way of triangulating `p`, timed `runs` times after a warm-up.
+template <class F>
+Row time_row(const std::string& mode, const std::string& backend, int runs, F&& once) {
+  Row row;
+  row.mode = mode;
+  row.backend = backend;
+  for (int r = -1; r < runs; ++r) {
+    Row one;
+    const auto t = Clock::now();
+    once(one);
+    if (r < 0) continue;
+    row.total_ms.push_back(ms_since(t));
+    row.resolve_ms.insert(row.resolve_ms.end(), one.resolve_ms.begin(), one.resolve_ms.end());
+    if (mode == "tiled") row.tiles_ms.push_back(one.tiles.tiles_ms), row.merge_ms.push_back(one.tiles.merge_ms);
+    row.tiles = one.tiles;
+    row.tile_points = one.tile_points;
+    if (r + 1 == runs) row.mesh = std::move(one.mesh);
+  }
+  return row;
+}
+
+void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangulator& tri, Row& out) {
+  const auto t = Clock::now();
+  ResolvedInput in = resolve_constraints(p);
+  out.resolve_ms.push_back(ms_since(t));
+  TileOptions opt;
+  opt.max_tile_points = tile_points;
+  out.tile_points = tile_points;
+  out.mesh = triangulate_tiled(std::move(in), opt, tri, &out.tiles).mesh;
+}
+
+}  // namespace
+
+int run_tiles(const BenchOptions& o) {
+  std::vector<uint64_t> sizes;
+  for (const auto& s : o.sizes) sizes.push_back(parse_bench_size(s));
+  if (sizes.empty()) sizes = o.quick ? std::vector<uint64_t>{200000} : std::vector<uint64_t>{2000000, 16000000};
+  const unsigned threads = std::thread::hardware_concurrency();
+  const int cgal_runs = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
+
+  std::optional<gpu::Context> ctx;
+  std::optional<gpu::GpuCdt> cdt;
+  std::string device = "none (--cgal-only)";
+  if (o.gpu) {
+    gpu::ContextOptions co;
+    co.device = o.device;
+    ctx.emplace(gpu::create_context(co));
+    cdt.emplace(*ctx);
+    device = ctx->info.name + ", driver " + ctx->info.driver_name + " " + ctx->info.driver_info;
+  }
+  std::printf("cdtgpu bench --table tiles, %s\n", bench_utc_now().c_str());
+  std::printf("CPU: %s, %u hardware threads\nGPU: %s\n", bench_cpu_model().c_str(), threads, device.c_str());
+  std::printf("workload: uniform points + a quarter as many Delaunay-edge constraints (seed %llu), in process; "
+              "median of %d runs (single CPU run: %d) after 1 warm-up; total = resolve + tiles + merge + canonical "
+              "order (single runs: the whole backend call); same = the mesh equals the first single run's\n\n",
+              static_cast<unsigned long long>(o.seed), o.runs, cgal_runs);
+  std::printf("%9s %-6s %-6s %7s %6s %6s %7s %9s %9s %9s %9s %9s %9s %7s %s\n", "points", "mode", "backend",
+              "tile", "tiles", "levels", "final%", "merge v", "resolve", "tiles ms", "merge ms", "total ms", "vs single",
+              "RSS GB", "same");
+  std::fflush(stdout);
+
+  json rows = json::array();
+  int failures = 0;
+  for (uint64_t n : sizes) {
+    InputSet in = uniform_points(n, o.seed);
+    add_dt_edge_constraints(in, n / 4, 0.5, o.seed);
+    const PreparedInput p = prepare(in);
+    in = InputSet{};
+    std::vector<Row> results;
+    if (n <= o.cgal_max_points)
+      results.push_back(time_row("single", "cgal", cgal_runs, [&](Row& r) { r.mesh = triangulate_cgal(p).mesh; }));
+    if (cdt)
+      results.push_back(time_row("single", "gpu", o.runs, [&](Row& r) { r.mesh = cdt->triangulate(p).mesh; }));
+    const uint64_t cpu_tile = o.tile_points ? o.tile_points : auto_cpu_tile_points(p.vertices.size(), threads);
+    if (cpu_tile && n <= o.cgal_max_points)
+      results.push_back(time_row("tiled", "cgal", o.runs, [&](Row& r) {
+        tiled_once(p, cpu_tile, cgal_tile_triangulator(), r);
+      }));
+    if (cdt) {
+      const uint64_t gpu_tile = o.tile_points ? o.tile_points
+                                              : std::min(gpu::max_tile_points(*ctx), p.vertices.size() / 4 + 1);
+      const TileTriangulator tri = gpu::gpu_tile_triangulator(*cdt);
+      results.push_back(time_row("tiled", "gpu", o.runs, [&](Row& r) { tiled_once(p, gpu_tile, tri, r); }));
+    }
+    if (results.empty()) continue;
+    const Mesh& reference = results.front().mesh;
+    std::map<std::string, double> single_ms;
+    for (Row& r : results) {
+      const bool same = r.mesh.vertices == reference.vertices && r.mesh.triangles == reference.triangles;
+      if (!same) ++failures;
+      const double total = median(r.total_ms);
+      if (r.mode == "single") single_ms[r.backend] = total;
+      const bool tiled = r.mode == "tiled";
+      const double final_share =
+          tiled && !r.mesh.triangles.empty() ? 100.0 * double(r.tiles.final_triangles) / double(r.mesh.triangles.size())
+                                             : std::nan("");
+      const double vs = tiled && single_ms.count(r.backend) ? single_ms[r.backend] / total : std::nan("");
+      const double rss = peak_rss_gb();
+      std::printf("%9llu %-6s %-6s %7s %6s %6s %7s %9s %9s %9s %9s %9s %9s %7.1f %s\n",
+                  static_cast<unsigned long long>(n), r.mode.c_str(), r.backend.c_str(),
+                  tiled ? std::to_string(r.tile_points).c_str() : "-",
+                  tiled ? std::to_string(r.tiles.tiles).c_str() : "-",
+                  tiled ? std::to_string(r.tiles.levels).c_str() : "-", fmt(final_share).c_str(),
+                  tiled ? std::to_string(r.tiles.merge_vertices).c_str() : "-", fmt(median(r.resolve_ms)).c_str(),
+                  fmt(median(r.tiles_ms)).c_str(), fmt(median(r.merge_ms)).c_str(), fmt(total).c_str(),
+                  fmt(vs, 2).c_str(), rss, same ? "yes" : "NO");
+      std::fflush(stdout);
+      rows.push_back({{"points", n}, {"vertices", p.vertices.size()}, {"constraints", p.constraints.size()},
+                      {"mode", r.mode}, {"backend", r.backend}, {"tile_points", r.tile_points},
+                      {"tiles", r.tiles.tiles}, {"levels", r.tiles.levels},
+                      {"final_triangles", r.tiles.final_triangles}, {"triangles", r.mesh.triangles.size()},
+                      {"merge_vertices", r.tiles.merge_vertices}, {"merge_segments", r.tiles.merge_segments},
+                      {"total_ms", r.total_ms}, {"resolve_ms", r.resolve_ms}, {"tiles_ms", r.tiles_ms},
+                      {"merge_ms", r.merge_ms}, {"peak_rss_gb_after", rss}, {"same", same}});
+    }
+  }
+  if (!o.json_path.empty()) {
+    json j{{"table", "tiles"},           {"date", bench_utc_now()}, {"cpu", bench_cpu_model()},
+           {"threads", threads},         {"device", device},        {"runs", o.runs},
+           {"cgal_runs", cgal_runs},     {"seed", o.seed},          {"rows", rows}};
+    write_file_atomically(o.json_path, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+  }
+  if (failures) std::printf("\n%d tiled or single run(s) differ from the first single run\n", failures);
+  return failures ? 1 : 0;
+}
+
+}  // namespace cdtgpu

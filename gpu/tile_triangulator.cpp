@@ -1,0 +1,51 @@
+#include "gpu/tile_triangulator.hpp"
+
+#include <algorithm>
+#include <memory>
+#include <mutex>
+
+#include <tbb/task_arena.h>
+
+#include "gpu/check.hpp"
+#include "shaders/layout_dt.h"
+
+namespace cdtgpu::gpu {
+
+TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt) {
+  return [&cdt, lock = std::make_shared<std::mutex>()](const std::vector<Point3>& vertices,
+                                                        const std::vector<Edge>& segments, std::string_view what) {
+    // A tile is a resolved graph already: the pipeline's resolve stage is handed the answer.
+    PreparedInput prepared;
+    prepared.vertices = vertices;
+    prepared.constraints = segments;
+    ResolvedInput resolved;
+    resolved.vertices = vertices;
+    resolved.constraints = segments;
+    std::promise<ResolvedInput> ready;
+    ready.set_value(std::move(resolved));
+    // Isolated: a thread waiting inside the pipeline's own parallel loops must not pick up another tile, which
+    // would wait for the lock it holds.
+    return tbb::this_task_arena::isolate([&] {
+      std::lock_guard<std::mutex> one_at_a_time(*lock);
+      try {
+        return std::move(cdt.triangulate(prepared, ready.get_future()).mesh.triangles);
+      } catch (const DeviceError& e) {
+        throw DeviceError(std::string(what) + " (" + std::to_string(vertices.size()) + " vertices, " +
+                          std::to_string(segments.size()) + " segments): " + e.what());
+      }
+    });
+  };
+}
+
+uint64_t max_tile_points(const Context& ctx) {
+  uint64_t device_local = 0;
+  for (size_t h = 0; h < ctx.info.heap_sizes.size(); ++h)
+    if (ctx.info.heap_device_local[h]) device_local = std::max(device_local, ctx.info.heap_sizes[h]);
+  constexpr uint64_t kBytesPerPoint = 260;
+  const uint64_t by_memory = device_local / kBytesPerPoint;
+  const uint64_t by_slots = DT_MAX_SLOTS / 2;
+  const uint64_t by_range = ctx.info.max_storage_buffer_range / 16;  // 16-byte points in descriptor-bound buffers
+  return std::min({by_memory, by_slots, by_range}) / 4 * 3;
+}
+
+}  // namespace cdtgpu::gpu

@@ -1,0 +1,20 @@
+// Tiles of core/tiles through one device: each tile's CDT is a whole GPU run (gpu/cdt_pipeline), one tile at a
+// time on the device while other threads gather the next tiles and sort out the finished ones.
+#pragma once
+#include <cstdint>
+
+#include "core/tiles.hpp"
+#include "gpu/cdt_pipeline.hpp"
+
+namespace cdtgpu::gpu {
+
+// Serialises its calls on `cdt`, which must outlive it; a DeviceError names the tile and its size.
+TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt);
+
+// The most points a tile of its own may hold on this device: the Delaunay build's slot limit and ~260 bytes of
+// device memory a point (the measured peak, docs/performance.md), the storage buffer range (16 bytes a
+// point in descriptor-bound buffers: lavapipe's 128 MiB), with a quarter to spare for the endpoints of
+// the segments that cross into the tile.
+uint64_t max_tile_points(const Context& ctx);
+
+}  // namespace cdtgpu::gpu
