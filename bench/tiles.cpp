@@ -2,6 +2,8 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <optional>
@@ -43,13 +45,14 @@ struct Row {
   Mesh mesh;
 };
 
-// One way of triangulating `p`, timed `runs` times after a warm-up.
+// One way of triangulating `p`, timed `runs` times after a warm-up (none for a single timed run: CGAL's
+// minutes at 16M points).
 template <class F>
 Row time_row(const std::string& mode, const std::string& backend, int runs, F&& once) {
   Row row;
   row.mode = mode;
   row.backend = backend;
-  for (int r = -1; r < runs; ++r) {
+  for (int r = runs > 1 ? -1 : 0; r < runs; ++r) {
     Row one;
     const auto t = Clock::now();
     once(one);
@@ -74,6 +77,35 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
   out.mesh = triangulate_tiled(std::move(in), opt, tri, &out.tiles).mesh;
 }
 
+// Above kDtEdgesMaxPoints the Delaunay-edge constraints (a CGAL triangulation of half the points, minutes at
+// 256M) give way to contour-like chains: the points of every fourth band of one point spacing's height joined
+// in x order, about n / 4 segments of about one spacing. Chains of disjoint bands never cross, and an x-monotone
+// chain through all of a band's points has no vertex inside a segment.
+constexpr uint64_t kDtEdgesMaxPoints = 20'000'000;
+
+void add_band_chains(InputSet& in) {
+  const size_t n = in.points.size();
+  const double spacing = kUniformSide / std::sqrt(double(n));
+  std::vector<std::pair<uint64_t, uint32_t>> chained;  // (band, point)
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t band = uint64_t((in.points[i].y - kUniformY0) / spacing);
+    if (band % 4 == 0) chained.push_back({band, uint32_t(i)});
+  }
+  std::sort(chained.begin(), chained.end(), [&](const auto& a, const auto& b) {
+    const Point3& p = in.points[a.second];
+    const Point3& q = in.points[b.second];
+    return a.first != b.first ? a.first < b.first : (p.x != q.x ? p.x < q.x : p.y < q.y);
+  });
+  for (size_t i = 0; i < chained.size();) {
+    Polyline line;
+    size_t j = i;
+    for (; j < chained.size() && chained[j].first == chained[i].first; ++j)
+      line.points.push_back(in.points[chained[j].second]);
+    if (line.points.size() >= 2) in.lines.push_back(std::move(line));
+    i = j;
+  }
+}
+
 }  // namespace
 
 int run_tiles(const BenchOptions& o) {
@@ -96,7 +128,7 @@ int run_tiles(const BenchOptions& o) {
   std::printf("cdtgpu bench --table tiles, %s\n", bench_utc_now().c_str());
   std::printf("CPU: %s, %u hardware threads\nGPU: %s\n", bench_cpu_model().c_str(), threads, device.c_str());
   std::printf("workload: uniform points + a quarter as many Delaunay-edge constraints (seed %llu), in process; "
-              "median of %d runs (single CPU run: %d) after 1 warm-up; total = resolve + tiles + merge + canonical "
+              "median of %d runs (single CPU run: %d) after 1 warm-up (none for 1 run); total = resolve + tiles + merge + canonical "
               "order (single runs: the whole backend call); same = the mesh equals the first single run's\n\n",
               static_cast<unsigned long long>(o.seed), o.runs, cgal_runs);
   std::printf("%9s %-6s %-6s %7s %6s %6s %7s %9s %9s %9s %9s %9s %9s %7s %s\n", "points", "mode", "backend",
@@ -108,14 +140,24 @@ int run_tiles(const BenchOptions& o) {
   int failures = 0;
   for (uint64_t n : sizes) {
     InputSet in = uniform_points(n, o.seed);
-    add_dt_edge_constraints(in, n / 4, 0.5, o.seed);
+    if (n <= kDtEdgesMaxPoints)
+      add_dt_edge_constraints(in, n / 4, 0.5, o.seed);
+    else
+      add_band_chains(in);
     const PreparedInput p = prepare(in);
     in = InputSet{};
     std::vector<Row> results;
     if (n <= o.cgal_max_points)
       results.push_back(time_row("single", "cgal", cgal_runs, [&](Row& r) { r.mesh = triangulate_cgal(p).mesh; }));
+    uint64_t gpu_single_peak = 0;
     if (cdt)
-      results.push_back(time_row("single", "gpu", o.runs, [&](Row& r) { r.mesh = cdt->triangulate(p).mesh; }));
+      results.push_back(time_row("single", "gpu", o.runs, [&](Row& r) {
+        gpu::GpuCdtStats gs;
+        r.mesh = cdt->triangulate(p, &gs).mesh;
+        gpu_single_peak = gs.peak_device_bytes;
+      }));
+    if (cdt)
+      std::printf("%9s single GPU run: peak device %s MB\n", "", fmt(double(gpu_single_peak) / 1e6).c_str());
     const uint64_t cpu_tile = o.tile_points ? o.tile_points : auto_cpu_tile_points(p.vertices.size(), threads);
     if (cpu_tile && n <= o.cgal_max_points)
       results.push_back(time_row("tiled", "cgal", o.runs, [&](Row& r) {
@@ -124,8 +166,17 @@ int run_tiles(const BenchOptions& o) {
     if (cdt) {
       const uint64_t gpu_tile = o.tile_points ? o.tile_points
                                               : std::min(gpu::max_tile_points(*ctx), p.vertices.size() / 4 + 1);
-      const TileTriangulator tri = gpu::gpu_tile_triangulator(*cdt);
-      results.push_back(time_row("tiled", "gpu", o.runs, [&](Row& r) { tiled_once(p, gpu_tile, tri, r); }));
+      gpu::GpuCdtStats sum;
+      const TileTriangulator tri = gpu::gpu_tile_triangulator(*cdt, &sum);
+      results.push_back(time_row("tiled", "gpu", o.runs, [&](Row& r) {
+        sum = gpu::GpuCdtStats{};
+        tiled_once(p, gpu_tile, tri, r);
+      }));
+      std::string parts;
+      for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
+      std::printf("%9s last tiled GPU run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB\n",
+                  "", fmt(sum.gpu_total_ms).c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
+                  fmt(double(sum.peak_device_bytes) / 1e6).c_str());
     }
     if (results.empty()) continue;
     const Mesh& reference = results.front().mesh;
@@ -149,6 +200,12 @@ int run_tiles(const BenchOptions& o) {
                   tiled ? std::to_string(r.tiles.merge_vertices).c_str() : "-", fmt(median(r.resolve_ms)).c_str(),
                   fmt(median(r.tiles_ms)).c_str(), fmt(median(r.merge_ms)).c_str(), fmt(total).c_str(),
                   fmt(vs, 2).c_str(), rss, same ? "yes" : "NO");
+      if (tiled)
+        std::printf("%9s last run: plan %s ms, tile CDTs %s ms and the tiles' other work %s ms (thread sums), merge "
+                    "input %s ms, keeping the merge's triangles %s ms\n", "",
+                    fmt(r.tiles.plan_ms).c_str(), fmt(r.tiles.tile_cdt_thread_ms).c_str(),
+                    fmt(r.tiles.tile_other_thread_ms).c_str(), fmt(r.tiles.merge_input_ms).c_str(),
+                    fmt(r.tiles.keep_ms).c_str());
       std::fflush(stdout);
       rows.push_back({{"points", n}, {"vertices", p.vertices.size()}, {"constraints", p.constraints.size()},
                       {"mode", r.mode}, {"backend", r.backend}, {"tile_points", r.tile_points},
@@ -156,7 +213,12 @@ int run_tiles(const BenchOptions& o) {
                       {"final_triangles", r.tiles.final_triangles}, {"triangles", r.mesh.triangles.size()},
                       {"merge_vertices", r.tiles.merge_vertices}, {"merge_segments", r.tiles.merge_segments},
                       {"total_ms", r.total_ms}, {"resolve_ms", r.resolve_ms}, {"tiles_ms", r.tiles_ms},
-                      {"merge_ms", r.merge_ms}, {"peak_rss_gb_after", rss}, {"same", same}});
+                      {"merge_ms", r.merge_ms}, {"peak_rss_gb_after", rss}, {"same", same},
+                      {"last_run_parts_ms", {{"plan", r.tiles.plan_ms},
+                                             {"tile_cdt_thread_sum", r.tiles.tile_cdt_thread_ms},
+                                             {"tile_other_thread_sum", r.tiles.tile_other_thread_ms},
+                                             {"merge_input", r.tiles.merge_input_ms},
+                                             {"keep", r.tiles.keep_ms}}}});
     }
   }
   if (!o.json_path.empty()) {

@@ -1,5 +1,6 @@
 // cdtgpu bench --table tiles: the tiled CDT (core/tiles) against the single run, in process, on generated
-// workloads (uniform points and a quarter as many Delaunay-edge constraints; no file I/O).
+// workloads (uniform points and a quarter as many Delaunay-edge constraints; above 20M points contour-like
+// chains through every fourth band of points instead, as many segments; no file I/O).
 //
 //   BenchOptions o;            // bench/bench.hpp
 //   o.table = "tiles";

@@ -10,6 +10,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Exact_rational.h>
 #include <CGAL/Spatial_sort_traits_adapter_2.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 #include <CGAL/property_map.h>
 #include <CGAL/spatial_sort.h>
@@ -148,9 +149,13 @@ CdtResult triangulate_cgal(const PreparedInput& prepared) {
   return result;
 }
 
-std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments) {
+std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+                                   std::vector<uint32_t>* neighbours) {
   using GVb = CGAL::Triangulation_vertex_base_with_info_2<uint32_t, Epick>;
-  using GFb = CGAL::Constrained_triangulation_face_base_2<Epick>;
+  struct FaceIndex {
+    uint32_t i = UINT32_MAX;  // finite faces get their position in the output
+  };
+  using GFb = CGAL::Constrained_triangulation_face_base_2<Epick, CGAL::Triangulation_face_base_with_info_2<FaceIndex, Epick>>;
   using GTds = CGAL::Triangulation_data_structure_2<GVb, GFb>;
   using GraphCdt = CGAL::Constrained_Delaunay_triangulation_2<Epick, GTds, CGAL::No_constraint_intersection_tag>;
   const size_t n = vertices.size();
@@ -175,8 +180,16 @@ std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const st
   std::vector<Triangle> triangles;
   if (cdt.dimension() != 2) return triangles;
   triangles.reserve(cdt.number_of_faces());
-  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+    f->info().i = uint32_t(triangles.size());
     triangles.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
+  }
+  if (neighbours) {
+    neighbours->resize(3 * triangles.size());
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+      for (int k = 0; k < 3; ++k)  // the edge from vertex k to k + 1 is opposite vertex k + 2
+        (*neighbours)[3 * f->info().i + k] = f->neighbor((k + 2) % 3)->info().i;
+  }
   return triangles;
 }
 

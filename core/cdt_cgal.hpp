@@ -19,6 +19,9 @@ CdtResult triangulate_cgal(const PreparedInput& prepared);
 // what resolve_constraints makes), with CGAL's plain Constrained_Delaunay_triangulation_2, which refuses a
 // crossing instead of constructing it. Counter-clockwise triangles in CGAL's face order; the same triangles as
 // triangulate_cgal on the input the graph was resolved from. Fewer than 3 vertices or all collinear: none.
-std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments);
+// `neighbours`, when given: 3 per triangle, [3i + k] the triangle across its edge from vertex k to vertex k + 1,
+// or UINT32_MAX on the hull.
+std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+                                   std::vector<uint32_t>* neighbours = nullptr);
 
 }  // namespace cdtgpu

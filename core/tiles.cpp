@@ -8,11 +8,16 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
 #include <chrono>
+#include <cmath>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -39,7 +44,6 @@ struct Node {
   Rect rect;
   uint32_t lo = 0, hi = 0;        // its own vertices: plan.order[lo, hi)
   int32_t left = -1, right = -1;  // children; -1: a tile
-  bool x_sorted = false;          // order[lo, hi) is sorted by (x, y)
 };
 
 struct Plan {
@@ -48,70 +52,85 @@ struct Plan {
   std::vector<uint32_t> tiles;  // the leaf nodes, left to right in the tree
 };
 
-// k-d splits at the median of the node's longer side (of its vertices' bounding box), level by level, until a
-// node holds at most `max_points`. The vertices before the median in (axis, other axis) order go left, so every
-// vertex strictly left of the split line is in the left node: by induction, every vertex strictly inside a
-// node's rectangle is one of its own.
+// Two-level k-d splits by count: columns of equal counts (vertex ids are in (x, y) order already), then each
+// column, by median splits in (y, x) order on its own core, cut into cells of equal counts; as many columns as make the tiles
+// about square over the data's extent. A cut goes between two consecutive vertices of that order, at the
+// coordinate of the first one after it: every vertex strictly before that coordinate is on the near side, so by
+// induction every vertex strictly inside a tile's rectangle is one of the tile's own. A binary tree over the cuts
+// serves the segments' descent.
 Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
+  const size_t n = v.size();
   Plan plan;
-  plan.order.resize(v.size());
+  plan.order.resize(n);
   std::iota(plan.order.begin(), plan.order.end(), 0u);
-  plan.nodes.push_back(Node{Rect{}, 0, uint32_t(v.size()), -1, -1, true});
-  std::vector<uint32_t> level = {0};
-  while (!level.empty()) {
-    std::vector<uint32_t> split;
-    for (uint32_t i : level)
-      if (plan.nodes[i].hi - plan.nodes[i].lo > max_points) split.push_back(i);
-    std::vector<std::pair<int, double>> cut(split.size());  // axis (0: x, 1: y) and the median's coordinate
-    tbb::parallel_for(size_t(0), split.size(), [&](size_t k) {
-      const Node& node = plan.nodes[split[k]];
-      uint32_t* b = plan.order.data() + node.lo;
-      uint32_t* e = plan.order.data() + node.hi;
-      double x0 = kInf, x1 = -kInf, y0 = kInf, y1 = -kInf;
-      for (const uint32_t* p = b; p != e; ++p) {
-        x0 = std::min(x0, v[*p].x), x1 = std::max(x1, v[*p].x);
-        y0 = std::min(y0, v[*p].y), y1 = std::max(y1, v[*p].y);
-      }
-      const int axis = (x1 - x0 >= y1 - y0) ? 0 : 1;
-      uint32_t* mid = b + (e - b) / 2;
-      if (axis == 1)
-        std::nth_element(b, mid, e, [&](uint32_t p, uint32_t q) {
-          return v[p].y != v[q].y ? v[p].y < v[q].y : v[p].x < v[q].x;
-        });
-      else if (!node.x_sorted)  // vertex ids are in (x, y) order
-        std::nth_element(b, mid, e);
-      cut[k] = {axis, axis == 0 ? v[*mid].x : v[*mid].y};
-    });
-    std::vector<uint32_t> next;
-    for (size_t k = 0; k < split.size(); ++k) {
-      const Node node = plan.nodes[split[k]];
-      const uint32_t mid = node.lo + (node.hi - node.lo) / 2;
-      Node left = node, right = node;
-      left.hi = mid;
-      right.lo = mid;
-      left.x_sorted = right.x_sorted = node.x_sorted && cut[k].first == 0;
-      if (cut[k].first == 0)
-        left.rect.x1 = right.rect.x0 = cut[k].second;
-      else
-        left.rect.y1 = right.rect.y0 = cut[k].second;
-      plan.nodes[split[k]].left = int32_t(plan.nodes.size());
-      plan.nodes.push_back(left);
-      plan.nodes[split[k]].right = int32_t(plan.nodes.size());
-      plan.nodes.push_back(right);
-      next.push_back(uint32_t(plan.nodes.size() - 2));
-      next.push_back(uint32_t(plan.nodes.size() - 1));
+  auto [y0, y1] = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, 1 << 16), std::pair<double, double>{kInf, -kInf},
+      [&](const tbb::blocked_range<size_t>& r, std::pair<double, double> m) {
+        for (size_t i = r.begin(); i < r.end(); ++i) m = {std::min(m.first, v[i].y), std::max(m.second, v[i].y)};
+        return m;
+      },
+      [](auto a, auto b) { return std::pair<double, double>{std::min(a.first, b.first), std::max(a.second, b.second)}; });
+  const double w = v.back().x - v.front().x, h = y1 - y0;
+  const uint64_t tiles = (n + max_points - 1) / max_points;
+  uint64_t columns = h <= 0 ? tiles : w <= 0 ? 1 : uint64_t(std::llround(std::sqrt(double(tiles) * w / h)));
+  columns = std::clamp<uint64_t>(columns, 1, tiles);
+  auto column_start = [&](uint64_t c) { return uint32_t(c * n / columns); };
+  auto cell_count = [&](uint64_t c) {
+    return std::max<uint64_t>(1, (column_start(c + 1) - column_start(c) + max_points - 1) / max_points);
+  };
+  // Each column on its own core: median splits by (y, x), their coordinates in preorder.
+  std::vector<std::vector<double>> cuts(columns);
+  tbb::parallel_for(uint64_t(0), columns, [&](uint64_t c) {
+    auto by_y = [&](uint32_t p, uint32_t q) { return v[p].y != v[q].y ? v[p].y < v[q].y : v[p].x < v[q].x; };
+    std::function<void(uint32_t, uint32_t, uint64_t)> split = [&](uint32_t lo, uint32_t hi, uint64_t count) {
+      if (count <= 1) return;
+      const uint64_t half = count / 2;
+      const uint32_t mid = lo + uint32_t(uint64_t(hi - lo) * half / count);
+      std::nth_element(plan.order.begin() + lo, plan.order.begin() + mid, plan.order.begin() + hi, by_y);
+      cuts[c].push_back(v[plan.order[mid]].y);
+      split(lo, mid, half);
+      split(mid, hi, count - half);
+    };
+    split(column_start(c), column_start(c + 1), cell_count(c));
+  });
+  auto add = [&](const Node& node) {
+    plan.nodes.push_back(node);
+    return int32_t(plan.nodes.size() - 1);
+  };
+  // The tree of column c's cells, consuming its cuts in the preorder they were made in.
+  size_t next_cut = 0;
+  std::function<int32_t(uint64_t, uint32_t, uint32_t, uint64_t, Rect)> cells = [&](uint64_t c, uint32_t lo,
+                                                                                    uint32_t hi, uint64_t count,
+                                                                                    Rect rect) {
+    const int32_t at = add(Node{rect, lo, hi, -1, -1});
+    if (count <= 1) {
+      plan.tiles.push_back(uint32_t(at));
+      return at;
     }
-    level = std::move(next);
-  }
-  std::vector<uint32_t> stack = {0};  // leaves left to right
-  while (!stack.empty()) {
-    const uint32_t i = stack.back();
-    stack.pop_back();
-    if (plan.nodes[i].left < 0)
-      plan.tiles.push_back(i);
-    else
-      stack.push_back(uint32_t(plan.nodes[i].right)), stack.push_back(uint32_t(plan.nodes[i].left));
-  }
+    const uint64_t half = count / 2;
+    const uint32_t mid = lo + uint32_t(uint64_t(hi - lo) * half / count);
+    Rect below = rect, above = rect;
+    below.y1 = above.y0 = cuts[c][next_cut++];
+    const int32_t left = cells(c, lo, mid, half, below);
+    const int32_t right = cells(c, mid, hi, count - half, above);
+    plan.nodes[at].left = left, plan.nodes[at].right = right;
+    return at;
+  };
+  std::function<int32_t(uint64_t, uint64_t, Rect)> cols = [&](uint64_t c0, uint64_t c1, Rect rect) {
+    if (c1 - c0 == 1) {
+      next_cut = 0;
+      return cells(c0, column_start(c0), column_start(c1), cell_count(c0), rect);
+    }
+    const int32_t at = add(Node{rect, 0, 0, -1, -1});
+    const uint64_t mid = (c0 + c1) / 2;
+    Rect west = rect, east = rect;
+    west.x1 = east.x0 = v[column_start(mid)].x;  // the ids of a column range are its (x, y) order
+    const int32_t left = cols(c0, mid, west);
+    const int32_t right = cols(mid, c1, east);
+    plan.nodes[at].left = left, plan.nodes[at].right = right;
+    return at;
+  };
+  cols(0, columns, Rect{});
   return plan;
 }
 
@@ -121,16 +140,18 @@ bool meets(const Rect& r, const Point3& a, const Point3& b) {
   const double x0 = std::max(r.x0, std::min(a.x, b.x)), x1 = std::min(r.x1, std::max(a.x, b.x));
   const double y0 = std::max(r.y0, std::min(a.y, b.y)), y1 = std::min(r.y1, std::max(a.y, b.y));
   if (x0 > x1 || y0 > y1) return false;
+  if (x0 == std::min(a.x, b.x) && x1 == std::max(a.x, b.x) && y0 == std::min(a.y, b.y) && y1 == std::max(a.y, b.y))
+    return true;  // the whole segment's box is in r
   int sides = 0;
   for (const pred::XY c : {pred::XY{x0, y0}, pred::XY{x1, y0}, pred::XY{x0, y1}, pred::XY{x1, y1}})
     sides |= 1 << (1 + pred::orient2d({a.x, a.y}, {b.x, b.y}, c));
   return sides != 1 && sides != 4;  // not all clockwise, not all counter-clockwise
 }
 
-// Whether the closed circumdisk of abc lies in the open interior of r, decided in interval arithmetic: a
-// triangle too flat or too close to the border to tell is taken as not final, which only makes the merge larger.
-// The caller holds CGAL::Protect_FPU_rounding (rounding towards +inf).
-bool disk_inside(const Point3& a, const Point3& b, const Point3& c, const Rect& r) {
+// Whether the closed circumdisk of abc lies in the open interior of r, in interval arithmetic: a triangle too
+// flat or too close to the border to tell is taken as not final, which only makes the merge larger.
+bool disk_inside_intervals(const Point3& a, const Point3& b, const Point3& c, const Rect& r) {
+  CGAL::Protect_FPU_rounding<true> upward;
   using I = CGAL::Interval_nt_advanced;
   const I ax(a.x), ay(a.y);
   const I bx = I(b.x) - ax, by = I(b.y) - ay, cx = I(c.x) - ax, cy = I(c.y) - ay;
@@ -144,59 +165,154 @@ bool disk_inside(const Point3& a, const Point3& b, const Point3& c, const Rect& 
          (r.y0 == -kInf || clear(ay + uy - I(r.y0))) && (r.y1 == kInf || clear(I(r.y1) - ay - uy));
 }
 
+// The same, decided in plain doubles when the answer is clear by more than a bound on their error, else by
+// disk_inside_intervals (~3x slower). With u = 2^-53 and M the largest of |b - a|, |c - a| per coordinate, first
+// order: d = 2((b-a) x (c-a)) is off by at most 16 u M^2 and each numerator of the centre by 36 u M^3 (the
+// differences' own rounding included); so the centre (from a) is off by e <= (36 u M^3 + |centre| 16 u M^2) / |d|
+// + u |centre| per coordinate, the radius by 1.5 e + 3 u r, a gap to a side by e + 2 u (|a - side| + |centre|).
+// Every bound is taken 4x, and d within 64x its error bound goes to intervals (the second-order terms stay tiny).
+bool disk_inside(const Point3& a, const Point3& b, const Point3& c, const Rect& r) {
+  constexpr double u = 0x1p-53;
+  const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
+  const double m = std::max({std::abs(bx), std::abs(by), std::abs(cx), std::abs(cy)});
+  const double d = 2 * (bx * cy - by * cx);
+  const double d_err = 4 * 16 * u * m * m;
+  if (!(std::abs(d) > 64 * d_err)) return disk_inside_intervals(a, b, c, r);
+  const double b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
+  const double ux = (cy * b2 - by * c2) / d, uy = (bx * c2 - cx * b2) / d;
+  const double centre = std::max(std::abs(ux), std::abs(uy));
+  const double e = 4 * ((36 * u * m * m * m + centre * 16 * u * m * m) / std::abs(d) + u * centre);
+  const double radius = std::sqrt(ux * ux + uy * uy);
+  const double radius_err = 4 * (1.5 * e + 3 * u * radius);
+  // +1: clear of the side by more than the error; -1: certainly not clear; 0: too close to tell.
+  auto side = [&](double offset, double gap) {
+    const double slack = e + radius_err + 4 * 2 * u * (std::abs(offset) + centre);
+    return gap - radius > slack ? 1 : gap - radius < -slack ? -1 : 0;
+  };
+  int worst = 1;
+  if (r.x0 != -kInf) worst = std::min(worst, side(a.x - r.x0, (a.x - r.x0) + ux));
+  if (worst >= 0 && r.x1 != kInf) worst = std::min(worst, side(r.x1 - a.x, (r.x1 - a.x) - ux));
+  if (worst >= 0 && r.y0 != -kInf) worst = std::min(worst, side(a.y - r.y0, (a.y - r.y0) + uy));
+  if (worst >= 0 && r.y1 != kInf) worst = std::min(worst, side(r.y1 - a.y, (r.y1 - a.y) - uy));
+  if (worst == 0) return disk_inside_intervals(a, b, c, r);
+  return worst > 0;
+}
+
 uint64_t key_of(uint32_t a, uint32_t b) { return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a; }
 
-// The directed edges of `triangles` that no other triangle of the list has: the border of their union, each
-// with the union on its left.
-std::vector<Edge> border_of(const std::vector<Triangle>& triangles) {
-  std::vector<std::pair<uint64_t, Edge>> edges;
-  edges.reserve(3 * triangles.size());
-  for (const Triangle& t : triangles)
-    for (int k = 0; k < 3; ++k) edges.push_back({key_of(t[k], t[(k + 1) % 3]), {t[k], t[(k + 1) % 3]}});
-  std::sort(edges.begin(), edges.end(), [](const auto& p, const auto& q) { return p.first < q.first; });
-  std::vector<Edge> border;
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i + 1;
-    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
-    if (j == i + 1) border.push_back(edges[i].second);
-    i = j;
-  }
-  return border;
+// Parallel compaction: the items of [0, n) that `keep` takes, in order, each written by `emit(i, out)`.
+template <class T, class Count, class Emit>
+std::vector<T> compact(size_t n, Count count, Emit emit) {
+  constexpr size_t kBlock = 1 << 16;
+  const size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<size_t> first(blocks + 1, 0);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) first[b + 1] += count(i);
+  });
+  for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
+  std::vector<T> out(first[blocks]);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    T* at = out.data() + first[b];
+    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) at = emit(i, at);
+  });
+  return out;
+}
+
+// Without the triangulator's neighbours: marks bit k of a final triangle whose edge a->b (from vertex k) has no
+// twin b->a in another final triangle. The final triangles' edges listed by their first vertex (a counting sort)
+// make the twin a look-up among a handful.
+void mark_border(const std::vector<Triangle>& triangles, size_t nl, std::vector<uint8_t>& final_mask) {
+  const size_t nt = triangles.size();
+  std::vector<uint32_t> start(nl + 1, 0);
+  tbb::parallel_for(size_t(0), nt, [&](size_t i) {
+    if (final_mask[i])
+      for (uint32_t a : triangles[i]) std::atomic_ref<uint32_t>(start[a + 1]).fetch_add(1, std::memory_order_relaxed);
+  });
+  for (size_t i = 0; i < nl; ++i) start[i + 1] += start[i];
+  std::vector<uint32_t> cursor(start.begin(), start.end() - 1), target(start[nl]);
+  tbb::parallel_for(size_t(0), nt, [&](size_t i) {
+    if (!final_mask[i]) return;
+    const Triangle& t = triangles[i];
+    for (int k = 0; k < 3; ++k)
+      target[std::atomic_ref<uint32_t>(cursor[t[k]]).fetch_add(1, std::memory_order_relaxed)] = t[(k + 1) % 3];
+  });
+  tbb::parallel_for(size_t(0), nt, [&](size_t i) {
+    if (!final_mask[i]) return;
+    const Triangle& t = triangles[i];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      const uint32_t* from = target.data() + start[b];
+      const uint32_t* to = target.data() + start[b + 1];
+      if (std::find(from, to, a) == to) final_mask[i] |= uint8_t(1 << k);
+    }
+  });
 }
 
 // One tile: its CDT, its final triangles (vertex ids of the whole) and their border.
 struct TileResult {
   std::vector<Triangle> final_triangles;
   std::vector<Edge> border;
+  double cdt_ms = 0, other_ms = 0;
 };
 
 TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segments, const Plan& plan,
                     const Node& node, std::span<const uint32_t> tile_segments, const TileTriangulator& triangulate,
                     const std::string& name, std::vector<uint8_t>& in_final) {
+  const auto t0 = Clock::now();
   std::vector<uint32_t> ids(plan.order.begin() + node.lo, plan.order.begin() + node.hi);
   for (uint32_t s : tile_segments) ids.push_back(segments[s][0]), ids.push_back(segments[s][1]);
-  std::sort(ids.begin(), ids.end());  // ids in (x, y) order: the local vertices stay sorted
+  tbb::parallel_sort(ids.begin(), ids.end());  // ids in (x, y) order: the local vertices stay sorted
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-  std::vector<Point3> local(ids.size());
-  for (size_t i = 0; i < ids.size(); ++i) local[i] = v[ids[i]];
+  const size_t nl = ids.size();
+  std::vector<Point3> local(nl);
+  tbb::parallel_for(size_t(0), nl, [&](size_t i) { local[i] = v[ids[i]]; });
   auto local_of = [&](uint32_t id) { return uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()); };
-  std::vector<Edge> local_segments;
-  local_segments.reserve(tile_segments.size());
-  for (uint32_t s : tile_segments) local_segments.push_back({local_of(segments[s][0]), local_of(segments[s][1])});
-  std::sort(local_segments.begin(), local_segments.end());
+  std::vector<Edge> local_segments(tile_segments.size());
+  tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
+    local_segments[i] = {local_of(segments[tile_segments[i]][0]), local_of(segments[tile_segments[i]][1])};
+  });
+  tbb::parallel_sort(local_segments.begin(), local_segments.end());
 
-  const std::vector<Triangle> triangles = triangulate(local, local_segments, name);
   TileResult r;
-  {
-    CGAL::Protect_FPU_rounding<true> upward;
-    for (const Triangle& t : triangles)
-      if (disk_inside(local[t[0]], local[t[1]], local[t[2]], node.rect))
-        r.final_triangles.push_back({ids[t[0]], ids[t[1]], ids[t[2]]});
+  const auto t1 = Clock::now();
+  TileMesh mesh = triangulate(local, local_segments, name);
+  r.cdt_ms = ms_since(t1);
+  const std::vector<Triangle>& triangles = mesh.triangles;
+  const size_t nt = triangles.size();
+  std::vector<uint8_t> final_mask(nt, 0);  // bit 3: final; bit k < 3: its edge k is on the final region's border
+  tbb::parallel_for(size_t(0), nt, [&](size_t i) {
+    const Triangle& t = triangles[i];
+    final_mask[i] = disk_inside(local[t[0]], local[t[1]], local[t[2]], node.rect) ? 8 : 0;
+  });
+  if (!mesh.neighbours.empty()) {
+    tbb::parallel_for(size_t(0), nt, [&](size_t i) {
+      if (!final_mask[i]) return;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t nb = mesh.neighbours[3 * i + k];
+        if (nb == UINT32_MAX || !final_mask[nb]) final_mask[i] |= uint8_t(1 << k);
+      }
+    });
+  } else {
+    mark_border(triangles, nl, final_mask);
   }
+  r.final_triangles = compact<Triangle>(
+      nt, [&](size_t i) { return final_mask[i] ? 1 : 0; },
+      [&](size_t i, Triangle* at) {
+        if (final_mask[i]) *at++ = {ids[triangles[i][0]], ids[triangles[i][1]], ids[triangles[i][2]]};
+        return at;
+      });
+  r.border = compact<Edge>(
+      nt, [&](size_t i) { return std::popcount(unsigned(final_mask[i] & 7)); },
+      [&](size_t i, Edge* at) {
+        for (int k = 0; k < 3; ++k)
+          if (final_mask[i] & (1 << k)) *at++ = {ids[triangles[i][k]], ids[triangles[i][(k + 1) % 3]]};
+        return at;
+      });
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
-  for (const Triangle& t : r.final_triangles)
-    for (uint32_t id : t) in_final[id] = 1;
-  r.border = border_of(r.final_triangles);
+  tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
+    for (uint32_t id : r.final_triangles[i]) std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
+  });
+  r.other_ms = ms_since(t0) - r.cdt_ms;
   return r;
 }
 
@@ -259,7 +375,11 @@ std::vector<Triangle> outside_final(const std::vector<Triangle>& m, const std::v
 }  // namespace
 
 TileTriangulator cgal_tile_triangulator() {
-  return [](const std::vector<Point3>& v, const std::vector<Edge>& s, std::string_view) { return cdt_of_graph(v, s); };
+  return [](const std::vector<Point3>& v, const std::vector<Edge>& s, std::string_view) {
+    TileMesh m;
+    m.triangles = cdt_of_graph(v, s, &m.neighbours);
+    return m;
+  };
 }
 
 std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<Edge>& segments,
@@ -270,7 +390,7 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   const uint64_t level = s.levels + 1;
   if (options.max_tile_points < 3 || n <= options.max_tile_points) {
     const auto t = Clock::now();
-    std::vector<Triangle> all = triangulate(v, segments, "the whole input");
+    std::vector<Triangle> all = triangulate(v, segments, "the whole input").triangles;
     s.merge_ms = ms_since(t);
     s.merge_vertices = n;
     s.merge_segments = segments.size();
@@ -313,6 +433,7 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   for (size_t i = 0; i < pairs.size(); ++i) tile_segments[i] = pairs[i].second, ++first[pairs[i].first + 1];
   for (size_t t = 0; t < tiles; ++t) first[t + 1] += first[t];
 
+  s.plan_ms += ms_since(t_tiles);
   std::vector<uint8_t> in_final(n, 0);
   std::vector<TileResult> results(tiles);
   const unsigned threads = options.parallel_tiles ? options.parallel_tiles : std::thread::hardware_concurrency();
@@ -328,9 +449,12 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
 
   // The merge: the vertices not inside the final region, the segments between them (a segment with an end
   // inside the final region lies inside it) and the final region's border.
+  const auto t_merge_input = Clock::now();
   std::vector<Triangle> out;
   std::vector<Edge> border;
   for (TileResult& r : results) {
+    s.tile_cdt_thread_ms += r.cdt_ms;
+    s.tile_other_thread_ms += r.other_ms;
     out.insert(out.end(), r.final_triangles.begin(), r.final_triangles.end());
     border.insert(border.end(), r.border.begin(), r.border.end());
     r = TileResult{};
@@ -355,7 +479,8 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   merge_segments.erase(std::unique(merge_segments.begin(), merge_segments.end()), merge_segments.end());
   s.tiles += tiles;
   s.levels += 1;
-  s.final_triangles += out.size();
+  if (level == 1) s.final_triangles = out.size();
+  s.merge_input_ms += ms_since(t_merge_input);
   s.tiles_ms += ms_since(t_tiles);
 
   // Tiled again while that shrinks it; the last level is one call (its time is merge_ms).
@@ -365,7 +490,7 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
     merged = tiled_cdt(merge_vertices, merge_segments, options, triangulate, &s);
   } else {
     const auto t = Clock::now();
-    merged = triangulate(merge_vertices, merge_segments, "merge, level " + std::to_string(level));
+    merged = triangulate(merge_vertices, merge_segments, "merge, level " + std::to_string(level)).triangles;
     s.merge_ms = ms_since(t);
     s.merge_vertices = ids.size();
     s.merge_segments = merge_segments.size();
@@ -375,6 +500,7 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   if (!again) s.merge_triangles = kept.size();
   for (Triangle& t : kept) out.push_back({ids[t[0]], ids[t[1]], ids[t[2]]});
   s.tiles_ms += ms_since(t_keep);
+  s.keep_ms += ms_since(t_keep);
   return out;
 }
 
@@ -386,6 +512,10 @@ CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options, cons
   r.mesh.vertices = std::move(in.vertices);
   canonicalize(r.mesh);
   return r;
+}
+
+bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0, double y1) {
+  return disk_inside(a, b, c, Rect{x0, x1, y0, y1});
 }
 
 uint64_t auto_cpu_tile_points(uint64_t vertices, unsigned cores) {

@@ -27,12 +27,18 @@
 
 namespace cdtgpu {
 
+// A tile's CDT: counter-clockwise triangles in any order, and optionally their neighbours (cdt_of_graph's
+// layout: [3i + k] across the edge from vertex k to k + 1, UINT32_MAX on the hull); empty: worked out here.
+struct TileMesh {
+  std::vector<Triangle> triangles;
+  std::vector<uint32_t> neighbours;
+};
+
 // The CDT of a planar straight-line graph: vertices sorted by (x, y) and unique, segments (a < b) sorted,
-// meeting only at shared endpoints and holding no vertex inside. Returns counter-clockwise triangles in any
-// order. Called from several threads at once (a GPU triangulator serialises itself). `what` names the call for
-// messages ("tile 3 of 16, level 1", "merge, level 1").
-using TileTriangulator = std::function<std::vector<Triangle>(const std::vector<Point3>& vertices,
-                                                             const std::vector<Edge>& segments, std::string_view what)>;
+// meeting only at shared endpoints and holding no vertex inside. Called from several threads at once (a GPU
+// triangulator serialises itself). `what` names the call for messages ("tile 3 of 16, level 1", "merge, level 1").
+using TileTriangulator = std::function<TileMesh(const std::vector<Point3>& vertices,
+                                                const std::vector<Edge>& segments, std::string_view what)>;
 
 // CGAL's constrained Delaunay triangulation (core/cdt_cgal.hpp, cdt_of_graph).
 TileTriangulator cgal_tile_triangulator();
@@ -48,11 +54,14 @@ struct TileOptions {
 struct TileStats {
   uint64_t tiles = 0;            // tiles of every level
   uint64_t levels = 0;           // 1: tiles and one merge; 2: the merge was tiled once more; ...
-  uint64_t final_triangles = 0;  // found final in tiles, every level
+  uint64_t final_triangles = 0;  // final in the first level's tiles (later levels' may be dropped again)
   uint64_t merge_vertices = 0;   // the last merge, the one triangulated in one call
   uint64_t merge_segments = 0;   // its constraints (segments and final-region border edges)
   uint64_t merge_triangles = 0;  // its triangles kept
   double tiles_ms = 0, merge_ms = 0;  // wall time: tiles and their bookkeeping, the last merge's call
+  // Parts of tiles_ms, every level: the k-d plan and the segments' tiles (wall), the tiles' triangulator calls
+  // and the rest of their work (summed over threads), building the merge input and keeping its triangles (wall).
+  double plan_ms = 0, tile_cdt_thread_ms = 0, tile_other_thread_ms = 0, merge_input_ms = 0, keep_ms = 0;
 };
 
 // The triangles of CDT(vertices, segments) (the graph as TileTriangulator takes it), tiled as `options` say.
@@ -64,6 +73,10 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& vertices, const std::
 // `in` was resolved from.
 CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options, const TileTriangulator& triangulate,
                             TileStats* stats = nullptr);
+
+// Whether the closed circumdisk of abc lies in the open rectangle (x0, x1) x (y0, y1) (±inf allowed): the tiles'
+// test of a final triangle. True only when it certainly does; near-ties and flat triangles answer false.
+bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0, double y1);
 
 // The tile size `--max-tile-points` auto picks for the CPU: 0 (no tiles) below min_points or on one core, else
 // vertices / (4 x cores), so that every core has a few tiles (docs/tiles.md has the measurements).

@@ -11,8 +11,20 @@
 
 namespace cdtgpu::gpu {
 
-TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt) {
-  return [&cdt, lock = std::make_shared<std::mutex>()](const std::vector<Point3>& vertices,
+namespace {
+
+void add(std::vector<std::pair<std::string, double>>& sum, const std::vector<std::pair<std::string, double>>& one) {
+  for (const auto& [name, ms] : one) {
+    auto it = std::find_if(sum.begin(), sum.end(), [&](const auto& x) { return x.first == name; });
+    if (it == sum.end()) sum.emplace_back(name, ms);
+    else it->second += ms;
+  }
+}
+
+}  // namespace
+
+TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum) {
+  return [&cdt, sum, lock = std::make_shared<std::mutex>()](const std::vector<Point3>& vertices,
                                                         const std::vector<Edge>& segments, std::string_view what) {
     // A tile is a resolved graph already: the pipeline's resolve stage is handed the answer.
     PreparedInput prepared;
@@ -28,7 +40,16 @@ TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt) {
     return tbb::this_task_arena::isolate([&] {
       std::lock_guard<std::mutex> one_at_a_time(*lock);
       try {
-        return std::move(cdt.triangulate(prepared, ready.get_future()).mesh.triangles);
+        GpuCdtStats one;
+        TileMesh mesh{std::move(cdt.triangulate(prepared, ready.get_future(), &one).mesh.triangles), {}};
+        if (sum) {
+          add(sum->wall_ms, one.wall_ms);
+          add(sum->gpu_ms, one.gpu_ms);
+          sum->gpu_total_ms += one.gpu_total_ms;
+          sum->wall_total_ms += one.wall_total_ms;
+          sum->peak_device_bytes = std::max(sum->peak_device_bytes, one.peak_device_bytes);
+        }
+        return mesh;
       } catch (const DeviceError& e) {
         throw DeviceError(std::string(what) + " (" + std::to_string(vertices.size()) + " vertices, " +
                           std::to_string(segments.size()) + " segments): " + e.what());

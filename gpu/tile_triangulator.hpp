@@ -8,8 +8,9 @@
 
 namespace cdtgpu::gpu {
 
-// Serialises its calls on `cdt`, which must outlive it; a DeviceError names the tile and its size.
-TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt);
+// Serialises its calls on `cdt`, which must outlive it; a DeviceError names the tile and its size. `sum`, when
+// given (and outliving it): every call's stage times added up, by name, and the largest device memory peak.
+TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum = nullptr);
 
 // The most points a tile of its own may hold on this device: the Delaunay build's slot limit and ~260 bytes of
 // device memory a point (the measured peak, docs/performance.md), the storage buffer range (16 bytes a

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <CGAL/Exact_rational.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -18,6 +20,8 @@
 
 namespace cdtgpu {
 namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 Polyline line(std::vector<Point3> pts, bool closed = false) {
   Polyline l;
@@ -177,6 +181,49 @@ TEST(Tiles, SameTrianglesWhateverTheThreadCount) {
   const CdtResult a = triangulate_tiled(resolve_constraints(p), one, cgal_tile_triangulator());
   const CdtResult b = triangulate_tiled(resolve_constraints(p), all, cgal_tile_triangulator());
   EXPECT_TRUE(a.mesh.triangles == b.mesh.triangles);
+}
+
+// The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at UTM
+// offsets, against rectangles whose sides sit at the exact circle's extremes and a hair beside them.
+TEST(Tiles, CircumdiskTestIsNeverWrongAboutInside) {
+  using Q = CGAL::Exact_rational;
+  std::mt19937_64 rng(17);
+  auto exact = [](const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0, double y1) {
+    const Q bx = Q(b.x) - Q(a.x), by = Q(b.y) - Q(a.y), cx = Q(c.x) - Q(a.x), cy = Q(c.y) - Q(a.y);
+    const Q d = 2 * (bx * cy - by * cx);
+    if (d == 0) return false;
+    const Q b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
+    const Q ux = (cy * b2 - by * c2) / d, uy = (bx * c2 - cx * b2) / d, r2 = ux * ux + uy * uy;
+    auto clear = [&](const Q& gap) { return gap > 0 && gap * gap > r2; };
+    return (std::isinf(x0) || clear(Q(a.x) + ux - Q(x0))) && (std::isinf(x1) || clear(Q(x1) - Q(a.x) - ux)) &&
+           (std::isinf(y0) || clear(Q(a.y) + uy - Q(y0))) && (std::isinf(y1) || clear(Q(y1) - Q(a.y) - uy));
+  };
+  int inside = 0, checked = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const double scale = std::ldexp(1.0, int(uniform_below(rng, 40)) - 20);
+    const Point3 a{500000 + unit_double(rng) * 1000, 6000000 + unit_double(rng) * 1000, 0};
+    Point3 b{a.x + (unit_double(rng) - 0.5) * scale, a.y + (unit_double(rng) - 0.5) * scale, 0};
+    Point3 c{a.x + (unit_double(rng) - 0.5) * scale, a.y + (unit_double(rng) - 0.5) * scale, 0};
+    if (i % 3 == 0) c = {b.x + (b.x - a.x) * 0.75, b.y + (b.y - a.y) * 0.75 + scale * 1e-12 * (i % 7), 0};  // flat
+    // The circle's extremes in doubles, then sides at them and a few ulps inside and outside.
+    const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y, d = 2 * (bx * cy - by * cx);
+    if (d == 0) continue;
+    const double ux = (cy * (bx * bx + by * by) - by * (cx * cx + cy * cy)) / d;
+    const double uy = (bx * (cx * cx + cy * cy) - cx * (bx * bx + by * by)) / d;
+    const double r = std::hypot(ux, uy);
+    for (int k = -3; k <= 3; ++k) {
+      const double nudge = k * 4e-16 * (std::abs(a.x) + r);
+      const double x0 = a.x + ux - r - nudge, x1 = a.x + ux + r + nudge;
+      const double y0 = a.y + uy - r - nudge, y1 = a.y + uy + r + nudge;
+      const bool got = circumdisk_inside(a, b, c, x0, x1, y0, y1);
+      ASSERT_FALSE(got && !exact(a, b, c, x0, x1, y0, y1)) << i << " " << k;
+      const bool wide = circumdisk_inside(a, b, c, x0 - r, kInf, -kInf, y1 + r);
+      ASSERT_FALSE(wide && !exact(a, b, c, x0 - r, kInf, -kInf, y1 + r)) << i;
+      inside += wide;
+      ++checked;
+    }
+  }
+  EXPECT_GT(inside, checked / 2) << "the test should rarely give up on clear cases";
 }
 
 TEST(Tiles, AutoTileSizeForTheCpu) {
