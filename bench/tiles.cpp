@@ -115,15 +115,14 @@ int run_tiles(const BenchOptions& o) {
   const unsigned threads = std::thread::hardware_concurrency();
   const int cgal_runs = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
 
-  std::optional<gpu::Context> ctx;
-  std::optional<gpu::GpuCdt> cdt;
+  // Each GPU row gets a context of its own, as each `cdtgpu triangulate` run does: the H100's clock drops after
+  // seconds without load (the CPU rows) and our bursts do not raise it again (bench/bench.cpp, time_gpu).
+  gpu::ContextOptions co;
+  co.device = o.device;
   std::string device = "none (--cgal-only)";
   if (o.gpu) {
-    gpu::ContextOptions co;
-    co.device = o.device;
-    ctx.emplace(gpu::create_context(co));
-    cdt.emplace(*ctx);
-    device = ctx->info.name + ", driver " + ctx->info.driver_name + " " + ctx->info.driver_info;
+    const gpu::Context ctx = gpu::create_context(co);
+    device = ctx.info.name + ", driver " + ctx.info.driver_name + " " + ctx.info.driver_info;
   }
   std::printf("cdtgpu bench --table tiles, %s\n", bench_utc_now().c_str());
   std::printf("CPU: %s, %u hardware threads\nGPU: %s\n", bench_cpu_model().c_str(), threads, device.c_str());
@@ -150,24 +149,28 @@ int run_tiles(const BenchOptions& o) {
     if (n <= o.cgal_max_points)
       results.push_back(time_row("single", "cgal", cgal_runs, [&](Row& r) { r.mesh = triangulate_cgal(p).mesh; }));
     uint64_t gpu_single_peak = 0;
-    if (cdt)
+    if (o.gpu) {
+      const gpu::Context ctx = gpu::create_context(co);
+      const gpu::GpuCdt cdt(ctx);
       results.push_back(time_row("single", "gpu", o.runs, [&](Row& r) {
         gpu::GpuCdtStats gs;
-        r.mesh = cdt->triangulate(p, &gs).mesh;
+        r.mesh = cdt.triangulate(p, &gs).mesh;
         gpu_single_peak = gs.peak_device_bytes;
       }));
-    if (cdt)
       std::printf("%9s single GPU run: peak device %s MB\n", "", fmt(double(gpu_single_peak) / 1e6).c_str());
+    }
     const uint64_t cpu_tile = o.tile_points ? o.tile_points : auto_cpu_tile_points(p.vertices.size(), threads);
     if (cpu_tile && n <= o.cgal_max_points)
       results.push_back(time_row("tiled", "cgal", o.runs, [&](Row& r) {
         tiled_once(p, cpu_tile, cgal_tile_triangulator(), r);
       }));
-    if (cdt) {
+    if (o.gpu) {
+      const gpu::Context ctx = gpu::create_context(co);
+      const gpu::GpuCdt cdt(ctx);
       const uint64_t gpu_tile = o.tile_points ? o.tile_points
-                                              : std::min(gpu::max_tile_points(*ctx), p.vertices.size() / 4 + 1);
+                                              : std::min(gpu::max_tile_points(ctx), p.vertices.size() / 4 + 1);
       gpu::GpuCdtStats sum;
-      const TileTriangulator tri = gpu::gpu_tile_triangulator(*cdt, &sum);
+      const TileTriangulator tri = gpu::gpu_tile_triangulator(cdt, &sum);
       results.push_back(time_row("tiled", "gpu", o.runs, [&](Row& r) {
         sum = gpu::GpuCdtStats{};
         tiled_once(p, gpu_tile, tri, r);
@@ -202,10 +205,10 @@ int run_tiles(const BenchOptions& o) {
                   fmt(vs, 2).c_str(), rss, same ? "yes" : "NO");
       if (tiled)
         std::printf("%9s last run: plan %s ms, tile CDTs %s ms and the tiles' other work %s ms (thread sums), merge "
-                    "input %s ms, keeping the merge's triangles %s ms\n", "",
+                    "input %s ms, keeping the merge's triangles %s ms, canonical order %s ms\n", "",
                     fmt(r.tiles.plan_ms).c_str(), fmt(r.tiles.tile_cdt_thread_ms).c_str(),
                     fmt(r.tiles.tile_other_thread_ms).c_str(), fmt(r.tiles.merge_input_ms).c_str(),
-                    fmt(r.tiles.keep_ms).c_str());
+                    fmt(r.tiles.keep_ms).c_str(), fmt(r.tiles.order_ms).c_str());
       std::fflush(stdout);
       rows.push_back({{"points", n}, {"vertices", p.vertices.size()}, {"constraints", p.constraints.size()},
                       {"mode", r.mode}, {"backend", r.backend}, {"tile_points", r.tile_points},
@@ -218,7 +221,8 @@ int run_tiles(const BenchOptions& o) {
                                              {"tile_cdt_thread_sum", r.tiles.tile_cdt_thread_ms},
                                              {"tile_other_thread_sum", r.tiles.tile_other_thread_ms},
                                              {"merge_input", r.tiles.merge_input_ms},
-                                             {"keep", r.tiles.keep_ms}}}});
+                                             {"keep", r.tiles.keep_ms},
+                                             {"canonical_order", r.tiles.order_ms}}}});
     }
   }
   if (!o.json_path.empty()) {

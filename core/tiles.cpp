@@ -20,6 +20,7 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <queue>
 #include <stdexcept>
 #include <thread>
 
@@ -248,6 +249,61 @@ void mark_border(const std::vector<Triangle>& triangles, size_t nl, std::vector<
   });
 }
 
+// A triangle list in canonical form (core/canonical.hpp): each rotated to start at its smallest index, sorted.
+// A GPU tile's list comes sorted already, and vertex ids mapped by a sorted id list keep any list sorted.
+void make_run(std::vector<Triangle>& run) {
+  tbb::parallel_for(size_t(0), run.size(), [&](size_t i) {
+    Triangle& t = run[i];
+    const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
+    t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
+  });
+  if (!std::is_sorted(run.begin(), run.end())) tbb::parallel_sort(run.begin(), run.end());
+}
+
+// The sorted runs merged into one sorted list, in parts on all cores: splitters sampled from the runs, each part
+// a heap merge of the runs' pieces between two splitters.
+std::vector<Triangle> merge_runs(std::vector<std::vector<Triangle>>& runs) {
+  runs.erase(std::remove_if(runs.begin(), runs.end(), [](const auto& r) { return r.empty(); }), runs.end());
+  if (runs.empty()) return {};
+  if (runs.size() == 1) return std::move(runs.front());
+  size_t total = 0;
+  for (const auto& r : runs) total += r.size();
+  const size_t parts = std::clamp<size_t>(total / 65536, 1, 4 * std::max(1u, std::thread::hardware_concurrency()));
+  const size_t step = std::max<size_t>(1, total / (parts * 16));
+  std::vector<Triangle> samples;
+  for (const auto& r : runs)
+    for (size_t i = step / 2; i < r.size(); i += step) samples.push_back(r[i]);
+  std::sort(samples.begin(), samples.end());
+  std::vector<std::vector<size_t>> cut(parts + 1, std::vector<size_t>(runs.size(), 0));
+  for (size_t r = 0; r < runs.size(); ++r) cut[parts][r] = runs[r].size();
+  for (size_t j = 1; j < parts; ++j) {
+    const Triangle& splitter = samples[j * samples.size() / parts];
+    for (size_t r = 0; r < runs.size(); ++r)
+      cut[j][r] = size_t(std::lower_bound(runs[r].begin(), runs[r].end(), splitter) - runs[r].begin());
+  }
+  std::vector<size_t> offset(parts + 1, 0);
+  for (size_t j = 0; j < parts; ++j) {
+    offset[j + 1] = offset[j];
+    for (size_t r = 0; r < runs.size(); ++r) offset[j + 1] += cut[j + 1][r] - cut[j][r];
+  }
+  std::vector<Triangle> out(total);
+  tbb::parallel_for(size_t(0), parts, [&](size_t j) {
+    using Head = std::pair<Triangle, uint32_t>;  // the next triangle of a run, and the run
+    std::priority_queue<Head, std::vector<Head>, std::greater<Head>> heap;
+    std::vector<size_t> at(cut[j]);
+    for (size_t r = 0; r < runs.size(); ++r)
+      if (at[r] < cut[j + 1][r]) heap.push({runs[r][at[r]], uint32_t(r)});
+    Triangle* o = out.data() + offset[j];
+    while (!heap.empty()) {
+      const uint32_t r = heap.top().second;
+      *o++ = heap.top().first;
+      heap.pop();
+      if (++at[r] < cut[j + 1][r]) heap.push({runs[r][at[r]], r});
+    }
+  });
+  return out;
+}
+
 // One tile: its CDT, its final triangles (vertex ids of the whole) and their border.
 struct TileResult {
   std::vector<Triangle> final_triangles;
@@ -308,6 +364,7 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
           if (final_mask[i] & (1 << k)) *at++ = {ids[triangles[i][k]], ids[triangles[i][(k + 1) % 3]]};
         return at;
       });
+  make_run(r.final_triangles);
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
   tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
     for (uint32_t id : r.final_triangles[i]) std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
@@ -382,19 +439,22 @@ TileTriangulator cgal_tile_triangulator() {
   };
 }
 
-std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<Edge>& segments,
-                                const TileOptions& options, const TileTriangulator& triangulate, TileStats* stats) {
-  TileStats local_stats;
-  TileStats& s = stats ? *stats : local_stats;
+namespace {
+
+// tiled_cdt's triangles as sorted canonical runs: one per tile, one for the merge's.
+std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, const std::vector<Edge>& segments,
+                                              const TileOptions& options, const TileTriangulator& triangulate,
+                                              TileStats& s) {
   const uint64_t n = v.size();
   const uint64_t level = s.levels + 1;
   if (options.max_tile_points < 3 || n <= options.max_tile_points) {
     const auto t = Clock::now();
-    std::vector<Triangle> all = triangulate(v, segments, "the whole input").triangles;
+    std::vector<std::vector<Triangle>> all(1, triangulate(v, segments, "the whole input").triangles);
+    make_run(all[0]);
     s.merge_ms = ms_since(t);
     s.merge_vertices = n;
     s.merge_segments = segments.size();
-    s.merge_triangles = all.size();
+    s.merge_triangles = all[0].size();
     return all;
   }
   const auto t_tiles = Clock::now();
@@ -450,26 +510,40 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   // The merge: the vertices not inside the final region, the segments between them (a segment with an end
   // inside the final region lies inside it) and the final region's border.
   const auto t_merge_input = Clock::now();
-  std::vector<Triangle> out;
+  std::vector<std::vector<Triangle>> runs(tiles);
   std::vector<Edge> border;
-  for (TileResult& r : results) {
-    s.tile_cdt_thread_ms += r.cdt_ms;
-    s.tile_other_thread_ms += r.other_ms;
-    out.insert(out.end(), r.final_triangles.begin(), r.final_triangles.end());
-    border.insert(border.end(), r.border.begin(), r.border.end());
-    r = TileResult{};
+  uint64_t final_count = 0;
+  for (size_t t = 0; t < tiles; ++t) {
+    s.tile_cdt_thread_ms += results[t].cdt_ms;
+    s.tile_other_thread_ms += results[t].other_ms;
+    final_count += results[t].final_triangles.size();
+    runs[t] = std::move(results[t].final_triangles);
+    border.insert(border.end(), results[t].border.begin(), results[t].border.end());
   }
+  results.clear();
   std::vector<uint8_t> in_merge(n);
-  for (size_t i = 0; i < n; ++i) in_merge[i] = !in_final[i];
+  tbb::parallel_for(size_t(0), n, [&](size_t i) { in_merge[i] = !in_final[i]; });
   for (const Edge& e : border) in_merge[e[0]] = in_merge[e[1]] = 1;
-  std::vector<uint32_t> ids, local_of(n, 0);
-  for (uint32_t i = 0; i < n; ++i)
-    if (in_merge[i]) local_of[i] = uint32_t(ids.size()), ids.push_back(i);
+  const std::vector<uint32_t> ids = compact<uint32_t>(
+      n, [&](size_t i) { return in_merge[i]; },
+      [&](size_t i, uint32_t* at) {
+        if (in_merge[i]) *at++ = uint32_t(i);
+        return at;
+      });
+  std::vector<uint32_t> local_of(n, 0);
   std::vector<Point3> merge_vertices(ids.size());
-  for (size_t i = 0; i < ids.size(); ++i) merge_vertices[i] = v[ids[i]];
-  std::vector<Edge> merge_segments, local_border(border.size());
-  for (const Edge& e : segments)
-    if (in_merge[e[0]] && in_merge[e[1]]) merge_segments.push_back({local_of[e[0]], local_of[e[1]]});
+  tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) {
+    local_of[ids[i]] = uint32_t(i);
+    merge_vertices[i] = v[ids[i]];
+  });
+  std::vector<Edge> merge_segments = compact<Edge>(
+      segments.size(), [&](size_t i) { return in_merge[segments[i][0]] && in_merge[segments[i][1]]; },
+      [&](size_t i, Edge* at) {
+        if (in_merge[segments[i][0]] && in_merge[segments[i][1]])
+          *at++ = {local_of[segments[i][0]], local_of[segments[i][1]]};
+        return at;
+      });
+  std::vector<Edge> local_border(border.size());
   for (size_t i = 0; i < border.size(); ++i) {
     local_border[i] = {local_of[border[i][0]], local_of[border[i][1]]};
     merge_segments.push_back({std::min(local_border[i][0], local_border[i][1]),
@@ -479,7 +553,7 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   merge_segments.erase(std::unique(merge_segments.begin(), merge_segments.end()), merge_segments.end());
   s.tiles += tiles;
   s.levels += 1;
-  if (level == 1) s.final_triangles = out.size();
+  if (level == 1) s.final_triangles = final_count;
   s.merge_input_ms += ms_since(t_merge_input);
   s.tiles_ms += ms_since(t_tiles);
 
@@ -487,20 +561,38 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   const bool again = ids.size() > options.max_tile_points && double(ids.size()) <= options.retile_share * double(n);
   std::vector<Triangle> merged;
   if (again) {
-    merged = tiled_cdt(merge_vertices, merge_segments, options, triangulate, &s);
+    std::vector<std::vector<Triangle>> merge_runs_ = tiled_runs(merge_vertices, merge_segments, options, triangulate, s);
+    merged = merge_runs(merge_runs_);
   } else {
     const auto t = Clock::now();
     merged = triangulate(merge_vertices, merge_segments, "merge, level " + std::to_string(level)).triangles;
+    make_run(merged);
     s.merge_ms = ms_since(t);
     s.merge_vertices = ids.size();
     s.merge_segments = merge_segments.size();
   }
   const auto t_keep = Clock::now();
-  std::vector<Triangle> kept = outside_final(merged, local_border);
+  std::vector<Triangle> kept = outside_final(merged, local_border);  // in order, so still a sorted run
   if (!again) s.merge_triangles = kept.size();
-  for (Triangle& t : kept) out.push_back({ids[t[0]], ids[t[1]], ids[t[2]]});
+  tbb::parallel_for(size_t(0), kept.size(), [&](size_t i) {
+    for (uint32_t& id : kept[i]) id = ids[id];
+  });
+  runs.push_back(std::move(kept));
   s.tiles_ms += ms_since(t_keep);
   s.keep_ms += ms_since(t_keep);
+  return runs;
+}
+
+}  // namespace
+
+std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<Edge>& segments,
+                                const TileOptions& options, const TileTriangulator& triangulate, TileStats* stats) {
+  TileStats local_stats;
+  TileStats& s = stats ? *stats : local_stats;
+  std::vector<std::vector<Triangle>> runs = tiled_runs(v, segments, options, triangulate, s);
+  const auto t = Clock::now();
+  std::vector<Triangle> out = merge_runs(runs);
+  s.order_ms = ms_since(t);
   return out;
 }
 
@@ -509,8 +601,7 @@ CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options, cons
   CdtResult r;
   r.steiner_points = in.steiner_points;
   r.mesh.triangles = tiled_cdt(in.vertices, in.constraints, options, triangulate, stats);
-  r.mesh.vertices = std::move(in.vertices);
-  canonicalize(r.mesh);
+  r.mesh.vertices = std::move(in.vertices);  // sorted and unique already: the triangles are in canonical order
   return r;
 }
 

@@ -62,9 +62,11 @@ struct TileStats {
   // Parts of tiles_ms, every level: the k-d plan and the segments' tiles (wall), the tiles' triangulator calls
   // and the rest of their work (summed over threads), building the merge input and keeping its triangles (wall).
   double plan_ms = 0, tile_cdt_thread_ms = 0, tile_other_thread_ms = 0, merge_input_ms = 0, keep_ms = 0;
+  double order_ms = 0;  // the tiles' and the merge's sorted runs merged into canonical order (wall)
 };
 
-// The triangles of CDT(vertices, segments) (the graph as TileTriangulator takes it), tiled as `options` say.
+// The triangles of CDT(vertices, segments) (the graph as TileTriangulator takes it), tiled as `options` say, in
+// canonical order (core/canonical.hpp): each starts at its smallest index, the list sorted.
 std::vector<Triangle> tiled_cdt(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
                                 const TileOptions& options, const TileTriangulator& triangulate,
                                 TileStats* stats = nullptr);
