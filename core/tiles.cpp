@@ -13,6 +13,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <chrono>
@@ -53,6 +54,51 @@ struct Plan {
   std::vector<uint32_t> tiles;  // the leaf nodes, left to right in the tree
 };
 
+// std::nth_element, on all cores for large ranges: two pivots sampled around the wanted rank split the range
+// into below, between and above them (a parallel partition); the rank almost always falls between, and only that
+// band (a few per cent) is left to std::nth_element. Exact either way.
+template <class Less>
+void select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less) {
+  const size_t n = size_t(last - first);
+  constexpr size_t kSerial = 1 << 20, kSamples = 4096;
+  if (n < kSerial) return std::nth_element(first, nth, last, less);
+  std::vector<uint32_t> sample(kSamples);
+  for (size_t i = 0; i < kSamples; ++i) sample[i] = first[i * n / kSamples];
+  std::sort(sample.begin(), sample.end(), less);
+  const size_t rank = size_t(nth - first) * kSamples / n, spread = 64;  // ~4 standard deviations of the rank
+  const uint32_t lo = sample[rank > spread ? rank - spread : 0];
+  const uint32_t hi = sample[std::min(kSamples - 1, rank + spread)];
+  auto part = [&](uint32_t id) { return less(id, lo) ? 0 : less(id, hi) ? 1 : 2; };
+  constexpr size_t kBlock = 1 << 16;
+  const size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::array<size_t, 3>> count(blocks + 1, {0, 0, 0});
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) ++count[b + 1][part(first[i])];
+  });
+  std::array<size_t, 3> total{0, 0, 0};
+  for (size_t b = 1; b <= blocks; ++b)
+    for (int k = 0; k < 3; ++k) total[k] += count[b][k];
+  std::array<size_t, 3> at{0, total[0], total[0] + total[1]};
+  for (size_t b = 0; b <= blocks; ++b) {  // count[b] becomes block b's write positions
+    const std::array<size_t, 3> c = b < blocks ? count[b + 1] : std::array<size_t, 3>{0, 0, 0};
+    count[b] = at;
+    for (int k = 0; k < 3; ++k) at[k] += c[k];
+  }
+  std::vector<uint32_t> out(n);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    std::array<size_t, 3> w = count[b];
+    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) out[w[part(first[i])]++] = first[i];
+  });
+  std::copy(out.begin(), out.end(), first);
+  const size_t k = size_t(nth - first);
+  if (k >= total[0] && k < total[0] + total[1])
+    std::nth_element(first + total[0], nth, first + total[0] + total[1], less);
+  else if (k < total[0])
+    std::nth_element(first, nth, first + total[0], less);
+  else
+    std::nth_element(first + total[0] + total[1], nth, last, less);
+}
+
 // Two-level k-d splits by count: columns of equal counts (vertex ids are in (x, y) order already), then each
 // column, by median splits in (y, x) order on its own core, cut into cells of equal counts; as many columns as make the tiles
 // about square over the data's extent. A cut goes between two consecutive vertices of that order, at the
@@ -87,7 +133,7 @@ Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
       if (count <= 1) return;
       const uint64_t half = count / 2;
       const uint32_t mid = lo + uint32_t(uint64_t(hi - lo) * half / count);
-      std::nth_element(plan.order.begin() + lo, plan.order.begin() + mid, plan.order.begin() + hi, by_y);
+      select(plan.order.data() + lo, plan.order.data() + mid, plan.order.data() + hi, by_y);
       cuts[c].push_back(v[plan.order[mid]].y);
       split(lo, mid, half);
       split(mid, hi, count - half);
@@ -503,7 +549,11 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
       const std::span<const uint32_t> mine(tile_segments.data() + first[t], first[t + 1] - first[t]);
       const std::string name = "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " +
                                std::to_string(level);
-      results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
+      // Isolated: a thread waiting in this tile's own parallel loops takes no other tile (whose GPU call would make
+      // it wait for the device as well).
+      tbb::this_task_arena::isolate([&] {
+        results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
+      });
     });
   });
 

@@ -172,6 +172,14 @@ TEST(Tiles, MergeTiledAgainOnLargerInputs) {
   EXPECT_LT(ts.merge_vertices, 30000u / 2);
 }
 
+// Columns of over 2^20 vertices are cut by the parallel selection (two sampled pivots, then nth_element in
+// the band between them): the same triangles.
+TEST(Tiles, LargeColumnsCutByTheParallelSelection) {
+  InputSet in = uniform_points(1'100'000, 31);
+  const TileStats ts = expect_same_as_single_run(in, {600'000});
+  EXPECT_EQ(ts.tiles, 2u);
+}
+
 TEST(Tiles, SameTrianglesWhateverTheThreadCount) {
   InputSet in = random_points(2000, 13);
   const PreparedInput p = prepare(in);
