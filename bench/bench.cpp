@@ -336,6 +336,7 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_option("--tile-points", o.tile_points,
                   "tiles: tiles of at most this many points (default: the CPU's auto size; the GPU: a quarter of the "
                   "input, or what the device holds)");
+  cmd->add_flag("--points-only", o.points_only, "tiles: uniform points without constraint segments");
   cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
   cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
       ->default_val(5)

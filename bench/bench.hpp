@@ -55,6 +55,7 @@ struct BenchOptions {
   std::string peer;                   // gDel2D's executable; empty: our columns only
   // --table tiles (bench/tiles.hpp)
   uint64_t tile_points = 0;           // tiles of at most this many points; 0: the CPU's auto size, the GPU's quarter
+  bool points_only = false;           // no constraint segments: the Delaunay triangulation tiled
   // Every table: no CGAL run (and so no comparison) for inputs of more points than this; CGAL takes minutes there.
   uint64_t cgal_max_points = 10000000;
 };

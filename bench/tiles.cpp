@@ -18,6 +18,7 @@
 #include "core/tiles.hpp"
 #include "core/workloads.hpp"
 #include "gpu/cdt_pipeline.hpp"
+#include "gpu/check.hpp"
 #include "gpu/tile_triangulator.hpp"
 #include "io/atomic_file.hpp"
 
@@ -139,10 +140,8 @@ int run_tiles(const BenchOptions& o) {
   int failures = 0;
   for (uint64_t n : sizes) {
     InputSet in = uniform_points(n, o.seed);
-    if (n <= kDtEdgesMaxPoints)
-      add_dt_edge_constraints(in, n / 4, 0.5, o.seed);
-    else
-      add_band_chains(in);
+    if (!o.points_only && n <= kDtEdgesMaxPoints) add_dt_edge_constraints(in, n / 4, 0.5, o.seed);
+    if (!o.points_only && n > kDtEdgesMaxPoints) add_band_chains(in);
     const PreparedInput p = prepare(in);
     in = InputSet{};
     std::vector<Row> results;
@@ -152,12 +151,17 @@ int run_tiles(const BenchOptions& o) {
     if (o.gpu) {
       const gpu::Context ctx = gpu::create_context(co);
       const gpu::GpuCdt cdt(ctx);
-      results.push_back(time_row("single", "gpu", o.runs, [&](Row& r) {
-        gpu::GpuCdtStats gs;
-        r.mesh = cdt.triangulate(p, &gs).mesh;
-        gpu_single_peak = gs.peak_device_bytes;
-      }));
-      std::printf("%9s single GPU run: peak device %s MB\n", "", fmt(double(gpu_single_peak) / 1e6).c_str());
+      try {  // a device too small for the whole input refuses it: the tiled rows still run
+        results.push_back(time_row("single", "gpu", o.runs, [&](Row& r) {
+          gpu::GpuCdtStats gs;
+          r.mesh = cdt.triangulate(p, &gs).mesh;
+          gpu_single_peak = gs.peak_device_bytes;
+        }));
+        std::printf("%9s single GPU run: peak device %s MB\n", "", fmt(double(gpu_single_peak) / 1e6).c_str());
+      } catch (const gpu::DeviceError& e) {
+        std::printf("%9llu single gpu: refused by the device: %s\n", static_cast<unsigned long long>(n), e.what());
+        rows.push_back({{"points", n}, {"mode", "single"}, {"backend", "gpu"}, {"refused", e.what()}});
+      }
     }
     const uint64_t cpu_tile = o.tile_points ? o.tile_points : auto_cpu_tile_points(p.vertices.size(), threads);
     if (cpu_tile && n <= o.cgal_max_points)

@@ -46,6 +46,7 @@ struct Node {
   Rect rect;
   uint32_t lo = 0, hi = 0;        // its own vertices: plan.order[lo, hi)
   int32_t left = -1, right = -1;  // children; -1: a tile
+  uint32_t column_lo = 0, column_hi = 0;  // a tile: the ids of its column, which hold its own
 };
 
 struct Plan {
@@ -149,7 +150,7 @@ Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
   std::function<int32_t(uint64_t, uint32_t, uint32_t, uint64_t, Rect)> cells = [&](uint64_t c, uint32_t lo,
                                                                                     uint32_t hi, uint64_t count,
                                                                                     Rect rect) {
-    const int32_t at = add(Node{rect, lo, hi, -1, -1});
+    const int32_t at = add(Node{rect, lo, hi, -1, -1, column_start(c), column_start(c + 1)});
     if (count <= 1) {
       plan.tiles.push_back(uint32_t(at));
       return at;
@@ -168,7 +169,7 @@ Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
       next_cut = 0;
       return cells(c0, column_start(c0), column_start(c1), cell_count(c0), rect);
     }
-    const int32_t at = add(Node{rect, 0, 0, -1, -1});
+    const int32_t at = add(Node{rect, 0, 0, -1, -1, 0, 0});
     const uint64_t mid = (c0 + c1) / 2;
     Rect west = rect, east = rect;
     west.x1 = east.x0 = v[column_start(mid)].x;  // the ids of a column range are its (x, y) order
@@ -361,14 +362,46 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
                     const Node& node, std::span<const uint32_t> tile_segments, const TileTriangulator& triangulate,
                     const std::string& name, std::vector<uint8_t>& in_final) {
   const auto t0 = Clock::now();
-  std::vector<uint32_t> ids(plan.order.begin() + node.lo, plan.order.begin() + node.hi);
-  for (uint32_t s : tile_segments) ids.push_back(segments[s][0]), ids.push_back(segments[s][1]);
-  tbb::parallel_sort(ids.begin(), ids.end());  // ids in (x, y) order: the local vertices stay sorted
-  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  // The tile's vertex ids, sorted: its own lie in its column's id range (a column is a range of the (x, y)
+  // order), marked in a byte map and read back in order; the segments' endpoints outside that range (few) are
+  // sorted apart. The map's ranks then give the segments' local ids.
+  const uint32_t c0 = node.column_lo, c1 = node.column_hi;
+  std::vector<uint8_t> mark(c1 - c0, 0);
+  tbb::parallel_for(node.lo, node.hi, [&](uint32_t i) { mark[plan.order[i] - c0] = 1; });
+  auto inside = [&](uint32_t id) { return id >= c0 && id < c1; };
+  tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
+    for (uint32_t id : segments[tile_segments[i]])
+      if (inside(id)) std::atomic_ref<uint8_t>(mark[id - c0]).store(1, std::memory_order_relaxed);
+  });
+  std::vector<uint32_t> outside = compact<uint32_t>(
+      tile_segments.size(), [&](size_t i) { return !inside(segments[tile_segments[i]][0]) + !inside(segments[tile_segments[i]][1]); },
+      [&](size_t i, uint32_t* at) {
+        for (uint32_t id : segments[tile_segments[i]])
+          if (!inside(id)) *at++ = id;
+        return at;
+      });
+  std::sort(outside.begin(), outside.end());
+  outside.erase(std::unique(outside.begin(), outside.end()), outside.end());
+  const std::vector<uint32_t> own = compact<uint32_t>(
+      mark.size(), [&](size_t i) { return mark[i]; },
+      [&](size_t i, uint32_t* at) {
+        if (mark[i]) *at++ = c0 + uint32_t(i);
+        return at;
+      });
+  const size_t below = size_t(std::lower_bound(outside.begin(), outside.end(), c0) - outside.begin());
+  std::vector<uint32_t> ids(outside.begin(), outside.begin() + below);
+  ids.insert(ids.end(), own.begin(), own.end());
+  ids.insert(ids.end(), outside.begin() + below, outside.end());
   const size_t nl = ids.size();
+  std::vector<uint32_t> rank(c1 - c0, 0);
   std::vector<Point3> local(nl);
-  tbb::parallel_for(size_t(0), nl, [&](size_t i) { local[i] = v[ids[i]]; });
-  auto local_of = [&](uint32_t id) { return uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()); };
+  tbb::parallel_for(size_t(0), nl, [&](size_t i) {
+    local[i] = v[ids[i]];
+    if (inside(ids[i])) rank[ids[i] - c0] = uint32_t(i);
+  });
+  auto local_of = [&](uint32_t id) {
+    return inside(id) ? rank[id - c0] : uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
+  };
   std::vector<Edge> local_segments(tile_segments.size());
   tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
     local_segments[i] = {local_of(segments[tile_segments[i]][0]), local_of(segments[tile_segments[i]][1])};

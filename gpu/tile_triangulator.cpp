@@ -65,7 +65,9 @@ uint64_t max_tile_points(const Context& ctx) {
   constexpr uint64_t kBytesPerPoint = 260;
   const uint64_t by_memory = device_local / kBytesPerPoint;
   const uint64_t by_slots = DT_MAX_SLOTS / 2;
-  const uint64_t by_range = ctx.info.max_storage_buffer_range / 16;  // 16-byte points in descriptor-bound buffers
+  // The largest descriptor-bound buffer per point: the constraint inserter's 12-byte tables per triangle slot,
+  // ~24 bytes a point (6.1 GB at 256M points, refused by a 4 GiB range).
+  const uint64_t by_range = ctx.info.max_storage_buffer_range / 24;
   return std::min({by_memory, by_slots, by_range}) / 4 * 3;
 }
 

@@ -13,8 +13,9 @@ namespace cdtgpu::gpu {
 TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum = nullptr);
 
 // The most points a tile of its own may hold on this device: the Delaunay build's slot limit and ~260 bytes of
-// device memory a point (the measured peak, docs/performance.md), the storage buffer range (16 bytes a
-// point in descriptor-bound buffers: lavapipe's 128 MiB), with a quarter to spare for the endpoints of
+// device memory a point (the measured peak, docs/performance.md), the storage buffer range (24 bytes a
+// point in the constraint inserter's tables: 179M points on a 4 GiB range, 5.6M on lavapipe's 128 MiB), with a
+// quarter to spare for the endpoints of
 // the segments that cross into the tile.
 uint64_t max_tile_points(const Context& ctx);
 
