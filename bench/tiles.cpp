@@ -6,10 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <thread>
-
-#include <nlohmann/json.hpp>
 
 #include "bench/figures.hpp"
 #include "core/canonical.hpp"
@@ -60,7 +59,8 @@ Row time_row(const std::string& mode, const std::string& backend, int runs, F&& 
     if (r < 0) continue;
     row.total_ms.push_back(ms_since(t));
     row.resolve_ms.insert(row.resolve_ms.end(), one.resolve_ms.begin(), one.resolve_ms.end());
-    if (mode == "tiled") row.tiles_ms.push_back(one.tiles.tiles_ms), row.merge_ms.push_back(one.tiles.merge_ms);
+    if (mode == "tiled")
+      row.tiles_ms.push_back(one.tiles.tiles_ms), row.merge_ms.push_back(one.tiles.merge_ms);
     row.tiles = one.tiles;
     row.tile_points = one.tile_points;
     if (r + 1 == runs) row.mesh = std::move(one.mesh);
@@ -80,8 +80,8 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
 
 // Above kDtEdgesMaxPoints the Delaunay-edge constraints (a CGAL triangulation of half the points, minutes at
 // 256M) give way to contour-like chains: the points of every fourth band of one point spacing's height joined
-// in x order, about n / 4 segments of about one spacing. Chains of disjoint bands never cross, and an x-monotone
-// chain through all of a band's points has no vertex inside a segment.
+// in x order, about n / 4 segments of about one spacing. Chains of disjoint bands never cross, and an
+// x-monotone chain through all of a band's points has no vertex inside a segment.
 constexpr uint64_t kDtEdgesMaxPoints = 20'000'000;
 
 void add_band_chains(InputSet& in) {
@@ -112,12 +112,14 @@ void add_band_chains(InputSet& in) {
 int run_tiles(const BenchOptions& o) {
   std::vector<uint64_t> sizes;
   for (const auto& s : o.sizes) sizes.push_back(parse_bench_size(s));
-  if (sizes.empty()) sizes = o.quick ? std::vector<uint64_t>{200000} : std::vector<uint64_t>{2000000, 16000000};
+  if (sizes.empty())
+    sizes = o.quick ? std::vector<uint64_t>{200000} : std::vector<uint64_t>{2000000, 16000000};
   const unsigned threads = std::thread::hardware_concurrency();
   const int cgal_runs = o.cgal_runs > 0 ? o.cgal_runs : o.runs;
 
-  // Each GPU row gets a context of its own, as each `cdtgpu triangulate` run does: the H100's clock drops after
-  // seconds without load (the CPU rows) and our bursts do not raise it again (bench/bench.cpp, time_gpu).
+  // Each GPU row gets a context of its own, as each `cdtgpu triangulate` run does: the H100's clock drops
+  // after seconds without load (the CPU rows) and our bursts do not raise it again (bench/bench.cpp,
+  // time_gpu).
   gpu::ContextOptions co;
   co.device = o.device;
   std::string device = "none (--cgal-only)";
@@ -127,13 +129,15 @@ int run_tiles(const BenchOptions& o) {
   }
   std::printf("cdtgpu bench --table tiles, %s\n", bench_utc_now().c_str());
   std::printf("CPU: %s, %u hardware threads\nGPU: %s\n", bench_cpu_model().c_str(), threads, device.c_str());
-  std::printf("workload: uniform points + a quarter as many Delaunay-edge constraints (seed %llu), in process; "
-              "median of %d runs (single CPU run: %d) after 1 warm-up (none for 1 run); total = resolve + tiles + merge + canonical "
-              "order (single runs: the whole backend call); same = the mesh equals the first single run's\n\n",
-              static_cast<unsigned long long>(o.seed), o.runs, cgal_runs);
+  std::printf(
+      "workload: uniform points + a quarter as many Delaunay-edge constraints (seed %llu), in process; "
+      "median of %d runs (single CPU run: %d) after 1 warm-up (none for 1 run); total = resolve + tiles + "
+      "merge + canonical "
+      "order (single runs: the whole backend call); same = the mesh equals the first single run's\n\n",
+      static_cast<unsigned long long>(o.seed), o.runs, cgal_runs);
   std::printf("%9s %-6s %-6s %7s %6s %6s %7s %9s %9s %9s %9s %9s %9s %7s %s\n", "points", "mode", "backend",
-              "tile", "tiles", "levels", "final%", "merge v", "resolve", "tiles ms", "merge ms", "total ms", "vs single",
-              "RSS GB", "same");
+              "tile", "tiles", "levels", "final%", "merge v", "resolve", "tiles ms", "merge ms", "total ms",
+              "vs single", "RSS GB", "same");
   std::fflush(stdout);
 
   json rows = json::array();
@@ -146,7 +150,8 @@ int run_tiles(const BenchOptions& o) {
     in = InputSet{};
     std::vector<Row> results;
     if (n <= o.cgal_max_points)
-      results.push_back(time_row("single", "cgal", cgal_runs, [&](Row& r) { r.mesh = triangulate_cgal(p).mesh; }));
+      results.push_back(
+          time_row("single", "cgal", cgal_runs, [&](Row& r) { r.mesh = triangulate_cgal(p).mesh; }));
     uint64_t gpu_single_peak = 0;
     if (o.gpu) {
       const gpu::Context ctx = gpu::create_context(co);
@@ -157,22 +162,24 @@ int run_tiles(const BenchOptions& o) {
           r.mesh = cdt.triangulate(p, &gs).mesh;
           gpu_single_peak = gs.peak_device_bytes;
         }));
-        std::printf("%9s single GPU run: peak device %s MB\n", "", fmt(double(gpu_single_peak) / 1e6).c_str());
+        std::printf("%9s single GPU run: peak device %s MB\n", "",
+                    fmt(double(gpu_single_peak) / 1e6).c_str());
       } catch (const gpu::DeviceError& e) {
-        std::printf("%9llu single gpu: refused by the device: %s\n", static_cast<unsigned long long>(n), e.what());
+        std::printf("%9llu single gpu: refused by the device: %s\n", static_cast<unsigned long long>(n),
+                    e.what());
         rows.push_back({{"points", n}, {"mode", "single"}, {"backend", "gpu"}, {"refused", e.what()}});
       }
     }
-    const uint64_t cpu_tile = o.tile_points ? o.tile_points : auto_cpu_tile_points(p.vertices.size(), threads);
+    const uint64_t cpu_tile =
+        o.tile_points ? o.tile_points : auto_cpu_tile_points(p.vertices.size(), threads);
     if (cpu_tile && n <= o.cgal_max_points)
-      results.push_back(time_row("tiled", "cgal", o.runs, [&](Row& r) {
-        tiled_once(p, cpu_tile, cgal_tile_triangulator(), r);
-      }));
+      results.push_back(time_row("tiled", "cgal", o.runs,
+                                 [&](Row& r) { tiled_once(p, cpu_tile, cgal_tile_triangulator(), r); }));
     if (o.gpu) {
       const gpu::Context ctx = gpu::create_context(co);
       const gpu::GpuCdt cdt(ctx);
-      const uint64_t gpu_tile = o.tile_points ? o.tile_points
-                                              : std::min(gpu::max_tile_points(ctx), p.vertices.size() / 4 + 1);
+      const uint64_t gpu_tile =
+          o.tile_points ? o.tile_points : std::min(gpu::max_tile_points(ctx), p.vertices.size() / 4 + 1);
       gpu::GpuCdtStats sum;
       const TileTriangulator tri = gpu::gpu_tile_triangulator(cdt, &sum);
       results.push_back(time_row("tiled", "gpu", o.runs, [&](Row& r) {
@@ -181,22 +188,25 @@ int run_tiles(const BenchOptions& o) {
       }));
       std::string parts;
       for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
-      std::printf("%9s last tiled GPU run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB\n",
-                  "", fmt(sum.gpu_total_ms).c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
-                  fmt(double(sum.peak_device_bytes) / 1e6).c_str());
+      std::printf(
+          "%9s last tiled GPU run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB\n",
+          "", fmt(sum.gpu_total_ms).c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
+          fmt(double(sum.peak_device_bytes) / 1e6).c_str());
     }
     if (results.empty()) continue;
     const Mesh& reference = results.front().mesh;
     std::map<std::string, double> single_ms;
     for (Row& r : results) {
+      const bool is_reference = &r == &results.front();
       const bool same = r.mesh.vertices == reference.vertices && r.mesh.triangles == reference.triangles;
       if (!same) ++failures;
       const double total = median(r.total_ms);
       if (r.mode == "single") single_ms[r.backend] = total;
       const bool tiled = r.mode == "tiled";
       const double final_share =
-          tiled && !r.mesh.triangles.empty() ? 100.0 * double(r.tiles.final_triangles) / double(r.mesh.triangles.size())
-                                             : std::nan("");
+          tiled && !r.mesh.triangles.empty()
+              ? 100.0 * double(r.tiles.final_triangles) / double(r.mesh.triangles.size())
+              : std::nan("");
       const double vs = tiled && single_ms.count(r.backend) ? single_ms[r.backend] / total : std::nan("");
       const double rss = peak_rss_gb();
       std::printf("%9llu %-6s %-6s %7s %6s %6s %7s %9s %9s %9s %9s %9s %9s %7.1f %s\n",
@@ -204,35 +214,49 @@ int run_tiles(const BenchOptions& o) {
                   tiled ? std::to_string(r.tile_points).c_str() : "-",
                   tiled ? std::to_string(r.tiles.tiles).c_str() : "-",
                   tiled ? std::to_string(r.tiles.levels).c_str() : "-", fmt(final_share).c_str(),
-                  tiled ? std::to_string(r.tiles.merge_vertices).c_str() : "-", fmt(median(r.resolve_ms)).c_str(),
-                  fmt(median(r.tiles_ms)).c_str(), fmt(median(r.merge_ms)).c_str(), fmt(total).c_str(),
-                  fmt(vs, 2).c_str(), rss, same ? "yes" : "NO");
+                  tiled ? std::to_string(r.tiles.merge_vertices).c_str() : "-",
+                  fmt(median(r.resolve_ms)).c_str(), fmt(median(r.tiles_ms)).c_str(),
+                  fmt(median(r.merge_ms)).c_str(), fmt(total).c_str(), fmt(vs, 2).c_str(), rss,
+                  same ? "yes" : "NO");
       if (tiled)
-        std::printf("%9s last run: plan %s ms, tile CDTs %s ms and the tiles' other work %s ms (thread sums), merge "
-                    "input %s ms, keeping the merge's triangles %s ms, canonical order %s ms\n", "",
-                    fmt(r.tiles.plan_ms).c_str(), fmt(r.tiles.tile_cdt_thread_ms).c_str(),
-                    fmt(r.tiles.tile_other_thread_ms).c_str(), fmt(r.tiles.merge_input_ms).c_str(),
-                    fmt(r.tiles.keep_ms).c_str(), fmt(r.tiles.order_ms).c_str());
+        std::printf(
+            "%9s last run: plan %s ms, tile CDTs %s ms and the tiles' other work %s ms (thread sums), merge "
+            "input %s ms, keeping the merge's triangles %s ms, canonical order %s ms\n",
+            "", fmt(r.tiles.plan_ms).c_str(), fmt(r.tiles.tile_cdt_thread_ms).c_str(),
+            fmt(r.tiles.tile_other_thread_ms).c_str(), fmt(r.tiles.merge_input_ms).c_str(),
+            fmt(r.tiles.keep_ms).c_str(), fmt(r.tiles.order_ms).c_str());
       std::fflush(stdout);
-      rows.push_back({{"points", n}, {"vertices", p.vertices.size()}, {"constraints", p.constraints.size()},
-                      {"mode", r.mode}, {"backend", r.backend}, {"tile_points", r.tile_points},
-                      {"tiles", r.tiles.tiles}, {"levels", r.tiles.levels},
-                      {"final_triangles", r.tiles.final_triangles}, {"triangles", r.mesh.triangles.size()},
-                      {"merge_vertices", r.tiles.merge_vertices}, {"merge_segments", r.tiles.merge_segments},
-                      {"total_ms", r.total_ms}, {"resolve_ms", r.resolve_ms}, {"tiles_ms", r.tiles_ms},
-                      {"merge_ms", r.merge_ms}, {"peak_rss_gb_after", rss}, {"same", same},
-                      {"last_run_parts_ms", {{"plan", r.tiles.plan_ms},
-                                             {"tile_cdt_thread_sum", r.tiles.tile_cdt_thread_ms},
-                                             {"tile_other_thread_sum", r.tiles.tile_other_thread_ms},
-                                             {"merge_input", r.tiles.merge_input_ms},
-                                             {"keep", r.tiles.keep_ms},
-                                             {"canonical_order", r.tiles.order_ms}}}});
+      rows.push_back({{"points", n},
+                      {"vertices", p.vertices.size()},
+                      {"constraints", p.constraints.size()},
+                      {"mode", r.mode},
+                      {"backend", r.backend},
+                      {"tile_points", r.tile_points},
+                      {"tiles", r.tiles.tiles},
+                      {"levels", r.tiles.levels},
+                      {"final_triangles", r.tiles.final_triangles},
+                      {"triangles", r.mesh.triangles.size()},
+                      {"merge_vertices", r.tiles.merge_vertices},
+                      {"merge_segments", r.tiles.merge_segments},
+                      {"total_ms", r.total_ms},
+                      {"resolve_ms", r.resolve_ms},
+                      {"tiles_ms", r.tiles_ms},
+                      {"merge_ms", r.merge_ms},
+                      {"peak_rss_gb_after", rss},
+                      {"same", same},
+                      {"last_run_parts_ms",
+                       {{"plan", r.tiles.plan_ms},
+                        {"tile_cdt_thread_sum", r.tiles.tile_cdt_thread_ms},
+                        {"tile_other_thread_sum", r.tiles.tile_other_thread_ms},
+                        {"merge_input", r.tiles.merge_input_ms},
+                        {"keep", r.tiles.keep_ms},
+                        {"canonical_order", r.tiles.order_ms}}}});
     }
   }
   if (!o.json_path.empty()) {
-    json j{{"table", "tiles"},           {"date", bench_utc_now()}, {"cpu", bench_cpu_model()},
-           {"threads", threads},         {"device", device},        {"runs", o.runs},
-           {"cgal_runs", cgal_runs},     {"seed", o.seed},          {"rows", rows}};
+    json j{{"table", "tiles"},       {"date", bench_utc_now()}, {"cpu", bench_cpu_model()},
+           {"threads", threads},     {"device", device},        {"runs", o.runs},
+           {"cgal_runs", cgal_runs}, {"seed", o.seed},          {"rows", rows}};
     write_file_atomically(o.json_path, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
   }
   if (failures) std::printf("\n%d tiled or single run(s) differ from the first single run\n", failures);

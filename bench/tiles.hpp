@@ -8,11 +8,11 @@
 //   int code = run_tiles(o);   // prints the table; 1 when a tiled mesh differs from the single run's
 //
 // Per row, each timed --runs times after a warm-up (median): the single run on the CPU (triangulate_cgal, one
-// core; --cgal-runs, skipped above --cgal-max) and on the GPU (gpu::GpuCdt), then the tiled runs: CPU tiles on
-// every core (auto tile size, or --tile-points) and GPU tiles streamed through the device (--tile-points, or a
-// quarter of the input). Every mesh is compared with the first single run's, byte for byte. Columns: tiles and
-// levels, the share of triangles final in their tiles, the last merge's size and time, resolve and total wall
-// time, and the process's peak resident memory after the row.
+// core; --cgal-runs, skipped above --cgal-max) and on the GPU (gpu::GpuCdt), then the tiled runs: CPU tiles
+// on every core (auto tile size, or --tile-points) and GPU tiles streamed through the device (--tile-points,
+// or a quarter of the input). Every mesh is compared with the first single run's, byte for byte. Columns:
+// tiles and levels, the share of triangles final in their tiles, the last merge's size and time, resolve and
+// total wall time, and the process's peak resident memory after the row.
 #pragma once
 #include "bench/bench.hpp"
 

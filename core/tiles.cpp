@@ -6,7 +6,6 @@
 
 #include <CGAL/Interval_nt.h>
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
@@ -32,20 +31,22 @@ namespace cdtgpu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// A tile's closed rectangle; ±inf on the outside of the data. Its vertices may lie on its border (shared with a
-// neighbour, each vertex in one of them); every vertex strictly inside it is one of its own.
+// A tile's closed rectangle; ±inf on the outside of the data. Its vertices may lie on its border (shared with
+// a neighbour, each vertex in one of them); every vertex strictly inside it is one of its own.
 struct Rect {
   double x0 = -kInf, x1 = kInf, y0 = -kInf, y1 = kInf;
 };
 
 struct Node {
   Rect rect;
-  uint32_t lo = 0, hi = 0;        // its own vertices: plan.order[lo, hi)
-  int32_t left = -1, right = -1;  // children; -1: a tile
+  uint32_t lo = 0, hi = 0;                // its own vertices: plan.order[lo, hi)
+  int32_t left = -1, right = -1;          // children; -1: a tile
   uint32_t column_lo = 0, column_hi = 0;  // a tile: the ids of its column, which hold its own
 };
 
@@ -56,8 +57,8 @@ struct Plan {
 };
 
 // std::nth_element, on all cores for large ranges: two pivots sampled around the wanted rank split the range
-// into below, between and above them (a parallel partition); the rank almost always falls between, and only that
-// band (a few per cent) is left to std::nth_element. Exact either way.
+// into below, between and above them (a parallel partition); the rank almost always falls between, and only
+// that band (a few per cent) is left to std::nth_element. Exact either way.
 template <class Less>
 void select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less) {
   const size_t n = size_t(last - first);
@@ -101,11 +102,11 @@ void select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less) {
 }
 
 // Two-level k-d splits by count: columns of equal counts (vertex ids are in (x, y) order already), then each
-// column, by median splits in (y, x) order on its own core, cut into cells of equal counts; as many columns as make the tiles
-// about square over the data's extent. A cut goes between two consecutive vertices of that order, at the
-// coordinate of the first one after it: every vertex strictly before that coordinate is on the near side, so by
-// induction every vertex strictly inside a tile's rectangle is one of the tile's own. A binary tree over the cuts
-// serves the segments' descent.
+// column, by median splits in (y, x) order on its own core, cut into cells of equal counts; as many columns
+// as make the tiles about square over the data's extent. A cut goes between two consecutive vertices of that
+// order, at the coordinate of the first one after it: every vertex strictly before that coordinate is on the
+// near side, so by induction every vertex strictly inside a tile's rectangle is one of the tile's own. A
+// binary tree over the cuts serves the segments' descent.
 Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
   const size_t n = v.size();
   Plan plan;
@@ -114,10 +115,13 @@ Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
   auto [y0, y1] = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, n, 1 << 16), std::pair<double, double>{kInf, -kInf},
       [&](const tbb::blocked_range<size_t>& r, std::pair<double, double> m) {
-        for (size_t i = r.begin(); i < r.end(); ++i) m = {std::min(m.first, v[i].y), std::max(m.second, v[i].y)};
+        for (size_t i = r.begin(); i < r.end(); ++i)
+          m = {std::min(m.first, v[i].y), std::max(m.second, v[i].y)};
         return m;
       },
-      [](auto a, auto b) { return std::pair<double, double>{std::min(a.first, b.first), std::max(a.second, b.second)}; });
+      [](auto a, auto b) {
+        return std::pair<double, double>{std::min(a.first, b.first), std::max(a.second, b.second)};
+      });
   const double w = v.back().x - v.front().x, h = y1 - y0;
   const uint64_t tiles = (n + max_points - 1) / max_points;
   uint64_t columns = h <= 0 ? tiles : w <= 0 ? 1 : uint64_t(std::llround(std::sqrt(double(tiles) * w / h)));
@@ -147,23 +151,22 @@ Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
   };
   // The tree of column c's cells, consuming its cuts in the preorder they were made in.
   size_t next_cut = 0;
-  std::function<int32_t(uint64_t, uint32_t, uint32_t, uint64_t, Rect)> cells = [&](uint64_t c, uint32_t lo,
-                                                                                    uint32_t hi, uint64_t count,
-                                                                                    Rect rect) {
-    const int32_t at = add(Node{rect, lo, hi, -1, -1, column_start(c), column_start(c + 1)});
-    if (count <= 1) {
-      plan.tiles.push_back(uint32_t(at));
-      return at;
-    }
-    const uint64_t half = count / 2;
-    const uint32_t mid = lo + uint32_t(uint64_t(hi - lo) * half / count);
-    Rect below = rect, above = rect;
-    below.y1 = above.y0 = cuts[c][next_cut++];
-    const int32_t left = cells(c, lo, mid, half, below);
-    const int32_t right = cells(c, mid, hi, count - half, above);
-    plan.nodes[at].left = left, plan.nodes[at].right = right;
-    return at;
-  };
+  std::function<int32_t(uint64_t, uint32_t, uint32_t, uint64_t, Rect)> cells =
+      [&](uint64_t c, uint32_t lo, uint32_t hi, uint64_t count, Rect rect) {
+        const int32_t at = add(Node{rect, lo, hi, -1, -1, column_start(c), column_start(c + 1)});
+        if (count <= 1) {
+          plan.tiles.push_back(uint32_t(at));
+          return at;
+        }
+        const uint64_t half = count / 2;
+        const uint32_t mid = lo + uint32_t(uint64_t(hi - lo) * half / count);
+        Rect below = rect, above = rect;
+        below.y1 = above.y0 = cuts[c][next_cut++];
+        const int32_t left = cells(c, lo, mid, half, below);
+        const int32_t right = cells(c, mid, hi, count - half, above);
+        plan.nodes[at].left = left, plan.nodes[at].right = right;
+        return at;
+      };
   std::function<int32_t(uint64_t, uint64_t, Rect)> cols = [&](uint64_t c0, uint64_t c1, Rect rect) {
     if (c1 - c0 == 1) {
       next_cut = 0;
@@ -182,13 +185,14 @@ Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
   return plan;
 }
 
-// Whether segment ab meets the closed rectangle r, exactly: the part of r inside the segment's bounding box is
-// met exactly when the segment's line does not pass strictly beside all four of its corners.
+// Whether segment ab meets the closed rectangle r, exactly: the part of r inside the segment's bounding box
+// is met exactly when the segment's line does not pass strictly beside all four of its corners.
 bool meets(const Rect& r, const Point3& a, const Point3& b) {
   const double x0 = std::max(r.x0, std::min(a.x, b.x)), x1 = std::min(r.x1, std::max(a.x, b.x));
   const double y0 = std::max(r.y0, std::min(a.y, b.y)), y1 = std::min(r.y1, std::max(a.y, b.y));
   if (x0 > x1 || y0 > y1) return false;
-  if (x0 == std::min(a.x, b.x) && x1 == std::max(a.x, b.x) && y0 == std::min(a.y, b.y) && y1 == std::max(a.y, b.y))
+  if (x0 == std::min(a.x, b.x) && x1 == std::max(a.x, b.x) && y0 == std::min(a.y, b.y) &&
+      y1 == std::max(a.y, b.y))
     return true;  // the whole segment's box is in r
   int sides = 0;
   for (const pred::XY c : {pred::XY{x0, y0}, pred::XY{x1, y0}, pred::XY{x0, y1}, pred::XY{x1, y1}})
@@ -214,11 +218,13 @@ bool disk_inside_intervals(const Point3& a, const Point3& b, const Point3& c, co
 }
 
 // The same, decided in plain doubles when the answer is clear by more than a bound on their error, else by
-// disk_inside_intervals (~3x slower). With u = 2^-53 and M the largest of |b - a|, |c - a| per coordinate, first
-// order: d = 2((b-a) x (c-a)) is off by at most 16 u M^2 and each numerator of the centre by 36 u M^3 (the
-// differences' own rounding included); so the centre (from a) is off by e <= (36 u M^3 + |centre| 16 u M^2) / |d|
-// + u |centre| per coordinate, the radius by 1.5 e + 3 u r, a gap to a side by e + 2 u (|a - side| + |centre|).
-// Every bound is taken 4x, and d within 64x its error bound goes to intervals (the second-order terms stay tiny).
+// disk_inside_intervals (~3x slower). With u = 2^-53 and M the largest of |b - a|, |c - a| per coordinate,
+// first order: d = 2((b-a) x (c-a)) is off by at most 16 u M^2 and each numerator of the centre by 36 u M^3
+// (the differences' own rounding included); so the centre (from a) is off by e <= (36 u M^3 + |centre| 16 u
+// M^2) / |d|
+// + u |centre| per coordinate, the radius by 1.5 e + 3 u r, a gap to a side by e + 2 u (|a - side| +
+// |centre|). Every bound is taken 4x, and d within 64x its error bound goes to intervals (the second-order
+// terms stay tiny).
 bool disk_inside(const Point3& a, const Point3& b, const Point3& c, const Rect& r) {
   constexpr double u = 0x1p-53;
   const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
@@ -266,56 +272,93 @@ std::vector<T> compact(size_t n, Count count, Emit emit) {
   return out;
 }
 
-// Without the triangulator's neighbours: marks bit k of a final triangle whose edge a->b (from vertex k) has no
-// twin b->a in another final triangle. The final triangles' edges listed by their first vertex (a counting sort)
-// make the twin a look-up among a handful.
-void mark_border(const std::vector<Triangle>& triangles, size_t nl, std::vector<uint8_t>& final_mask) {
+// The edges of the convex hull of sorted points (counter-clockwise, collinear boundary points kept: a
+// triangulation's hull edges join consecutive ones), as directed keys a << 32 | b.
+std::vector<uint64_t> hull_edges(const std::vector<Point3>& p) {
+  std::vector<uint32_t> h;
+  auto turn = [&](uint32_t a, uint32_t b, uint32_t c) {
+    return pred::orient2d({p[a].x, p[a].y}, {p[b].x, p[b].y}, {p[c].x, p[c].y});
+  };
+  for (int pass = 0; pass < 2; ++pass) {  // lower hull left to right, then upper hull right to left
+    const size_t base = h.size();
+    for (size_t k = 0; k < p.size(); ++k) {
+      const uint32_t i = uint32_t(pass == 0 ? k : p.size() - 1 - k);
+      while (h.size() >= base + 2 && turn(h[h.size() - 2], h.back(), i) < 0) h.pop_back();
+      h.push_back(i);
+    }
+    if (pass == 0) h.pop_back();  // the last point starts the upper hull
+  }
+  std::vector<uint64_t> edges;
+  for (size_t k = 0; k + 1 < h.size(); ++k) edges.push_back(uint64_t(h[k]) << 32 | h[k + 1]);
+  std::sort(edges.begin(), edges.end());
+  return edges;
+}
+
+// Without the triangulator's neighbours: marks bit k of a final triangle whose edge a->b (from vertex k) is
+// not shared with another final triangle. Such an edge is shared with a non-final triangle (b->a is one of
+// its edges) or lies on the tile's hull (a->b is a hull edge); both its ends then touch a non-final triangle
+// or the hull, which a byte per vertex tells, so nearly every edge is settled without a look-up.
+void mark_border(const std::vector<Triangle>& triangles, const std::vector<Point3>& local,
+                 std::vector<uint8_t>& final_mask) {
   const size_t nt = triangles.size();
-  std::vector<uint32_t> start(nl + 1, 0);
-  tbb::parallel_for(size_t(0), nt, [&](size_t i) {
-    if (final_mask[i])
-      for (uint32_t a : triangles[i]) std::atomic_ref<uint32_t>(start[a + 1]).fetch_add(1, std::memory_order_relaxed);
-  });
-  for (size_t i = 0; i < nl; ++i) start[i + 1] += start[i];
-  std::vector<uint32_t> cursor(start.begin(), start.end() - 1), target(start[nl]);
-  tbb::parallel_for(size_t(0), nt, [&](size_t i) {
-    if (!final_mask[i]) return;
-    const Triangle& t = triangles[i];
-    for (int k = 0; k < 3; ++k)
-      target[std::atomic_ref<uint32_t>(cursor[t[k]]).fetch_add(1, std::memory_order_relaxed)] = t[(k + 1) % 3];
-  });
+  const std::vector<uint64_t> hull = hull_edges(local);
+  std::vector<uint8_t> touched(local.size(), 0);
+  for (uint64_t e : hull) touched[e >> 32] = 1;
+  const std::vector<uint64_t> non_final = compact<uint64_t>(
+      nt, [&](size_t i) { return final_mask[i] ? 0 : 3; },
+      [&](size_t i, uint64_t* at) {
+        if (final_mask[i]) return at;
+        const Triangle& t = triangles[i];
+        for (int k = 0; k < 3; ++k) *at++ = uint64_t(t[k]) << 32 | t[(k + 1) % 3];
+        return at;
+      });
+  for (uint64_t e : non_final) touched[e >> 32] = 1;
+  std::vector<uint64_t> sorted_non_final = non_final;
+  tbb::parallel_sort(sorted_non_final.begin(), sorted_non_final.end());
+  auto has = [](const std::vector<uint64_t>& keys, uint64_t key) {
+    return std::binary_search(keys.begin(), keys.end(), key);
+  };
   tbb::parallel_for(size_t(0), nt, [&](size_t i) {
     if (!final_mask[i]) return;
     const Triangle& t = triangles[i];
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = t[k], b = t[(k + 1) % 3];
-      const uint32_t* from = target.data() + start[b];
-      const uint32_t* to = target.data() + start[b + 1];
-      if (std::find(from, to, a) == to) final_mask[i] |= uint8_t(1 << k);
+      if (!touched[a] || !touched[b]) continue;
+      if (has(sorted_non_final, uint64_t(b) << 32 | a) || has(hull, uint64_t(a) << 32 | b))
+        final_mask[i] |= uint8_t(1 << k);
     }
   });
 }
 
-// A triangle list in canonical form (core/canonical.hpp): each rotated to start at its smallest index, sorted.
-// A GPU tile's list comes sorted already, and vertex ids mapped by a sorted id list keep any list sorted.
+// A triangle list in canonical form (core/canonical.hpp): each rotated to start at its smallest index,
+// sorted. A GPU tile's list comes sorted already, and vertex ids mapped by a sorted id list keep any list
+// sorted.
 void make_run(std::vector<Triangle>& run) {
   tbb::parallel_for(size_t(0), run.size(), [&](size_t i) {
     Triangle& t = run[i];
     const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
     t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
   });
-  if (!std::is_sorted(run.begin(), run.end())) tbb::parallel_sort(run.begin(), run.end());
+  const bool sorted = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(1, std::max<size_t>(1, run.size()), 1 << 16), true,
+      [&](const tbb::blocked_range<size_t>& r, bool ok) {
+        for (size_t i = r.begin(); ok && i < r.end(); ++i) ok = !(run[i] < run[i - 1]);
+        return ok;
+      },
+      [](bool a, bool b) { return a && b; });
+  if (!sorted) tbb::parallel_sort(run.begin(), run.end());
 }
 
-// The sorted runs merged into one sorted list, in parts on all cores: splitters sampled from the runs, each part
-// a heap merge of the runs' pieces between two splitters.
+// The sorted runs merged into one sorted list, in parts on all cores: splitters sampled from the runs, each
+// part a heap merge of the runs' pieces between two splitters.
 std::vector<Triangle> merge_runs(std::vector<std::vector<Triangle>>& runs) {
   runs.erase(std::remove_if(runs.begin(), runs.end(), [](const auto& r) { return r.empty(); }), runs.end());
   if (runs.empty()) return {};
   if (runs.size() == 1) return std::move(runs.front());
   size_t total = 0;
   for (const auto& r : runs) total += r.size();
-  const size_t parts = std::clamp<size_t>(total / 65536, 1, 4 * std::max(1u, std::thread::hardware_concurrency()));
+  const size_t parts =
+      std::clamp<size_t>(total / 65536, 1, 4 * std::max(1u, std::thread::hardware_concurrency()));
   const size_t step = std::max<size_t>(1, total / (parts * 16));
   std::vector<Triangle> samples;
   for (const auto& r : runs)
@@ -359,8 +402,9 @@ struct TileResult {
 };
 
 TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segments, const Plan& plan,
-                    const Node& node, std::span<const uint32_t> tile_segments, const TileTriangulator& triangulate,
-                    const std::string& name, std::vector<uint8_t>& in_final) {
+                    const Node& node, std::span<const uint32_t> tile_segments,
+                    const TileTriangulator& triangulate, const std::string& name,
+                    std::vector<uint8_t>& in_final) {
   const auto t0 = Clock::now();
   // The tile's vertex ids, sorted: its own lie in its column's id range (a column is a range of the (x, y)
   // order), marked in a byte map and read back in order; the segments' endpoints outside that range (few) are
@@ -374,7 +418,10 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
       if (inside(id)) std::atomic_ref<uint8_t>(mark[id - c0]).store(1, std::memory_order_relaxed);
   });
   std::vector<uint32_t> outside = compact<uint32_t>(
-      tile_segments.size(), [&](size_t i) { return !inside(segments[tile_segments[i]][0]) + !inside(segments[tile_segments[i]][1]); },
+      tile_segments.size(),
+      [&](size_t i) {
+        return !inside(segments[tile_segments[i]][0]) + !inside(segments[tile_segments[i]][1]);
+      },
       [&](size_t i, uint32_t* at) {
         for (uint32_t id : segments[tile_segments[i]])
           if (!inside(id)) *at++ = id;
@@ -414,7 +461,8 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   r.cdt_ms = ms_since(t1);
   const std::vector<Triangle>& triangles = mesh.triangles;
   const size_t nt = triangles.size();
-  std::vector<uint8_t> final_mask(nt, 0);  // bit 3: final; bit k < 3: its edge k is on the final region's border
+  std::vector<uint8_t> final_mask(nt,
+                                  0);  // bit 3: final; bit k < 3: its edge k is on the final region's border
   tbb::parallel_for(size_t(0), nt, [&](size_t i) {
     const Triangle& t = triangles[i];
     final_mask[i] = disk_inside(local[t[0]], local[t[1]], local[t[2]], node.rect) ? 8 : 0;
@@ -428,7 +476,7 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
       }
     });
   } else {
-    mark_border(triangles, nl, final_mask);
+    mark_border(triangles, local, final_mask);
   }
   r.final_triangles = compact<Triangle>(
       nt, [&](size_t i) { return final_mask[i] ? 1 : 0; },
@@ -446,7 +494,8 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   make_run(r.final_triangles);
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
   tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
-    for (uint32_t id : r.final_triangles[i]) std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
+    for (uint32_t id : r.final_triangles[i])
+      std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
   });
   r.other_ms = ms_since(t0) - r.cdt_ms;
   return r;
@@ -481,11 +530,13 @@ std::vector<Triangle> outside_final(const std::vector<Triangle>& m, const std::v
     while (parent[t] != t) t = parent[t] = parent[parent[t]];
     return t;
   };
-  std::vector<std::pair<uint32_t, bool>> sides;  // a triangle beside a border edge, and whether on its final side
+  std::vector<std::pair<uint32_t, bool>>
+      sides;  // a triangle beside a border edge, and whether on its final side
   for (size_t i = 0; i < half.size();) {
     size_t j = i + 1;
     while (j < half.size() && half[j].key == half[i].key) ++j;
-    auto f = std::lower_bound(final_side.begin(), final_side.end(), std::pair<uint64_t, bool>{half[i].key, false});
+    auto f =
+        std::lower_bound(final_side.begin(), final_side.end(), std::pair<uint64_t, bool>{half[i].key, false});
     if (f != final_side.end() && f->first == half[i].key) {
       for (size_t k = i; k < j; ++k) sides.push_back({half[k].triangle, half[k].forward == f->second});
     } else if (j == i + 2) {
@@ -498,7 +549,8 @@ std::vector<Triangle> outside_final(const std::vector<Triangle>& m, const std::v
     uint8_t& mk = mark[root(t)];
     const uint8_t want = on_final ? 1 : 2;
     if (mk && mk != want)
-      throw std::logic_error("tile merge: a part of the merge lies on both sides of the final region's border");
+      throw std::logic_error(
+          "tile merge: a part of the merge lies on both sides of the final region's border");
     mk = want;
   }
   std::vector<Triangle> kept;
@@ -542,50 +594,67 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   std::vector<uint32_t> tile_of_node(plan.nodes.size(), 0);
   for (size_t t = 0; t < tiles; ++t) tile_of_node[plan.tiles[t]] = uint32_t(t);
 
-  // Every segment goes to every tile whose rectangle it meets (whole, with its endpoints).
-  tbb::enumerable_thread_specific<std::vector<std::pair<uint32_t, uint32_t>>> found;  // (tile, segment)
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, segments.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
-    auto& out = found.local();
-    std::vector<uint32_t> stack;
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      const Point3& a = v[segments[i][0]];
-      const Point3& b = v[segments[i][1]];
-      stack.assign(1, 0);
-      while (!stack.empty()) {
-        const Node& node = plan.nodes[stack.back()];
-        const uint32_t at = stack.back();
-        stack.pop_back();
-        if (node.left < 0) {
-          out.push_back({tile_of_node[at], uint32_t(i)});
-          continue;
-        }
-        for (int32_t c : {node.left, node.right})
-          if (meets(plan.nodes[c].rect, a, b)) stack.push_back(uint32_t(c));
+  // Every segment goes to every tile whose rectangle it meets (whole, with its endpoints): blocks of segments
+  // count their tiles, then write them in block order, so each tile's list is in segment order without a sort.
+  auto for_tiles_of = [&](size_t i, auto&& f) {
+    const Point3& a = v[segments[i][0]];
+    const Point3& b = v[segments[i][1]];
+    uint32_t stack[64];  // the tree's depth is about log2(tiles)
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const uint32_t at = stack[--top];
+      const Node& node = plan.nodes[at];
+      if (node.left < 0) {
+        f(tile_of_node[at]);
+        continue;
       }
+      for (int32_t c : {node.right, node.left})
+        if (meets(plan.nodes[c].rect, a, b)) stack[top++] = uint32_t(c);
     }
+  };
+  constexpr size_t kSegmentBlock = 1 << 15;
+  const size_t segment_blocks = (segments.size() + kSegmentBlock - 1) / kSegmentBlock;
+  std::vector<std::vector<uint32_t>> block_count(segment_blocks);
+  tbb::parallel_for(size_t(0), segment_blocks, [&](size_t b) {
+    std::vector<uint32_t>& count = block_count[b];
+    count.assign(tiles, 0);
+    for (size_t i = b * kSegmentBlock; i < std::min(segments.size(), (b + 1) * kSegmentBlock); ++i)
+      for_tiles_of(i, [&](uint32_t t) { ++count[t]; });
   });
-  std::vector<std::pair<uint32_t, uint32_t>> pairs;
-  for (auto& part : found) pairs.insert(pairs.end(), part.begin(), part.end());
-  tbb::parallel_sort(pairs.begin(), pairs.end());
-  std::vector<uint32_t> tile_segments(pairs.size());
   std::vector<size_t> first(tiles + 1, 0);
-  for (size_t i = 0; i < pairs.size(); ++i) tile_segments[i] = pairs[i].second, ++first[pairs[i].first + 1];
-  for (size_t t = 0; t < tiles; ++t) first[t + 1] += first[t];
+  for (size_t t = 0; t < tiles; ++t) {
+    first[t + 1] = first[t];
+    for (size_t b = 0; b < segment_blocks; ++b) {
+      const uint32_t c = block_count[b][t];
+      block_count[b][t] = uint32_t(first[t + 1] - first[t]);  // the block's start within the tile's list
+      first[t + 1] += c;
+    }
+  }
+  std::vector<uint32_t> tile_segments(first[tiles]);
+  tbb::parallel_for(size_t(0), segment_blocks, [&](size_t b) {
+    std::vector<uint32_t>& at = block_count[b];
+    for (size_t i = b * kSegmentBlock; i < std::min(segments.size(), (b + 1) * kSegmentBlock); ++i)
+      for_tiles_of(i, [&](uint32_t t) { tile_segments[first[t] + at[t]++] = uint32_t(i); });
+  });
+  block_count.clear();
 
   s.plan_ms += ms_since(t_tiles);
   std::vector<uint8_t> in_final(n, 0);
   std::vector<TileResult> results(tiles);
-  const unsigned threads = options.parallel_tiles ? options.parallel_tiles : std::thread::hardware_concurrency();
+  const unsigned threads =
+      options.parallel_tiles ? options.parallel_tiles : std::thread::hardware_concurrency();
   tbb::task_arena arena(int(std::max(1u, threads)));
   arena.execute([&] {
     tbb::parallel_for(size_t(0), tiles, size_t(1), [&](size_t t) {
       const std::span<const uint32_t> mine(tile_segments.data() + first[t], first[t + 1] - first[t]);
       const std::string name = "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " +
                                std::to_string(level);
-      // Isolated: a thread waiting in this tile's own parallel loops takes no other tile (whose GPU call would make
-      // it wait for the device as well).
+      // Isolated: a thread waiting in this tile's own parallel loops takes no other tile (whose GPU call
+      // would make it wait for the device as well).
       tbb::this_task_arena::isolate([&] {
-        results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
+        results[t] =
+            run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
       });
     });
   });
@@ -629,8 +698,8 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   std::vector<Edge> local_border(border.size());
   for (size_t i = 0; i < border.size(); ++i) {
     local_border[i] = {local_of[border[i][0]], local_of[border[i][1]]};
-    merge_segments.push_back({std::min(local_border[i][0], local_border[i][1]),
-                              std::max(local_border[i][0], local_border[i][1])});
+    merge_segments.push_back(
+        {std::min(local_border[i][0], local_border[i][1]), std::max(local_border[i][0], local_border[i][1])});
   }
   tbb::parallel_sort(merge_segments.begin(), merge_segments.end());
   merge_segments.erase(std::unique(merge_segments.begin(), merge_segments.end()), merge_segments.end());
@@ -641,10 +710,12 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   s.tiles_ms += ms_since(t_tiles);
 
   // Tiled again while that shrinks it; the last level is one call (its time is merge_ms).
-  const bool again = ids.size() > options.max_tile_points && double(ids.size()) <= options.retile_share * double(n);
+  const bool again =
+      ids.size() > options.max_tile_points && double(ids.size()) <= options.retile_share * double(n);
   std::vector<Triangle> merged;
   if (again) {
-    std::vector<std::vector<Triangle>> merge_runs_ = tiled_runs(merge_vertices, merge_segments, options, triangulate, s);
+    std::vector<std::vector<Triangle>> merge_runs_ =
+        tiled_runs(merge_vertices, merge_segments, options, triangulate, s);
     merged = merge_runs(merge_runs_);
   } else {
     const auto t = Clock::now();
@@ -669,7 +740,8 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
 }  // namespace
 
 std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<Edge>& segments,
-                                const TileOptions& options, const TileTriangulator& triangulate, TileStats* stats) {
+                                const TileOptions& options, const TileTriangulator& triangulate,
+                                TileStats* stats) {
   TileStats local_stats;
   TileStats& s = stats ? *stats : local_stats;
   std::vector<std::vector<Triangle>> runs = tiled_runs(v, segments, options, triangulate, s);
@@ -679,16 +751,18 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<
   return out;
 }
 
-CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options, const TileTriangulator& triangulate,
-                            TileStats* stats) {
+CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options,
+                            const TileTriangulator& triangulate, TileStats* stats) {
   CdtResult r;
   r.steiner_points = in.steiner_points;
   r.mesh.triangles = tiled_cdt(in.vertices, in.constraints, options, triangulate, stats);
-  r.mesh.vertices = std::move(in.vertices);  // sorted and unique already: the triangles are in canonical order
+  r.mesh.vertices =
+      std::move(in.vertices);  // sorted and unique already: the triangles are in canonical order
   return r;
 }
 
-bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0, double y1) {
+bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0,
+                       double y1) {
   return disk_inside(a, b, c, Rect{x0, x1, y0, y1});
 }
 

@@ -7,7 +7,8 @@
 //   CdtResult r = triangulate_tiled(std::move(in), opt, cgal_tile_triangulator(), &ts);   // canonical mesh
 //
 // Steps (core/tiles.cpp reads as this list):
-//   plan     k-d splits of the vertices by count (the median of the longer side's extent) until a tile holds at
+//   plan     k-d splits of the vertices by count (the median of the longer side's extent) until a tile holds
+//   at
 //            most max_tile_points; every tile is a closed rectangle, ±inf on the outside
 //   tiles    each tile's CDT of its vertices plus every segment meeting its rectangle (segments whole, with
 //            their endpoints: nothing is clipped, so a tile makes no vertex of its own); a triangle whose
@@ -36,7 +37,8 @@ struct TileMesh {
 
 // The CDT of a planar straight-line graph: vertices sorted by (x, y) and unique, segments (a < b) sorted,
 // meeting only at shared endpoints and holding no vertex inside. Called from several threads at once (a GPU
-// triangulator serialises itself). `what` names the call for messages ("tile 3 of 16, level 1", "merge, level 1").
+// triangulator serialises itself). `what` names the call for messages ("tile 3 of 16, level 1", "merge, level
+// 1").
 using TileTriangulator = std::function<TileMesh(const std::vector<Point3>& vertices,
                                                 const std::vector<Edge>& segments, std::string_view what)>;
 
@@ -44,7 +46,8 @@ using TileTriangulator = std::function<TileMesh(const std::vector<Point3>& verti
 TileTriangulator cgal_tile_triangulator();
 
 struct TileOptions {
-  uint64_t max_tile_points = 0;  // at most this many of a tile's own vertices; below 3 or >= the input: no tiles
+  uint64_t max_tile_points =
+      0;  // at most this many of a tile's own vertices; below 3 or >= the input: no tiles
   // A merge tiled again only while it holds at most this share of its level's vertices (else one call).
   double retile_share = 0.6;
   // Tiles triangulated at once (0: all cores); 1 for a device that takes one at a time.
@@ -52,36 +55,39 @@ struct TileOptions {
 };
 
 struct TileStats {
-  uint64_t tiles = 0;            // tiles of every level
-  uint64_t levels = 0;           // 1: tiles and one merge; 2: the merge was tiled once more; ...
-  uint64_t final_triangles = 0;  // final in the first level's tiles (later levels' may be dropped again)
-  uint64_t merge_vertices = 0;   // the last merge, the one triangulated in one call
-  uint64_t merge_segments = 0;   // its constraints (segments and final-region border edges)
-  uint64_t merge_triangles = 0;  // its triangles kept
+  uint64_t tiles = 0;                 // tiles of every level
+  uint64_t levels = 0;                // 1: tiles and one merge; 2: the merge was tiled once more; ...
+  uint64_t final_triangles = 0;       // final in the first level's tiles (later levels' may be dropped again)
+  uint64_t merge_vertices = 0;        // the last merge, the one triangulated in one call
+  uint64_t merge_segments = 0;        // its constraints (segments and final-region border edges)
+  uint64_t merge_triangles = 0;       // its triangles kept
   double tiles_ms = 0, merge_ms = 0;  // wall time: tiles and their bookkeeping, the last merge's call
-  // Parts of tiles_ms, every level: the k-d plan and the segments' tiles (wall), the tiles' triangulator calls
-  // and the rest of their work (summed over threads), building the merge input and keeping its triangles (wall).
+  // Parts of tiles_ms, every level: the k-d plan and the segments' tiles (wall), the tiles' triangulator
+  // calls and the rest of their work (summed over threads), building the merge input and keeping its
+  // triangles (wall).
   double plan_ms = 0, tile_cdt_thread_ms = 0, tile_other_thread_ms = 0, merge_input_ms = 0, keep_ms = 0;
   double order_ms = 0;  // the tiles' and the merge's sorted runs merged into canonical order (wall)
 };
 
-// The triangles of CDT(vertices, segments) (the graph as TileTriangulator takes it), tiled as `options` say, in
-// canonical order (core/canonical.hpp): each starts at its smallest index, the list sorted.
+// The triangles of CDT(vertices, segments) (the graph as TileTriangulator takes it), tiled as `options` say,
+// in canonical order (core/canonical.hpp): each starts at its smallest index, the list sorted.
 std::vector<Triangle> tiled_cdt(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
                                 const TileOptions& options, const TileTriangulator& triangulate,
                                 TileStats* stats = nullptr);
 
-// The whole mesh of a resolved input, canonical: the bytes of triangulate_cgal(prepared) for the prepared input
-// `in` was resolved from.
-CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options, const TileTriangulator& triangulate,
-                            TileStats* stats = nullptr);
+// The whole mesh of a resolved input, canonical: the bytes of triangulate_cgal(prepared) for the prepared
+// input `in` was resolved from.
+CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options,
+                            const TileTriangulator& triangulate, TileStats* stats = nullptr);
 
-// Whether the closed circumdisk of abc lies in the open rectangle (x0, x1) x (y0, y1) (±inf allowed): the tiles'
-// test of a final triangle. True only when it certainly does; near-ties and flat triangles answer false.
-bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0, double y1);
+// Whether the closed circumdisk of abc lies in the open rectangle (x0, x1) x (y0, y1) (±inf allowed): the
+// tiles' test of a final triangle. True only when it certainly does; near-ties and flat triangles answer
+// false.
+bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0,
+                       double y1);
 
-// The tile size `--max-tile-points` auto picks for the CPU: 0 (no tiles) below min_points or on one core, else
-// vertices / (4 x cores), so that every core has a few tiles (docs/tiles.md has the measurements).
+// The tile size `--max-tile-points` auto picks for the CPU: 0 (no tiles) below min_points or on one core,
+// else vertices / (4 x cores), so that every core has a few tiles (docs/tiles.md has the measurements).
 uint64_t auto_cpu_tile_points(uint64_t vertices, unsigned cores);
 
 }  // namespace cdtgpu

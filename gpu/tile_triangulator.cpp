@@ -1,10 +1,10 @@
 #include "gpu/tile_triangulator.hpp"
 
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <memory>
 #include <mutex>
-
-#include <tbb/task_arena.h>
 
 #include "gpu/check.hpp"
 #include "shaders/layout_dt.h"
@@ -13,19 +13,22 @@ namespace cdtgpu::gpu {
 
 namespace {
 
-void add(std::vector<std::pair<std::string, double>>& sum, const std::vector<std::pair<std::string, double>>& one) {
+void add(std::vector<std::pair<std::string, double>>& sum,
+         const std::vector<std::pair<std::string, double>>& one) {
   for (const auto& [name, ms] : one) {
     auto it = std::find_if(sum.begin(), sum.end(), [&](const auto& x) { return x.first == name; });
-    if (it == sum.end()) sum.emplace_back(name, ms);
-    else it->second += ms;
+    if (it == sum.end())
+      sum.emplace_back(name, ms);
+    else
+      it->second += ms;
   }
 }
 
 }  // namespace
 
 TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum) {
-  return [&cdt, sum, lock = std::make_shared<std::mutex>()](const std::vector<Point3>& vertices,
-                                                        const std::vector<Edge>& segments, std::string_view what) {
+  return [&cdt, sum, lock = std::make_shared<std::mutex>()](
+             const std::vector<Point3>& vertices, const std::vector<Edge>& segments, std::string_view what) {
     // A tile is a resolved graph already: the pipeline's resolve stage is handed the answer.
     PreparedInput prepared;
     prepared.vertices = vertices;
@@ -35,8 +38,8 @@ TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum) {
     resolved.constraints = segments;
     std::promise<ResolvedInput> ready;
     ready.set_value(std::move(resolved));
-    // Isolated: a thread waiting inside the pipeline's own parallel loops must not pick up another tile, which
-    // would wait for the lock it holds.
+    // Isolated: a thread waiting inside the pipeline's own parallel loops must not pick up another tile,
+    // which would wait for the lock it holds.
     return tbb::this_task_arena::isolate([&] {
       std::lock_guard<std::mutex> one_at_a_time(*lock);
       try {
@@ -65,8 +68,8 @@ uint64_t max_tile_points(const Context& ctx) {
   constexpr uint64_t kBytesPerPoint = 260;
   const uint64_t by_memory = device_local / kBytesPerPoint;
   const uint64_t by_slots = DT_MAX_SLOTS / 2;
-  // The largest descriptor-bound buffer per point: the constraint inserter's 12-byte tables per triangle slot,
-  // ~24 bytes a point (6.1 GB at 256M points, refused by a 4 GiB range).
+  // The largest descriptor-bound buffer per point: the constraint inserter's 12-byte tables per triangle
+  // slot, ~24 bytes a point (6.1 GB at 256M points, refused by a 4 GiB range).
   const uint64_t by_range = ctx.info.max_storage_buffer_range / 24;
   return std::min({by_memory, by_slots, by_range}) / 4 * 3;
 }

@@ -1,5 +1,5 @@
-// Tiles of core/tiles through one device: each tile's CDT is a whole GPU run (gpu/cdt_pipeline), one tile at a
-// time on the device while other threads gather the next tiles and sort out the finished ones.
+// Tiles of core/tiles through one device: each tile's CDT is a whole GPU run (gpu/cdt_pipeline), one tile at
+// a time on the device while other threads gather the next tiles and sort out the finished ones.
 #pragma once
 #include <cstdint>
 
@@ -8,15 +8,15 @@
 
 namespace cdtgpu::gpu {
 
-// Serialises its calls on `cdt`, which must outlive it; a DeviceError names the tile and its size. `sum`, when
-// given (and outliving it): every call's stage times added up, by name, and the largest device memory peak.
+// Serialises its calls on `cdt`, which must outlive it; a DeviceError names the tile and its size. `sum`,
+// when given (and outliving it): every call's stage times added up, by name, and the largest device memory
+// peak.
 TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum = nullptr);
 
-// The most points a tile of its own may hold on this device: the Delaunay build's slot limit and ~260 bytes of
-// device memory a point (the measured peak, docs/performance.md), the storage buffer range (24 bytes a
-// point in the constraint inserter's tables: 179M points on a 4 GiB range, 5.6M on lavapipe's 128 MiB), with a
-// quarter to spare for the endpoints of
-// the segments that cross into the tile.
+// The most points a tile of its own may hold on this device: the Delaunay build's slot limit and ~260 bytes
+// of device memory a point (the measured peak, docs/performance.md), the storage buffer range (24 bytes a
+// point in the constraint inserter's tables: 179M points on a 4 GiB range, 5.6M on lavapipe's 128 MiB), with
+// a quarter to spare for the endpoints of the segments that cross into the tile.
 uint64_t max_tile_points(const Context& ctx);
 
 }  // namespace cdtgpu::gpu

@@ -1,11 +1,10 @@
-// The tiled CDT (core/tiles): with tiles of 16 to 500 points, on uniform, clustered, grid and degenerate layouts,
-// with crossing and long constraints, the mesh equals triangulate_cgal's (the single run) exactly; the tiles'
-// counts say the path really tiled.
+// The tiled CDT (core/tiles): with tiles of 16 to 500 points, on uniform, clustered, grid and degenerate
+// layouts, with crossing and long constraints, the mesh equals triangulate_cgal's (the single run) exactly;
+// the tiles' counts say the path really tiled.
 #include "core/tiles.hpp"
 
-#include <gtest/gtest.h>
-
 #include <CGAL/Exact_rational.h>
+#include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
@@ -30,32 +29,46 @@ Polyline line(std::vector<Point3> pts, bool closed = false) {
   return l;
 }
 
-// The tiled mesh against the single run, at several tile sizes; returns the stats of the smallest tiles.
+// CGAL's triangles without their neighbours, as the GPU gives them: the tiles find their border themselves.
+TileTriangulator without_neighbours() {
+  return [](const std::vector<Point3>& v, const std::vector<Edge>& s, std::string_view what) {
+    TileMesh m = cgal_tile_triangulator()(v, s, what);
+    m.neighbours.clear();
+    return m;
+  };
+}
+
+// The tiled mesh against the single run, at several tile sizes, with and without the triangulator's
+// neighbours; returns the stats of the smallest tiles.
 TileStats expect_same_as_single_run(const InputSet& in, std::vector<uint64_t> tile_points = {16, 50, 500}) {
   const PreparedInput p = prepare(in);
   const CdtResult single = triangulate_cgal(p);
   TileStats smallest;
-  for (uint64_t tp : tile_points) {
-    TileStats ts;
-    TileOptions opt;
-    opt.max_tile_points = tp;
-    const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
-    EXPECT_EQ(tiled.steiner_points, single.steiner_points) << "tiles of " << tp;
-    EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << "tiles of " << tp;
-    EXPECT_EQ(tiled.mesh.triangles.size(), single.mesh.triangles.size()) << "tiles of " << tp;
-    EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << "tiles of " << tp;
-    if (p.vertices.size() > tp) {
-      EXPECT_GE(ts.tiles, 2u) << "tiles of " << tp;
+  for (uint64_t tp : tile_points)
+    for (const bool neighbours : {true, false}) {
+      SCOPED_TRACE(neighbours ? "with neighbours" : "without neighbours");
+      TileStats ts;
+      TileOptions opt;
+      opt.max_tile_points = tp;
+      const CdtResult tiled = triangulate_tiled(
+          resolve_constraints(p), opt, neighbours ? cgal_tile_triangulator() : without_neighbours(), &ts);
+      EXPECT_EQ(tiled.steiner_points, single.steiner_points) << "tiles of " << tp;
+      EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << "tiles of " << tp;
+      EXPECT_EQ(tiled.mesh.triangles.size(), single.mesh.triangles.size()) << "tiles of " << tp;
+      EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << "tiles of " << tp;
+      if (p.vertices.size() > tp) {
+        EXPECT_GE(ts.tiles, 2u) << "tiles of " << tp;
+      }
+      if (tp == tile_points.front()) smallest = ts;
     }
-    if (tp == tile_points.front()) smallest = ts;
-  }
   return smallest;
 }
 
 InputSet random_points(size_t n, uint64_t seed, double side = 1000) {
   std::mt19937_64 rng(seed);
   InputSet in;
-  for (size_t i = 0; i < n; ++i) in.points.push_back({unit_double(rng) * side, unit_double(rng) * side, double(i)});
+  for (size_t i = 0; i < n; ++i)
+    in.points.push_back({unit_double(rng) * side, unit_double(rng) * side, double(i)});
   return in;
 }
 
@@ -124,8 +137,7 @@ TEST(Tiles, ClusteredPoints) {
   InputSet in;
   for (int c = 0; c < 5; ++c) {
     const double cx = unit_double(rng) * 1e5, cy = unit_double(rng) * 1e5;
-    for (int i = 0; i < 400; ++i)
-      in.points.push_back({cx + unit_double(rng), cy + unit_double(rng), 0});
+    for (int i = 0; i < 400; ++i) in.points.push_back({cx + unit_double(rng), cy + unit_double(rng), 0});
   }
   expect_same_as_single_run(in);
 }
@@ -191,12 +203,13 @@ TEST(Tiles, SameTrianglesWhateverTheThreadCount) {
   EXPECT_TRUE(a.mesh.triangles == b.mesh.triangles);
 }
 
-// The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at UTM
-// offsets, against rectangles whose sides sit at the exact circle's extremes and a hair beside them.
+// The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at
+// UTM offsets, against rectangles whose sides sit at the exact circle's extremes and a hair beside them.
 TEST(Tiles, CircumdiskTestIsNeverWrongAboutInside) {
   using Q = CGAL::Exact_rational;
   std::mt19937_64 rng(17);
-  auto exact = [](const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0, double y1) {
+  auto exact = [](const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0,
+                  double y1) {
     const Q bx = Q(b.x) - Q(a.x), by = Q(b.y) - Q(a.y), cx = Q(c.x) - Q(a.x), cy = Q(c.y) - Q(a.y);
     const Q d = 2 * (bx * cy - by * cx);
     if (d == 0) return false;
@@ -212,7 +225,8 @@ TEST(Tiles, CircumdiskTestIsNeverWrongAboutInside) {
     const Point3 a{500000 + unit_double(rng) * 1000, 6000000 + unit_double(rng) * 1000, 0};
     Point3 b{a.x + (unit_double(rng) - 0.5) * scale, a.y + (unit_double(rng) - 0.5) * scale, 0};
     Point3 c{a.x + (unit_double(rng) - 0.5) * scale, a.y + (unit_double(rng) - 0.5) * scale, 0};
-    if (i % 3 == 0) c = {b.x + (b.x - a.x) * 0.75, b.y + (b.y - a.y) * 0.75 + scale * 1e-12 * (i % 7), 0};  // flat
+    if (i % 3 == 0)
+      c = {b.x + (b.x - a.x) * 0.75, b.y + (b.y - a.y) * 0.75 + scale * 1e-12 * (i % 7), 0};  // flat
     // The circle's extremes in doubles, then sides at them and a few ulps inside and outside.
     const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y, d = 2 * (bx * cy - by * cx);
     if (d == 0) continue;
