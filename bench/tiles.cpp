@@ -217,7 +217,9 @@ int run_tiles(const BenchOptions& o) {
                   tiled ? std::to_string(r.tiles.merge_vertices).c_str() : "-",
                   fmt(median(r.resolve_ms)).c_str(), fmt(median(r.tiles_ms)).c_str(),
                   fmt(median(r.merge_ms)).c_str(), fmt(total).c_str(), fmt(vs, 2).c_str(), rss,
-                  same ? "yes" : "NO");
+                  is_reference ? "(ref)"
+                  : same       ? "yes"
+                               : "NO");
       if (tiled)
         std::printf(
             "%9s last run: plan %s ms, tile CDTs %s ms and the tiles' other work %s ms (thread sums), merge "
@@ -243,6 +245,7 @@ int run_tiles(const BenchOptions& o) {
                       {"tiles_ms", r.tiles_ms},
                       {"merge_ms", r.merge_ms},
                       {"peak_rss_gb_after", rss},
+                      {"reference", is_reference},
                       {"same", same},
                       {"last_run_parts_ms",
                        {{"plan", r.tiles.plan_ms},
