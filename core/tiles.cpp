@@ -26,6 +26,7 @@
 
 #include "core/canonical.hpp"
 #include "core/predicates.hpp"
+#include "core/touched.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -86,12 +87,13 @@ void select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less) {
     count[b] = at;
     for (int k = 0; k < 3; ++k) at[k] += c[k];
   }
-  std::vector<uint32_t> out(n);
+  std::vector<uint32_t> out;
+  resize_touched(out, n);
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     std::array<size_t, 3> w = count[b];
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) out[w[part(first[i])]++] = first[i];
   });
-  std::copy(out.begin(), out.end(), first);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) { first[i] = out[i]; });
   const size_t k = size_t(nth - first);
   if (k >= total[0] && k < total[0] + total[1])
     std::nth_element(first + total[0], nth, first + total[0] + total[1], less);
@@ -110,8 +112,8 @@ void select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less) {
 Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
   const size_t n = v.size();
   Plan plan;
-  plan.order.resize(n);
-  std::iota(plan.order.begin(), plan.order.end(), 0u);
+  resize_touched(plan.order, n);
+  tbb::parallel_for(size_t(0), n, [&](size_t i) { plan.order[i] = uint32_t(i); });
   auto [y0, y1] = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, n, 1 << 16), std::pair<double, double>{kInf, -kInf},
       [&](const tbb::blocked_range<size_t>& r, std::pair<double, double> m) {
@@ -264,7 +266,8 @@ std::vector<T> compact(size_t n, Count count, Emit emit) {
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) first[b + 1] += count(i);
   });
   for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
-  std::vector<T> out(first[blocks]);
+  std::vector<T> out;
+  resize_touched(out, first[blocks]);
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     T* at = out.data() + first[b];
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) at = emit(i, at);
@@ -376,7 +379,8 @@ std::vector<Triangle> merge_runs(std::vector<std::vector<Triangle>>& runs) {
     offset[j + 1] = offset[j];
     for (size_t r = 0; r < runs.size(); ++r) offset[j + 1] += cut[j + 1][r] - cut[j][r];
   }
-  std::vector<Triangle> out(total);
+  std::vector<Triangle> out;
+  resize_touched(out, total);
   tbb::parallel_for(size_t(0), parts, [&](size_t j) {
     using Head = std::pair<Triangle, uint32_t>;  // the next triangle of a run, and the run
     std::priority_queue<Head, std::vector<Head>, std::greater<Head>> heap;
@@ -410,7 +414,8 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   // order), marked in a byte map and read back in order; the segments' endpoints outside that range (few) are
   // sorted apart. The map's ranks then give the segments' local ids.
   const uint32_t c0 = node.column_lo, c1 = node.column_hi;
-  std::vector<uint8_t> mark(c1 - c0, 0);
+  std::vector<uint8_t> mark;
+  resize_touched(mark, c1 - c0);
   tbb::parallel_for(node.lo, node.hi, [&](uint32_t i) { mark[plan.order[i] - c0] = 1; });
   auto inside = [&](uint32_t id) { return id >= c0 && id < c1; };
   tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
@@ -440,8 +445,10 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   ids.insert(ids.end(), own.begin(), own.end());
   ids.insert(ids.end(), outside.begin() + below, outside.end());
   const size_t nl = ids.size();
-  std::vector<uint32_t> rank(c1 - c0, 0);
-  std::vector<Point3> local(nl);
+  std::vector<uint32_t> rank;
+  resize_touched(rank, c1 - c0);
+  std::vector<Point3> local;
+  resize_touched(local, nl);
   tbb::parallel_for(size_t(0), nl, [&](size_t i) {
     local[i] = v[ids[i]];
     if (inside(ids[i])) rank[ids[i] - c0] = uint32_t(i);

@@ -1,11 +1,13 @@
 #include "gpu/tile_triangulator.hpp"
 
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <memory>
 #include <mutex>
 
+#include "core/touched.hpp"
 #include "gpu/check.hpp"
 #include "shaders/layout_dt.h"
 
@@ -31,10 +33,13 @@ TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum) {
              const std::vector<Point3>& vertices, const std::vector<Edge>& segments, std::string_view what) {
     // A tile is a resolved graph already: the pipeline's resolve stage is handed the answer.
     PreparedInput prepared;
-    prepared.vertices = vertices;
-    prepared.constraints = segments;
     ResolvedInput resolved;
-    resolved.vertices = vertices;
+    resize_touched(prepared.vertices, vertices.size());
+    resize_touched(resolved.vertices, vertices.size());
+    tbb::parallel_for(size_t(0), vertices.size(), [&](size_t i) {
+      prepared.vertices[i] = resolved.vertices[i] = vertices[i];
+    });
+    prepared.constraints = segments;
     resolved.constraints = segments;
     std::promise<ResolvedInput> ready;
     ready.set_value(std::move(resolved));
