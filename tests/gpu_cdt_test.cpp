@@ -9,6 +9,8 @@
 // CDTGPU_LARGE=1 adds the paper's headline size (2M points, 500K constraints) for the GPU machine.
 #include <gtest/gtest.h>
 
+#include "tests/peer_inputs.hpp"
+
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
@@ -412,11 +414,8 @@ TEST(GpuCdt, ReportsBrokenRequirements) {
 
 // The peer inputs of artem-ogre/CDT that need no Steiner points (crossings are another stage's job).
 TEST(GpuCdt, PeerInputsWithoutCrossings) {
-  const std::filesystem::path dir = std::filesystem::path(CDTGPU_SHARED_DATA) / "cdt-peer-inputs";
-  std::vector<std::filesystem::path> files;
-  for (const auto& e : std::filesystem::directory_iterator(dir))
-    if (e.path().extension() == ".txt") files.push_back(e.path());
-  std::sort(files.begin(), files.end());
+  CDTGPU_SKIP_WITHOUT_PEER_INPUTS();
+  const std::vector<std::filesystem::path> files = peer_input_files();
   ASSERT_GE(files.size(), 30u);
   int ran = 0;
   for (const auto& f : files) {

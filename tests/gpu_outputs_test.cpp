@@ -123,7 +123,9 @@ size_t centres_where_the_tie_matters(const Mesh& m, double cell) {
 
 TEST(GpuDivision, CoarseQuotientsAreCorrectedToTheNearest) {
   const char* v = std::getenv("CDTGPU_VALIDATION");  // =0 where the layer is not installed (the H100 machine)
-  if (!(v && std::string(v) == "0")) EXPECT_TRUE(ctx().validation) << "the Khronos validation layer is not active";
+  if (!(v && std::string(v) == "0")) {
+    EXPECT_TRUE(ctx().validation) << "the Khronos validation layer is not active";
+  }
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> mant(1, 2);
   std::uniform_int_distribution<int> expo(-60, 60), sign(0, 1);

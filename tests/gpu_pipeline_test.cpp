@@ -7,6 +7,8 @@
 // CDTGPU_LARGE=1 adds 2M points + 500K constraints (the paper's headline) for the GPU machine.
 #include <gtest/gtest.h>
 
+#include "tests/peer_inputs.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -74,11 +76,8 @@ InputSet workload(uint64_t n, uint64_t m, double f, uint64_t seed) {
 }
 
 TEST(GpuPipeline, EveryPeerInput) {
-  const std::filesystem::path dir = std::filesystem::path(CDTGPU_SHARED_DATA) / "cdt-peer-inputs";
-  std::vector<std::filesystem::path> files;
-  for (const auto& e : std::filesystem::directory_iterator(dir))
-    if (e.path().extension() == ".txt") files.push_back(e.path());
-  std::sort(files.begin(), files.end());
+  CDTGPU_SKIP_WITHOUT_PEER_INPUTS();
+  const std::vector<std::filesystem::path> files = peer_input_files();
   ASSERT_GE(files.size(), 30u);
   int with_steiner = 0;  // inputs whose constraints cross: the CPU resolve stage is exercised
   for (const auto& f : files) {

@@ -16,6 +16,7 @@
 #include "core/resolve.hpp"
 #include "core/workloads.hpp"
 #include "io/readers.hpp"
+#include "tests/peer_inputs.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -257,17 +258,13 @@ TEST(Tiles, AutoTileSizeForTheCpu) {
 
 // The peer inputs (artem-ogre/CDT's test suite) when ../shared/data is there: every one, tiles of 16 and 64.
 TEST(Tiles, PeerInputs) {
-  const char* env = std::getenv("CDTGPU_PEER_INPUTS");
-  const std::filesystem::path dir = env ? env : std::filesystem::path(CDTGPU_SHARED_DATA) / "cdt-peer-inputs";
-  if (!std::filesystem::is_directory(dir))
-    GTEST_SKIP() << dir << " is absent (artem-ogre/CDT's test inputs; CDTGPU_PEER_INPUTS may name a copy)";
+  CDTGPU_SKIP_WITHOUT_PEER_INPUTS();
   int files = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir)) {
-    if (e.path().extension() != ".txt") continue;
-    std::ifstream file(e.path(), std::ios::binary);
+  for (const auto& path : peer_input_files()) {
+    std::ifstream file(path, std::ios::binary);
     InputSet in;
-    read_peer_input(file, e.path().string(), in);
-    SCOPED_TRACE(e.path().filename().string());
+    read_peer_input(file, path.string(), in);
+    SCOPED_TRACE(path.filename().string());
     expect_same_as_single_run(in, {16, 64});
     ++files;
   }
