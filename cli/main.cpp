@@ -63,8 +63,8 @@ int main(int argc, char** argv) {
                 ":role=breakline|vertices|boundary|hole and/or z=FIELD|NUMBER|drape|min|mean|max, comma-separated "
                 "(e.g. lakes.shp:role=hole, footprints.shp:role=breakline,z=drape)")
       ->required();
-  t->add_option("-o,--output", tri.output, "output mesh (.obj .ply .wkt .xml (LandXML) .2dm), or - for stdout")
-      ->required();
+  t->add_option("-o,--output", tri.output,
+                 "output mesh (.obj .ply .wkt .xml (LandXML) .2dm), or - for stdout (needed unless --tiles-out)");
   t->add_option("--format", tri.format, "obj, ply, wkt, landxml or 2dm (default: from the output's extension)");
   t->add_flag("--ascii", tri.write.ascii, "PLY: ascii instead of binary little-endian");
   t->add_flag("--wkt-multipolygon", tri.write.wkt_multipolygon, "WKT: MULTIPOLYGON Z instead of TIN Z");
@@ -87,6 +87,10 @@ int main(int argc, char** argv) {
   t->add_option("--max-edge", tri.max_edge,
                  "drop triangles reached from outside across an unconstrained edge longer than this (concave hull)")
       ->check(CLI::PositiveNumber);
+  t->add_option("--tiles-out", tri.tiles_out,
+                 "also (or only) write the mesh as one file per tile into this folder, with index.geojson: each "
+                 "triangle in the file of the tile holding its smallest vertex (format from --format, default PLY; "
+                 "tiles of --max-tile-points, default 1M points); `cdtgpu verify DIR` reads it back");
   t->add_option("--max-tile-points", tri.max_tile_points,
                  "triangulate in tiles of at most N input points, merged exactly (the same output); 0: never. "
                  "Default: tiles on every core for the CPU backend at 100K points or more, and for the GPU when "
@@ -97,7 +101,7 @@ int main(int argc, char** argv) {
   std::string mesh_path;
   InputOptions ver;
   auto* v = app.add_subcommand("verify", "check a mesh is the constrained Delaunay triangulation of the inputs");
-  v->add_option("mesh", mesh_path, "mesh written by cdtgpu triangulate")->required();
+  v->add_option("mesh", mesh_path, "mesh written by cdtgpu triangulate, or a --tiles-out folder")->required();
   v->add_option("inputs", ver.inputs, "the inputs it was made from, with the same options")->required();
   add_input_options(v, ver, crs, utm_zone, epsg);
 

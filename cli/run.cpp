@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <future>
@@ -34,6 +35,7 @@
 #include "io/gis_writers.hpp"
 #include "io/input_spec.hpp"
 #include "io/output_guard.hpp"
+#include "io/tiles_dir.hpp"
 #include "io/write_png.hpp"
 
 namespace cdtgpu {
@@ -198,15 +200,24 @@ uint64_t gpu_tile_points(const gpu::Context& ctx, uint64_t vertices, int64_t max
 int run_triangulate(const TriangulateOptions& options) {
   RunStats stats;
   WriteOptions write = options.write;
+  if (options.output.empty() && options.tiles_out.empty())
+    throw UsageError("no output: give -o FILE (or - for stdout) and/or --tiles-out DIR");
   if (!options.format.empty())
     write.format = parse_format(options.format);
   else if (options.output == "-")
     throw UsageError("writing to stdout needs --format (obj, ply, wkt, landxml or 2dm)");
-  else
+  else if (!options.output.empty())
     write.format = format_from_extension(options.output);
   if (options.backend != "auto" && options.backend != "gpu" && options.backend != "cgal")
     throw UsageError("unknown backend '" + options.backend + "' (use auto, gpu or cgal)");
-  std::vector<std::string> outputs = triangulate_outputs(options.output, options.stats_path);
+  std::vector<std::string> outputs =
+      options.output.empty() ? std::vector<std::string>{} : triangulate_outputs(options.output, options.stats_path);
+  if (options.output.empty() && !options.stats_path.empty()) outputs.push_back(options.stats_path);
+  if (!options.tiles_out.empty()) {  // a folder: checked like a file (its parent must exist), without a trailing /
+    std::string dir = std::filesystem::path(options.tiles_out).lexically_normal().string();
+    while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+    outputs.push_back(dir);
+  }
   for (const std::string* extra : {&options.grid_out, &options.contours_out, &options.preview})
     if (!extra->empty()) outputs.push_back(*extra);  // their .prj files hold the mesh's CRS and may be its .prj
   std::vector<std::string> input_paths;  // without their :key=value options
@@ -389,7 +400,14 @@ int run_triangulate(const TriangulateOptions& options) {
     return c;
   };
   timed(stats, "write", [&] {
-    write_mesh_file(result.mesh, crs_for(options.output), write, options.output);
+    if (!options.output.empty()) write_mesh_file(result.mesh, crs_for(options.output), write, options.output);
+    if (!options.tiles_out.empty()) {
+      // Pieces as large as the run's tiles, else a million points a file.
+      const uint64_t piece = options.max_tile_points > 0 ? uint64_t(options.max_tile_points) : 1'000'000;
+      const std::vector<MeshPiece> pieces = split_mesh(result.mesh, piece);
+      write_tiles_dir(pieces, l.crs, write, options.tiles_out);
+      stats.counts["tile_files"] = pieces.size();
+    }
     if (grid) write_ascii_grid_file(*grid, crs_for(options.grid_out), options.grid_out);
     if (!options.contours_out.empty())
       write_contours_wkt_file(contours, crs_for(options.contours_out), options.contours_out);
@@ -424,7 +442,8 @@ int run_triangulate(const TriangulateOptions& options) {
 
 int run_verify(const std::string& mesh_path, const InputOptions& options) {
   RunStats stats;
-  Mesh mesh = read_mesh_file(mesh_path);
+  // A --tiles-out folder: the union of its files, each triangle in exactly one (checked), verified as one mesh.
+  Mesh mesh = std::filesystem::is_directory(mesh_path) ? read_tiles_dir(mesh_path) : read_mesh_file(mesh_path);
   Loaded l = load(options, stats);
   const RegionRules rules = region_rules(l.in, l.parts, l.prepared, 0);
   const bool regions = std::count(rules.region_edge.begin(), rules.region_edge.end(), 1) > 0;

@@ -17,7 +17,7 @@ struct InputOptions {
 
 struct TriangulateOptions {
   InputOptions input;
-  std::string output;        // "-" for stdout
+  std::string output;        // "-" for stdout; empty: --tiles-out only
   std::string format;        // empty: from the output's extension
   WriteOptions write;
   std::string backend = "auto";  // auto (default: cli/gpu_start.hpp), gpu or cgal (the CPU reference)
@@ -30,6 +30,7 @@ struct TriangulateOptions {
   std::string preview;       // hillshaded PNG of the TIN (core/hillshade.hpp); empty: none
   double max_edge = 0;       // > 0: concave-hull trimming (core/regions.hpp)
   int64_t max_tile_points = -1;  // tiles of at most this many points (core/tiles.hpp); 0: never; -1: auto
+  std::string tiles_out;         // the mesh as one file per tile plus index.geojson (io/tiles_dir.hpp); empty: none
 };
 
 // Returns the process exit code; throws InputError / UsageError for bad input.

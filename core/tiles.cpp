@@ -768,6 +768,49 @@ CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options,
   return r;
 }
 
+std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points) {
+  const std::vector<Point3>& v = mesh.vertices;
+  if (v.empty()) return {};
+  const Plan plan = plan_tiles(v, std::max<uint64_t>(1, tile_points));
+  const size_t tiles = plan.tiles.size();
+  std::vector<uint32_t> owner(v.size(), 0);
+  for (size_t t = 0; t < tiles; ++t) {
+    const Node& node = plan.nodes[plan.tiles[t]];
+    for (uint32_t i = node.lo; i < node.hi; ++i) owner[plan.order[i]] = uint32_t(t);
+  }
+  std::vector<uint8_t> used(v.size(), 0);
+  std::vector<std::vector<uint32_t>> triangles_of(tiles);  // canonical order kept: the mesh's is
+  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+    triangles_of[owner[mesh.triangles[i][0]]].push_back(uint32_t(i));
+    for (uint32_t id : mesh.triangles[i]) used[id] = 1;
+  }
+  std::vector<MeshPiece> pieces(tiles);
+  tbb::parallel_for(size_t(0), tiles, [&](size_t t) {
+    const Node& node = plan.nodes[plan.tiles[t]];
+    std::vector<uint32_t> ids;
+    for (uint32_t i = node.lo; i < node.hi; ++i)
+      if (!used[plan.order[i]]) ids.push_back(plan.order[i]);
+    for (uint32_t i : triangles_of[t])
+      for (uint32_t id : mesh.triangles[i]) ids.push_back(id);
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    MeshPiece& p = pieces[t];
+    p.x0 = p.y0 = kInf;
+    p.x1 = p.y1 = -kInf;
+    for (uint32_t id : ids) {
+      p.mesh.vertices.push_back(v[id]);
+      p.x0 = std::min(p.x0, v[id].x), p.x1 = std::max(p.x1, v[id].x);
+      p.y0 = std::min(p.y0, v[id].y), p.y1 = std::max(p.y1, v[id].y);
+    }
+    auto local = [&](uint32_t id) { return uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()); };
+    for (uint32_t i : triangles_of[t]) {
+      const Triangle& g = mesh.triangles[i];
+      p.mesh.triangles.push_back({local(g[0]), local(g[1]), local(g[2])});
+    }
+  });
+  return pieces;
+}
+
 bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0,
                        double y1) {
   return disk_inside(a, b, c, Rect{x0, x1, y0, y1});

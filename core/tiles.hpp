@@ -80,6 +80,17 @@ std::vector<Triangle> tiled_cdt(const std::vector<Point3>& vertices, const std::
 CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options,
                             const TileTriangulator& triangulate, TileStats* stats = nullptr);
 
+// `--tiles-out`: a canonical mesh cut into pieces, one file each. Tiles planned over its vertices as for
+// triangulation (at most tile_points of their own); a triangle belongs to the tile holding its smallest vertex
+// (its first, in canonical order), so every triangle is in exactly one piece; a piece holds its triangles'
+// vertices (a vertex shared by pieces is in each) and its own vertices that no triangle uses. Each piece is
+// canonical; the union of the pieces is the mesh.
+struct MeshPiece {
+  Mesh mesh;
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;  // its vertices' extent
+};
+std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points);
+
 // Whether the closed circumdisk of abc lies in the open rectangle (x0, x1) x (y0, y1) (±inf allowed): the
 // tiles' test of a final triangle. True only when it certainly does; near-ties and flat triangles answer
 // false.

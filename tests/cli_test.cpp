@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include "gpu/context.hpp"
+#include "io/tiles_dir.hpp"
+#include "io/writers.hpp"
 
 #include <cstdlib>
 #include <filesystem>
@@ -492,4 +494,47 @@ TEST_F(Cli, TiledSampleIsTheUntiledSample) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(slurp(path("tiled.ply")) == slurp(path("single.ply")));
   EXPECT_GE(nlohmann::json::parse(slurp(path("t.json")))["counts"]["tiles"].get<int>(), 8);
+}
+
+// --tiles-out: the union of the tile files is the mesh of -o, each triangle in exactly one file; verify accepts
+// the folder and refuses it with a file missing or a triangle in two files.
+TEST_F(Cli, TilesOutFolderIsTheMeshInPieces) {
+  write_terrain();
+  const std::string in = path("dem.csv") + " " + path("lines.wkt") + " -q --backend cgal";
+  Result r = run("triangulate " + in + " --max-tile-points 60 --tiles-out " + path("tiles/") + " -o " +
+                 path("single.ply") + " --stats " + path("s.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto index = nlohmann::json::parse(slurp(path("tiles/index.geojson")));
+  ASSERT_GE(index["features"].size(), 4u);
+  EXPECT_EQ(nlohmann::json::parse(slurp(path("s.json")))["counts"]["tile_files"], index["features"].size());
+  const cdtgpu::Mesh whole = cdtgpu::read_tiles_dir(path("tiles"));
+  const cdtgpu::Mesh single = cdtgpu::read_mesh_file(path("single.ply"));
+  EXPECT_EQ(whole.vertices, single.vertices);
+  EXPECT_TRUE(whole.triangles == single.triangles);
+  size_t triangles = 0;
+  for (const auto& f : index["features"]) triangles += f["properties"]["triangles"].get<size_t>();
+  EXPECT_EQ(triangles, single.triangles.size()) << "every triangle in exactly one file";
+  EXPECT_EQ(run("verify " + path("tiles") + " " + path("dem.csv") + " " + path("lines.wkt")).code, 0);
+
+  // Only --tiles-out, as OBJ, written again over the old folder.
+  r = run("triangulate " + in + " --max-tile-points 100 --format obj --tiles-out " + path("tiles"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(path("tiles/tile_0001.obj")));
+  EXPECT_FALSE(fs::exists(path("tiles/tile_0001.ply"))) << "the old folder's files are gone";
+  EXPECT_TRUE(cdtgpu::read_tiles_dir(path("tiles")).triangles == single.triangles);
+
+  // The index naming one file twice: its triangles would count twice.
+  const std::string good_index = slurp(path("tiles/index.geojson"));
+  auto twice = nlohmann::json::parse(good_index);
+  twice["features"][1]["properties"] = twice["features"][0]["properties"];
+  write("tiles/index.geojson", twice.dump());
+  Result v = run("verify " + path("tiles") + " " + path("dem.csv") + " " + path("lines.wkt"));
+  EXPECT_EQ(v.code, 2) << v.err;
+  EXPECT_NE(v.err.find("a triangle is in two tile files"), std::string::npos) << v.err;
+  write("tiles/index.geojson", good_index);
+  fs::remove(path("tiles/tile_0002.obj"));
+  v = run("verify " + path("tiles") + " " + path("dem.csv") + " " + path("lines.wkt"));
+  EXPECT_EQ(v.code, 2) << v.err;
+  EXPECT_NE(v.err.find("tile_0002.obj"), std::string::npos) << v.err;
+  EXPECT_EQ(run("triangulate " + in).code, 2) << "no output at all is a usage error";
 }

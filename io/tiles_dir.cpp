@@ -1,0 +1,132 @@
+#include "io/tiles_dir.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/canonical.hpp"
+#include "core/error.hpp"
+#include "io/atomic_file.hpp"
+
+namespace cdtgpu {
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* extension_of(MeshFormat f) {
+  switch (f) {
+    case MeshFormat::Obj: return ".obj";
+    case MeshFormat::Ply: return ".ply";
+    case MeshFormat::Wkt: return ".wkt";
+    case MeshFormat::LandXml: return ".xml";
+    case MeshFormat::Sms2dm: return ".2dm";
+  }
+  return ".ply";
+}
+
+}  // namespace
+
+void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const WriteOptions& options,
+                     const std::string& dir) {
+  const fs::path target = fs::path(dir).lexically_normal();
+  const fs::path clean = target.filename().empty() ? target.parent_path() : target;
+  std::error_code ec;
+  if (fs::exists(clean, ec) && !fs::is_directory(clean, ec))
+    throw UsageError("--tiles-out " + dir + ": exists and is not a folder");
+  const fs::path fresh = clean.string() + ".tmp-" + std::to_string(::getpid());
+  fs::remove_all(fresh, ec);
+  fs::create_directories(fresh);
+  try {
+    nlohmann::json features = nlohmann::json::array();
+    for (size_t t = 0; t < pieces.size(); ++t) {
+      const MeshPiece& p = pieces[t];
+      char name[32];
+      std::snprintf(name, sizeof name, "tile_%04zu%s", t + 1, extension_of(options.format));
+      write_mesh_file(p.mesh, crs, options, (fresh / name).string());
+      features.push_back(
+          {{"type", "Feature"},
+           {"geometry",
+            {{"type", "Polygon"},
+             {"coordinates",
+              {{{p.x0, p.y0}, {p.x1, p.y0}, {p.x1, p.y1}, {p.x0, p.y1}, {p.x0, p.y0}}}}}},
+           {"properties",
+            {{"tile", t + 1},
+             {"file", name},
+             {"vertices", p.mesh.vertices.size()},
+             {"triangles", p.mesh.triangles.size()}}}});
+    }
+    nlohmann::json index{{"type", "FeatureCollection"}, {"features", features}};
+    if (!crs.name.empty()) index["crs_name"] = crs.name;
+    if (crs.epsg) index["crs_epsg"] = crs.epsg;
+    write_file_atomically((fresh / "index.geojson").string(), [&](std::ostream& out) { out << index.dump(1) << '\n'; });
+    const fs::path old = clean.string() + ".old-" + std::to_string(::getpid());
+    if (fs::exists(clean, ec)) fs::rename(clean, old);
+    fs::rename(fresh, clean);
+    fs::remove_all(old, ec);
+  } catch (...) {
+    fs::remove_all(fresh, ec);
+    throw;
+  }
+}
+
+Mesh read_tiles_dir(const std::string& dir) {
+  const fs::path index_path = fs::path(dir) / "index.geojson";
+  std::ifstream in(index_path);
+  if (!in) throw InputError(index_path.string(), 0, "cannot open the tile index");
+  nlohmann::json index;
+  try {
+    index = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(index_path.string(), 0, std::string("not JSON: ") + e.what());
+  }
+  if (!index.contains("features") || !index["features"].is_array())
+    throw InputError(index_path.string(), 0, "no \"features\" array");
+  Mesh all;
+  uint64_t feature = 0;
+  for (const auto& f : index["features"]) {
+    ++feature;
+    const auto& props = f.value("properties", nlohmann::json::object());
+    if (!props.contains("file") || !props["file"].is_string())
+      throw InputError(index_path.string(), feature, "feature without a \"file\" property");
+    const std::string file = (fs::path(dir) / props["file"].get<std::string>()).string();
+    const Mesh piece = read_mesh_file(file);
+    if (props.value("vertices", uint64_t(0)) != piece.vertices.size() ||
+        props.value("triangles", uint64_t(0)) != piece.triangles.size())
+      throw InputError(file, 0, "holds other counts of vertices or triangles than the index says");
+    const uint32_t base = uint32_t(all.vertices.size());
+    all.vertices.insert(all.vertices.end(), piece.vertices.begin(), piece.vertices.end());
+    for (const Triangle& t : piece.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  }
+  // Merge the repeated vertices: sorted by (x, y), the first of each run kept.
+  std::vector<uint32_t> order(all.vertices.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  const auto& v = all.vertices;
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    return v[a].x != v[b].x ? v[a].x < v[b].x : v[a].y < v[b].y;
+  });
+  std::vector<uint32_t> merged(v.size());
+  std::vector<Point3> unique;
+  for (size_t k = 0; k < order.size(); ++k) {
+    const Point3& p = v[order[k]];
+    if (unique.empty() || unique.back().x != p.x || unique.back().y != p.y) {
+      unique.push_back(p);
+    } else if (unique.back().z != p.z) {
+      throw InputError(dir, 0, "a vertex shared by two tile files has two z values");
+    }
+    merged[order[k]] = uint32_t(unique.size() - 1);
+  }
+  for (Triangle& t : all.triangles)
+    for (uint32_t& id : t) id = merged[id];
+  all.vertices = std::move(unique);
+  canonicalize(all);
+  for (size_t i = 1; i < all.triangles.size(); ++i)
+    if (all.triangles[i] == all.triangles[i - 1]) throw InputError(dir, 0, "a triangle is in two tile files");
+  return all;
+}
+
+}  // namespace cdtgpu
