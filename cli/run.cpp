@@ -292,30 +292,10 @@ int run_triangulate(const TriangulateOptions& options) {
     // CPU's values bit for bit. Their pipelines are asked for now, so they compile while the CDT runs.
     if (!options.grid_out.empty() || !options.preview.empty()) gpu_raster.emplace(start->context(), cdt->primitives());
     if (!options.contours_out.empty()) gpu_contours.emplace(start->context(), cdt->primitives());
-    const uint64_t tile = gpu_tile_points(start->context(), l.prepared.vertices.size(), options.max_tile_points);
-    if (tile >= 3 && l.prepared.vertices.size() > tile) {
-      ResolvedInput in = timed(stats, "triangulate: resolve wait", [&] { return resolving.get(); });
-      stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
-      try {
-        return triangulate_in_tiles(std::move(in), tile, gpu::gpu_tile_triangulator(*cdt), stats);
-      } catch (const gpu::DeviceError& e) {
-        if (options.backend == "gpu") throw;
-        stats.backend = "cgal";
-        stats.backend_reason = gpu_refused(e);
-        spdlog::warn("{}", stats.backend_reason);
-        cdt = nullptr;
-        gpu_raster.reset();
-        gpu_contours.reset();
-        return triangulate_cpu(l.prepared, options.max_tile_points, stats);
-      }
-    }
-    gpu::GpuCdtStats gs;
-    CdtResult r;
-    try {
-      r = cdt->triangulate(l.prepared, std::move(resolving), &gs);
-    } catch (const gpu::DeviceError& e) {
+    // Called in a DeviceError's handler. Auto: the CPU computes the same triangulation (a device too small for
+    // the input, or out of memory); a forced GPU rethrows.
+    auto on_cpu_instead = [&](const gpu::DeviceError& e) {
       if (options.backend == "gpu") throw;
-      // Auto: the CPU computes the same triangulation (a device too small for the input, or out of memory).
       stats.backend = "cgal";
       stats.backend_reason = gpu_refused(e);
       spdlog::warn("{}", stats.backend_reason);
@@ -323,6 +303,23 @@ int run_triangulate(const TriangulateOptions& options) {
       gpu_raster.reset();
       gpu_contours.reset();
       return triangulate_cpu(l.prepared, options.max_tile_points, stats);
+    };
+    const uint64_t tile = gpu_tile_points(start->context(), l.prepared.vertices.size(), options.max_tile_points);
+    if (tile >= 3 && l.prepared.vertices.size() > tile) {
+      ResolvedInput in = timed(stats, "triangulate: resolve wait", [&] { return resolving.get(); });
+      stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+      try {
+        return triangulate_in_tiles(std::move(in), tile, gpu::gpu_tile_triangulator(*cdt), stats);
+      } catch (const gpu::DeviceError& e) {
+        return on_cpu_instead(e);
+      }
+    }
+    gpu::GpuCdtStats gs;
+    CdtResult r;
+    try {
+      r = cdt->triangulate(l.prepared, std::move(resolving), &gs);
+    } catch (const gpu::DeviceError& e) {
+      return on_cpu_instead(e);
     }
     stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
     for (const auto& [name, ms] : gs.wall_ms) stats.stage_ms.emplace_back("triangulate: " + name, ms);

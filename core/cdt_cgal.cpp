@@ -84,6 +84,29 @@ using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
 using Cdt = CGAL::Constrained_Delaunay_triangulation_2<Traits, Tds, CGAL::Exact_intersections_tag>;
 using CdtPlus = CGAL::Constrained_triangulation_plus_2<Cdt>;
 
+// Inserts the vertices as CGAL's range insert does (Hilbert-sorted, each with the last one's face as hint);
+// `set_index(handle, i)` records vertex i's index on its handle. Returns the handle of each vertex.
+template <class Tri, class SetIndex>
+std::vector<typename Tri::Vertex_handle> insert_points(Tri& cdt, const std::vector<Point3>& vertices,
+                                                       SetIndex set_index) {
+  std::vector<Epick::Point_2> points;
+  points.reserve(vertices.size());
+  for (const Point3& p : vertices) points.emplace_back(p.x, p.y);
+  std::vector<std::size_t> order(points.size());  // size_t: the key type of CGAL's pointer property map
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  using SortTraits =
+      CGAL::Spatial_sort_traits_adapter_2<Epick, CGAL::Pointer_property_map<Epick::Point_2>::type>;
+  CGAL::spatial_sort(order.begin(), order.end(), SortTraits(CGAL::make_property_map(points)));
+  std::vector<typename Tri::Vertex_handle> handle(points.size());
+  typename Tri::Face_handle hint;
+  for (std::size_t i : order) {
+    handle[i] = cdt.insert(points[i], hint);
+    set_index(handle[i], uint32_t(i));
+    hint = handle[i]->face();
+  }
+  return handle;
+}
+
 }  // namespace
 
 CdtResult triangulate_cgal(const PreparedInput& prepared) {
@@ -91,24 +114,10 @@ CdtResult triangulate_cgal(const PreparedInput& prepared) {
   const uint32_t n = uint32_t(in.size());
   CdtResult result;
 
-  std::vector<Epick::Point_2> points;
-  points.reserve(n);
-  for (const Point3& p : in) points.emplace_back(p.x, p.y);
-  std::vector<std::size_t> order(n);  // size_t: the key type of CGAL's pointer property map
-  std::iota(order.begin(), order.end(), std::size_t(0));
-  using SortTraits =
-      CGAL::Spatial_sort_traits_adapter_2<Epick, CGAL::Pointer_property_map<Epick::Point_2>::type>;
-  CGAL::spatial_sort(order.begin(), order.end(), SortTraits(CGAL::make_property_map(points)));
-
   CdtPlus cdt;
-  std::vector<CdtPlus::Vertex_handle> handle(n);
-  CdtPlus::Face_handle hint;
-  for (std::size_t i : order) {
-    CdtPlus::Vertex_handle v = cdt.insert(points[i], hint);
-    v->info().index = uint32_t(i);  // prepared vertices are unique, so every insert makes a new vertex
-    handle[i] = v;
-    hint = v->face();
-  }
+  // Prepared vertices are unique, so every insert makes a new vertex.
+  const std::vector<CdtPlus::Vertex_handle> handle =
+      insert_points(cdt, in, [](CdtPlus::Vertex_handle v, uint32_t i) { v->info().index = i; });
 
   std::vector<CdtPlus::Constraint_id> ids;
   ids.reserve(prepared.constraints.size());
@@ -158,24 +167,9 @@ std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const st
   using GFb = CGAL::Constrained_triangulation_face_base_2<Epick, CGAL::Triangulation_face_base_with_info_2<FaceIndex, Epick>>;
   using GTds = CGAL::Triangulation_data_structure_2<GVb, GFb>;
   using GraphCdt = CGAL::Constrained_Delaunay_triangulation_2<Epick, GTds, CGAL::No_constraint_intersection_tag>;
-  const size_t n = vertices.size();
-  std::vector<Epick::Point_2> points;
-  points.reserve(n);
-  for (const Point3& p : vertices) points.emplace_back(p.x, p.y);
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), std::size_t(0));
-  using SortTraits =
-      CGAL::Spatial_sort_traits_adapter_2<Epick, CGAL::Pointer_property_map<Epick::Point_2>::type>;
-  CGAL::spatial_sort(order.begin(), order.end(), SortTraits(CGAL::make_property_map(points)));
-
   GraphCdt cdt;
-  std::vector<GraphCdt::Vertex_handle> handle(n);
-  GraphCdt::Face_handle hint;
-  for (std::size_t i : order) {
-    handle[i] = cdt.insert(points[i], hint);
-    handle[i]->info() = uint32_t(i);
-    hint = handle[i]->face();
-  }
+  const std::vector<GraphCdt::Vertex_handle> handle =
+      insert_points(cdt, vertices, [](GraphCdt::Vertex_handle v, uint32_t i) { v->info() = i; });
   for (const Edge& e : segments) cdt.insert_constraint(handle[e[0]], handle[e[1]]);
   std::vector<Triangle> triangles;
   if (cdt.dimension() != 2) return triangles;
