@@ -538,3 +538,30 @@ TEST_F(Cli, TilesOutFolderIsTheMeshInPieces) {
   EXPECT_NE(v.err.find("tile_0002.obj"), std::string::npos) << v.err;
   EXPECT_EQ(run("triangulate " + in).code, 2) << "no output at all is a usage error";
 }
+
+// A tile the device cannot take: a forced GPU run fails with exit 3 naming the tile and writes nothing; auto
+// falls back to CPU tiles with the same bytes.
+TEST_F(Cli, ATileTheDeviceRefusesFailsOrFallsBack) {
+  write_terrain();
+  const std::string in = path("dem.csv") + " " + path("lines.wkt") + " -q --max-tile-points 50";
+  std::string device;
+  for (const cdtgpu::gpu::DeviceInfo& d : cdtgpu::gpu::list_devices())
+    if (device.empty() && d.missing.empty()) device = d.name;
+  ASSERT_FALSE(device.empty());
+  ASSERT_EQ(run("triangulate " + in + " --backend cgal -o " + path("cgal.ply")).code, 0);
+  ::setenv("CDTGPU_AUTO_MIN_POINTS", "1", 1);
+  ::setenv("CDTGPU_DEVICE_MEMORY_LIMIT", "64K", 1);
+  Result forced = run("triangulate " + in + " --backend gpu -o " + path("forced.ply"));
+  Result fell = run("triangulate " + in + " --device '" + device + "' -o " + path("auto.ply") + " --stats " +
+                    path("auto.json"));
+  ::unsetenv("CDTGPU_DEVICE_MEMORY_LIMIT");
+  ::unsetenv("CDTGPU_AUTO_MIN_POINTS");
+  EXPECT_EQ(forced.code, 3) << forced.err;
+  EXPECT_NE(forced.err.find(", level 1 ("), std::string::npos) << "names the tile: " << forced.err;
+  EXPECT_FALSE(fs::exists(path("forced.ply")));
+  ASSERT_EQ(fell.code, 0) << fell.err;
+  const auto stats = nlohmann::json::parse(slurp(path("auto.json")));
+  EXPECT_EQ(stats["backend"], "cgal");
+  EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
+  EXPECT_EQ(slurp(path("auto.ply")), slurp(path("cgal.ply")));
+}
