@@ -275,22 +275,44 @@ std::vector<T> compact(size_t n, Count count, Emit emit) {
   return out;
 }
 
-// The edges of the convex hull of sorted points (counter-clockwise, collinear boundary points kept: a
-// triangulation's hull edges join consecutive ones), as directed keys a << 32 | b.
-std::vector<uint64_t> hull_edges(const std::vector<Point3>& p) {
-  std::vector<uint32_t> h;
+// The hull chains of p[ids] (ids in (x, y) order): the lower one left to right, then the upper one right to left,
+// collinear boundary points kept (a triangulation's hull edges join consecutive ones). Returns the closed cycle,
+// its first point repeated at the end.
+std::vector<uint32_t> hull_cycle(const std::vector<Point3>& p, const std::vector<uint32_t>& ids) {
   auto turn = [&](uint32_t a, uint32_t b, uint32_t c) {
     return pred::orient2d({p[a].x, p[a].y}, {p[b].x, p[b].y}, {p[c].x, p[c].y});
   };
-  for (int pass = 0; pass < 2; ++pass) {  // lower hull left to right, then upper hull right to left
+  std::vector<uint32_t> h;
+  if (ids.empty()) return h;
+  for (int pass = 0; pass < 2; ++pass) {
     const size_t base = h.size();
-    for (size_t k = 0; k < p.size(); ++k) {
-      const uint32_t i = uint32_t(pass == 0 ? k : p.size() - 1 - k);
+    for (size_t k = 0; k < ids.size(); ++k) {
+      const uint32_t i = ids[pass == 0 ? k : ids.size() - 1 - k];
       while (h.size() >= base + 2 && turn(h[h.size() - 2], h.back(), i) < 0) h.pop_back();
       h.push_back(i);
     }
-    if (pass == 0) h.pop_back();  // the last point starts the upper hull
+    if (pass == 0) h.pop_back();  // the last point starts the upper chain
   }
+  return h;
+}
+
+// The edges of the convex hull of sorted points, counter-clockwise, as directed keys a << 32 | b. A point on the
+// whole hull is on the hull of any run of the order that holds it, so runs' hull points are found on all cores
+// and the hull of those few is the answer (64M points: 5.7 s on one core before).
+std::vector<uint64_t> hull_edges(const std::vector<Point3>& p) {
+  constexpr size_t kRun = 1 << 16;
+  const size_t runs = (p.size() + kRun - 1) / kRun;
+  std::vector<std::vector<uint32_t>> on_hull(runs);
+  tbb::parallel_for(size_t(0), runs, [&](size_t r) {
+    std::vector<uint32_t> ids;
+    for (size_t i = r * kRun; i < std::min(p.size(), (r + 1) * kRun); ++i) ids.push_back(uint32_t(i));
+    on_hull[r] = hull_cycle(p, ids);
+    std::sort(on_hull[r].begin(), on_hull[r].end());
+    on_hull[r].erase(std::unique(on_hull[r].begin(), on_hull[r].end()), on_hull[r].end());
+  });
+  std::vector<uint32_t> candidates;  // in (x, y) order: the runs are consecutive
+  for (const auto& r : on_hull) candidates.insert(candidates.end(), r.begin(), r.end());
+  const std::vector<uint32_t> h = hull_cycle(p, candidates);
   std::vector<uint64_t> edges;
   for (size_t k = 0; k + 1 < h.size(); ++k) edges.push_back(uint64_t(h[k]) << 32 | h[k + 1]);
   std::sort(edges.begin(), edges.end());
