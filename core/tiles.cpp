@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstring>
+#include <memory>
 #include <atomic>
 #include <bit>
 #include <chrono>
@@ -436,8 +438,12 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   // order), marked in a byte map and read back in order; the segments' endpoints outside that range (few) are
   // sorted apart. The map's ranks then give the segments' local ids.
   const uint32_t c0 = node.column_lo, c1 = node.column_hi;
-  std::vector<uint8_t> mark;
-  resize_touched(mark, c1 - c0);
+  // Raw arrays: a vector would value-initialise them on one core (a 64M-point tile's column: 640 MB).
+  const size_t span = c1 - c0;
+  std::unique_ptr<uint8_t[]> mark(new uint8_t[span]);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, span, 1 << 20), [&](const tbb::blocked_range<size_t>& r) {
+    std::memset(mark.get() + r.begin(), 0, r.size());
+  });
   tbb::parallel_for(node.lo, node.hi, [&](uint32_t i) { mark[plan.order[i] - c0] = 1; });
   auto inside = [&](uint32_t id) { return id >= c0 && id < c1; };
   tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
@@ -457,7 +463,7 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   std::sort(outside.begin(), outside.end());
   outside.erase(std::unique(outside.begin(), outside.end()), outside.end());
   const std::vector<uint32_t> own = compact<uint32_t>(
-      mark.size(), [&](size_t i) { return mark[i]; },
+      span, [&](size_t i) { return mark[i]; },
       [&](size_t i, uint32_t* at) {
         if (mark[i]) *at++ = c0 + uint32_t(i);
         return at;
@@ -467,8 +473,7 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   ids.insert(ids.end(), own.begin(), own.end());
   ids.insert(ids.end(), outside.begin() + below, outside.end());
   const size_t nl = ids.size();
-  std::vector<uint32_t> rank;
-  resize_touched(rank, c1 - c0);
+  std::unique_ptr<uint32_t[]> rank(new uint32_t[span]);  // set, and read, only at the tile's ids in the column
   std::vector<Point3> local;
   resize_touched(local, nl);
   tbb::parallel_for(size_t(0), nl, [&](size_t i) {

@@ -108,12 +108,19 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   result.steiner_points = in.steiner_points;
   result.mesh.vertices = std::move(in.vertices);
 
+  result.mesh.triangles = constrain_and_download(tri, in.constraints, s, triangles.get());
+  s.wall_total_ms = ms_since(t_all);
+  return result;
+}
+
+std::vector<Triangle> GpuCdt::constrain_and_download(GpuTriangulation& tri, const std::vector<Edge>& constraints,
+                                                     GpuCdtStats& s, std::vector<Triangle> storage) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
   //    constraints: the Delaunay triangulation is the answer.
-  t = Clock::now();
-  if (tri.num_slots > 0 && !in.constraints.empty()) {
-    inserter_.insert(tri, in.constraints, &s.constraints, constraint_options);
+  auto t = Clock::now();
+  if (tri.num_slots > 0 && !constraints.empty()) {
+    inserter_.insert(tri, constraints, &s.constraints, constraint_options);
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
   }
@@ -122,15 +129,32 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   // 4. The finite triangles, sorted into canonical order on the GPU, then downloaded.
   t = Clock::now();
   double sort_ms = 0;
-  result.mesh.triangles = sorter_.download(tri, &sort_ms, triangles.get());
+  std::vector<Triangle> triangles = sorter_.download(tri, &sort_ms, std::move(storage));
   // During the sort: the triangulation and every scratch buffer the stages left in the cache (the sort takes
   // its own from there too).
   const uint64_t sorting = tri.points.size + tri.verts.size + tri.nbrs.size + tri.vertex_slots.size + cache_.bytes();
   s.peak_device_bytes = std::max(s.peak_device_bytes, sorting);
   add_gpu(s, "", {{"canonical order", sort_ms}});
   record_stage(s, "download", t);
+  return triangles;
+}
+
+std::vector<Triangle> GpuCdt::triangulate_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+                                                GpuCdtStats* stats) const {
+  GpuCdtStats local;
+  GpuCdtStats& s = stats ? *stats : local;
+  s = GpuCdtStats{};
+  const auto t_all = Clock::now();
+  const size_t n = vertices.size();
+  std::future<std::vector<Triangle>> storage = std::async(std::launch::async, [n] {  // pages touched meanwhile
+    std::vector<Triangle> v;
+    resize_touched(v, 2 * n);
+    return v;
+  });
+  GpuTriangulation tri = delaunay_of(vertices, s);
+  std::vector<Triangle> triangles = constrain_and_download(tri, segments, s, storage.get());
   s.wall_total_ms = ms_since(t_all);
-  return result;
+  return triangles;
 }
 
 }  // namespace cdtgpu::gpu

@@ -62,6 +62,12 @@ class GpuCdt {
   CdtResult triangulate(const PreparedInput& prepared, std::future<ResolvedInput> resolving,
                         GpuCdtStats* stats = nullptr) const;
 
+  // The CDT of a graph resolved already (vertices sorted and unique, segments meeting only at shared endpoints and
+  // through no vertex: a tile of core/tiles): stages 2-4 without the resolve stage or any copy of the input.
+  // Triangles in canonical order.
+  std::vector<Triangle> triangulate_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+                                          GpuCdtStats* stats = nullptr) const;
+
   // Duplicate merging on the GPU for prepare(in, cdt.merger()); the same answer as the CPU's merge_points.
   PointMerger merger() const;
 
@@ -77,6 +83,9 @@ class GpuCdt {
  private:
   // Upload and Delaunay build of `vertices`, their stages added to `s`.
   GpuTriangulation delaunay_of(const std::vector<Point3>& vertices, GpuCdtStats& s) const;
+  // Stages 3 and 4: the constraints inserted, the triangles downloaded in canonical order into `storage`.
+  std::vector<Triangle> constrain_and_download(GpuTriangulation& tri, const std::vector<Edge>& constraints,
+                                               GpuCdtStats& s, std::vector<Triangle> storage) const;
 
   const Context& ctx_;
   // One scratch cache for the stages, which run one after another: the Delaunay build's per-slot buffers are

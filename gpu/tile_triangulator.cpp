@@ -1,13 +1,11 @@
 #include "gpu/tile_triangulator.hpp"
 
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <memory>
 #include <mutex>
 
-#include "core/touched.hpp"
 #include "gpu/check.hpp"
 #include "shaders/layout_dt.h"
 
@@ -31,25 +29,14 @@ void add(std::vector<std::pair<std::string, double>>& sum,
 TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum) {
   return [&cdt, sum, lock = std::make_shared<std::mutex>()](
              const std::vector<Point3>& vertices, const std::vector<Edge>& segments, std::string_view what) {
-    // A tile is a resolved graph already: the pipeline's resolve stage is handed the answer.
-    PreparedInput prepared;
-    ResolvedInput resolved;
-    resize_touched(prepared.vertices, vertices.size());
-    resize_touched(resolved.vertices, vertices.size());
-    tbb::parallel_for(size_t(0), vertices.size(), [&](size_t i) {
-      prepared.vertices[i] = resolved.vertices[i] = vertices[i];
-    });
-    prepared.constraints = segments;
-    resolved.constraints = segments;
-    std::promise<ResolvedInput> ready;
-    ready.set_value(std::move(resolved));
+    // A tile is a resolved graph already: no resolve stage, no copies.
     // Isolated: a thread waiting inside the pipeline's own parallel loops must not pick up another tile,
     // which would wait for the lock it holds.
     return tbb::this_task_arena::isolate([&] {
       std::lock_guard<std::mutex> one_at_a_time(*lock);
       try {
         GpuCdtStats one;
-        TileMesh mesh{std::move(cdt.triangulate(prepared, ready.get_future(), &one).mesh.triangles), {}};
+        TileMesh mesh{cdt.triangulate_graph(vertices, segments, &one), {}};
         if (sum) {
           add(sum->wall_ms, one.wall_ms);
           add(sum->gpu_ms, one.gpu_ms);
