@@ -25,6 +25,13 @@ struct Result {
   std::string err;
 };
 
+// The name of the first Vulkan device the GPU backend can use (lavapipe in CI); empty if none.
+std::string first_usable_device() {
+  for (const cdtgpu::gpu::DeviceInfo& d : cdtgpu::gpu::list_devices())
+    if (d.missing.empty()) return d.name;
+  return "";
+}
+
 class Cli : public ::testing::Test {
  public:
   fs::path dir;
@@ -179,9 +186,7 @@ TEST_F(Cli, AutoBackendPicksByInputSizeAndDevice) {
 TEST_F(Cli, DeviceMemoryCapFailsAForcedGpuAndAutoFallsBack) {
   write_terrain();
   const std::string in = path("dem.csv") + " " + path("lines.wkt");
-  std::string device;
-  for (const cdtgpu::gpu::DeviceInfo& d : cdtgpu::gpu::list_devices())
-    if (device.empty() && d.missing.empty()) device = d.name;
+  const std::string device = first_usable_device();
   ASSERT_FALSE(device.empty());
   ASSERT_EQ(run("triangulate " + in + " -q --backend cgal -o " + path("cgal.ply")).code, 0);
   ::setenv("CDTGPU_AUTO_MIN_POINTS", "1", 1);
@@ -544,9 +549,7 @@ TEST_F(Cli, TilesOutFolderIsTheMeshInPieces) {
 TEST_F(Cli, ATileTheDeviceRefusesFailsOrFallsBack) {
   write_terrain();
   const std::string in = path("dem.csv") + " " + path("lines.wkt") + " -q --max-tile-points 50";
-  std::string device;
-  for (const cdtgpu::gpu::DeviceInfo& d : cdtgpu::gpu::list_devices())
-    if (device.empty() && d.missing.empty()) device = d.name;
+  const std::string device = first_usable_device();
   ASSERT_FALSE(device.empty());
   ASSERT_EQ(run("triangulate " + in + " --backend cgal -o " + path("cgal.ply")).code, 0);
   ::setenv("CDTGPU_AUTO_MIN_POINTS", "1", 1);
