@@ -1,6 +1,8 @@
 // cdtgpu command line: parses options and calls cli/run.cpp. Exit codes: 0 ok, 1 verify failed,
 // 2 bad input or usage, 3 any other failure (GPU, out of memory, internal).
 #include <CLI/CLI.hpp>
+#include <charconv>
+#include <cmath>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -35,6 +37,22 @@ CrsRequest crs_from(const std::string& crs, const std::string& utm_zone, const s
   if (!epsg.empty()) return parse_crs("EPSG:" + epsg);
   return parse_crs(crs);
 }
+
+// Option checks whose messages say what is allowed in words (CLI11's own print the range's bound as a
+// 309-digit number).
+CLI::Validator number_check(const char* what, bool (*ok)(double)) {
+  return CLI::Validator(
+      [what, ok](std::string& text) -> std::string {
+        double v = 0;
+        const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (r.ec != std::errc() || r.ptr != text.data() + text.size() || !std::isfinite(v))
+          return "'" + text + "' is not a number";
+        return ok(v) ? std::string() : "must be " + std::string(what) + ", not " + text;
+      },
+      what);
+}
+const CLI::Validator positive = number_check("a number greater than 0", [](double v) { return v > 0; });
+const CLI::Validator non_negative = number_check("0 or more", [](double v) { return v >= 0; });
 
 }  // namespace
 
@@ -76,17 +94,17 @@ int main(int argc, char** argv) {
   t->add_option("--grid-out", tri.grid_out, "also write the TIN as a DEM grid (ESRI ASCII .asc), NODATA outside");
   t->add_option("--cell", tri.cell, "grid cell size; cell centres at its multiples")
       ->default_val(1.0)
-      ->check(CLI::PositiveNumber);
+      ->check(positive);
   t->add_option("--contours-out", tri.contours_out,
                 "also write contour lines: WKT LINESTRING Z, one per line (.geojson: GeoJSON)");
   t->add_option("--interval", tri.interval, "contour interval; levels at its multiples")
       ->default_val(10.0)
-      ->check(CLI::PositiveNumber);
+      ->check(positive);
   t->add_option("--preview", tri.preview, "also write a hillshaded picture of the TIN (PNG, about 1000 px wide)");
   t->add_option("--stats", tri.stats_path, "write counts, CRS and stage times as JSON to this file");
   t->add_option("--max-edge", tri.max_edge,
                  "drop triangles reached from outside across an unconstrained edge longer than this (concave hull)")
-      ->check(CLI::PositiveNumber);
+      ->check(positive);
   t->add_option("--tiles-out", tri.tiles_out,
                  "also (or only) write the mesh as one file per tile into this folder, with index.geojson: each "
                  "triangle in the file of the tile holding its smallest vertex (format from --format, default PLY; "
@@ -95,7 +113,7 @@ int main(int argc, char** argv) {
                  "triangulate in tiles of at most N input points, merged exactly (the same output); 0: never. "
                  "Default: tiles on every core for the CPU backend at 100K points or more, and for the GPU when "
                  "the input exceeds what the device holds")
-      ->check(CLI::NonNegativeNumber);
+      ->check(non_negative);
   add_input_options(t, tri.input, crs, utm_zone, epsg);
 
   std::string mesh_path;

@@ -1,5 +1,6 @@
 // Errors with context, caught once in cli/ and turned into a message and an exit code.
 #pragma once
+#include <charconv>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -26,6 +27,14 @@ struct InputError : std::runtime_error {
     return m;
   }
 };
+
+// A number as messages write it: the shortest text that reads back to the same double ("1e-09", "0.5", "250000"),
+// never std::to_string's six fixed decimals ("0.000000").
+inline std::string number_text(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
 
 // A usage error (bad option value, unknown format). Exit code 2.
 struct UsageError : std::runtime_error {

@@ -38,7 +38,7 @@ int64_t floor_index(double v, double cell) {
 
 GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells) {
   if (!(cell > 0) || !std::isfinite(cell))
-    throw UsageError("the grid cell size must be a positive number, not " + std::to_string(cell));
+    throw UsageError("the grid cell size must be a positive number, not " + number_text(cell));
   if (mesh.triangles.empty())
     throw UsageError("the mesh has no triangles: there is no surface to rasterise into a grid");
   double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
@@ -51,8 +51,7 @@ GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells) {
   const double limit = 9e15;  // integer cell indices stay exact in double
   if (std::fabs(x0 / cell) > limit || std::fabs(x1 / cell) > limit || std::fabs(y0 / cell) > limit ||
       std::fabs(y1 / cell) > limit)
-    throw UsageError("the grid cell size " + std::to_string(cell) +
-                     " is too small for coordinates this large");
+    throw UsageError("the grid cell size " + number_text(cell) + " is too small for coordinates this large");
   GridSpec g;
   g.cell = cell;
   g.ix0 = floor_index(x0, cell);
@@ -60,7 +59,7 @@ GridSpec grid_for(const Mesh& mesh, double cell, uint64_t max_cells) {
   g.ncols = uint64_t(ceil_index(x1, cell) - g.ix0 + 1);
   g.nrows = uint64_t(ceil_index(y1, cell) - g.iy0 + 1);
   if (double(g.ncols) * double(g.nrows) > double(max_cells))
-    throw UsageError("a grid of cell size " + std::to_string(cell) + " would have " +
+    throw UsageError("a grid of cell size " + number_text(cell) + " would have " +
                      std::to_string(g.ncols) + " x " + std::to_string(g.nrows) + " cells (at most " +
                      std::to_string(max_cells) + "): choose a larger --cell");
   return g;

@@ -8,9 +8,15 @@ namespace cdtgpu {
 
 void check_finite(const InputSet& in, uint32_t source, uint64_t record, const Point3& p) {
   const bool z_ok = std::isfinite(p.z) || (in.nan_for_missing_z && is_missing_z(p.z));
+  const std::string& file = source < in.sources.size() ? in.sources[source] : "?";
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !z_ok)
-    throw InputError(source < in.sources.size() ? in.sources[source] : "?", record,
-                     "coordinate is not a finite number");
+    throw InputError(file, record, "coordinate is not a finite number");
+  // Far outside any coordinate reference system (UTM northings reach 1e7, lon/lat 180): a unit or parsing
+  // mistake, which would otherwise be triangulated (and passes the predicates' exact range).
+  for (const double v : {p.x, p.y})
+    if (std::abs(v) > kMaxCoordinate)
+      throw InputError(file, record,
+                       "coordinate " + number_text(v) + " is beyond ±1e15, far outside any coordinate reference system");
 }
 
 void add_point(InputSet& in, uint32_t source, uint64_t record, const Point3& p) {

@@ -4,7 +4,11 @@
 
 namespace cdtgpu {
 
-// Throws InputError for non-finite coordinates (naming file and record).
+// The largest |x| or |y| accepted from a reader.
+constexpr double kMaxCoordinate = 1e15;
+
+// Throws InputError naming the source and record for a NaN or infinite coordinate (a z read as missing is fine)
+// and for an x or y beyond ±kMaxCoordinate.
 void check_finite(const InputSet& in, uint32_t source, uint64_t record, const Point3& p);
 
 // Appends a point after check_finite.

@@ -568,3 +568,24 @@ TEST_F(Cli, ATileTheDeviceRefusesFailsOrFallsBack) {
   EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
   EXPECT_EQ(slurp(path("auto.ply")), slurp(path("cgal.ply")));
 }
+
+// Messages say what is allowed in words and write numbers as read; a coordinate far outside any CRS is refused
+// naming the file and line.
+TEST_F(Cli, RangeErrorsAndFarCoordinatesAreClearMessages) {
+  write_terrain();
+  Result r = run("triangulate " + path("dem.csv") + " -o " + path("t.ply") + " --max-edge -5");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("--max-edge: must be a number greater than 0, not -5"), std::string::npos) << r.err;
+  EXPECT_LT(r.err.size(), 200u) << r.err;
+  r = run("triangulate " + path("dem.csv") + " -o " + path("t.ply") + " --max-tile-points -1");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("must be 0 or more, not -1"), std::string::npos) << r.err;
+  r = run("triangulate " + path("dem.csv") + " -o " + path("t.ply") + " --grid-out " + path("g.asc") + " --cell 1e-9");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("cell size 1e-09 would have"), std::string::npos) << r.err;
+  write("far.xyz", "500000 6000000 1\n500010 6000000 2\n2e15 6000010 3\n");
+  r = run("triangulate " + path("far.xyz") + " --crs none -o " + path("far.ply"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("far.xyz:3: coordinate 2e+15 is beyond"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("far.ply")));
+}
