@@ -153,10 +153,12 @@ std::string gpu_refused(const gpu::DeviceError& e) {
 }
 
 // The tiled CDT (core/tiles) of a resolved input, its figures in the stats.
+// in_flight: tiles worked on at once (0: as many as the cores take; a device's: 2, core/tiles.hpp).
 CdtResult triangulate_in_tiles(ResolvedInput&& in, uint64_t tile_points, const TileTriangulator& triangulate,
-                               RunStats& stats) {
+                               RunStats& stats, unsigned in_flight = 0) {
   TileOptions opt;
   opt.max_tile_points = tile_points;
+  opt.tiles_in_flight = in_flight;
   TileStats ts;
   CdtResult r = timed(stats, "triangulate: tiles and merge", [&] {
     return triangulate_tiled(std::move(in), opt, triangulate, &ts);
@@ -309,7 +311,7 @@ int run_triangulate(const TriangulateOptions& options) {
       ResolvedInput in = timed(stats, "triangulate: resolve wait", [&] { return resolving.get(); });
       stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
       try {
-        return triangulate_in_tiles(std::move(in), tile, gpu::gpu_tile_triangulator(*cdt), stats);
+        return triangulate_in_tiles(std::move(in), tile, gpu::gpu_tile_triangulator(*cdt), stats, 2);
       } catch (const gpu::DeviceError& e) {
         return on_cpu_instead(e);
       }

@@ -7,6 +7,7 @@
 #include <CGAL/Interval_nt.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
@@ -676,22 +677,30 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   s.plan_ms += ms_since(t_tiles);
   std::vector<uint8_t> in_final(n, 0);
   std::vector<TileResult> results(tiles);
-  const unsigned threads =
-      options.parallel_tiles ? options.parallel_tiles : std::thread::hardware_concurrency();
-  tbb::task_arena arena(int(std::max(1u, threads)));
-  arena.execute([&] {
-    tbb::parallel_for(size_t(0), tiles, size_t(1), [&](size_t t) {
-      const std::span<const uint32_t> mine(tile_segments.data() + first[t], first[t + 1] - first[t]);
-      const std::string name = "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " +
-                               std::to_string(level);
-      // Isolated: a thread waiting in this tile's own parallel loops takes no other tile (whose GPU call
-      // would make it wait for the device as well).
-      tbb::this_task_arena::isolate([&] {
-        results[t] =
-            run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
-      });
+  // At most tiles_in_flight tiles at once (a sliding window), each with every core for its own loops.
+  auto one_tile = [&](size_t t) {
+    const std::span<const uint32_t> mine(tile_segments.data() + first[t], first[t + 1] - first[t]);
+    const std::string name =
+        "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);
+    // Isolated: a thread waiting in this tile's own parallel loops takes no other tile (whose GPU call would
+    // make it wait for the device as well).
+    tbb::this_task_arena::isolate([&] {
+      results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
     });
-  });
+  };
+  if (options.tiles_in_flight == 0 || options.tiles_in_flight >= tiles) {
+    tbb::parallel_for(size_t(0), tiles, size_t(1), one_tile);
+  } else {
+    size_t next = 0;
+    tbb::parallel_pipeline(
+        options.tiles_in_flight,
+        tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                       [&](tbb::flow_control& fc) -> size_t {
+                                         if (next == tiles) fc.stop();
+                                         return next < tiles ? next++ : 0;
+                                       }) &
+            tbb::make_filter<size_t, void>(tbb::filter_mode::parallel, one_tile));
+  }
 
   // The merge: the vertices not inside the final region, the segments between them (a segment with an end
   // inside the final region lies inside it) and the final region's border.

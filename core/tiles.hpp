@@ -50,8 +50,9 @@ struct TileOptions {
       0;  // at most this many of a tile's own vertices; below 3 or >= the input: no tiles
   // A merge tiled again only while it holds at most this share of its level's vertices (else one call).
   double retile_share = 0.6;
-  // Tiles triangulated at once (0: all cores); 1 for a device that takes one at a time.
-  unsigned parallel_tiles = 0;
+  // Tiles worked on at once, a sliding window (0: as many as the cores take). A device's tiles are large: two at
+  // once (one on the device, the next gathered meanwhile) bound host memory by the tile size.
+  unsigned tiles_in_flight = 0;
 };
 
 struct TileStats {

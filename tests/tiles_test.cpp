@@ -193,15 +193,18 @@ TEST(Tiles, LargeColumnsCutByTheParallelSelection) {
   EXPECT_EQ(ts.tiles, 2u);
 }
 
-TEST(Tiles, SameTrianglesWhateverTheThreadCount) {
+TEST(Tiles, SameTrianglesWhateverTheTilesInFlight) {
   InputSet in = random_points(2000, 13);
   const PreparedInput p = prepare(in);
-  TileOptions one, all;
-  one.max_tile_points = all.max_tile_points = 100;
-  one.parallel_tiles = 1;
-  const CdtResult a = triangulate_tiled(resolve_constraints(p), one, cgal_tile_triangulator());
+  TileOptions all;
+  all.max_tile_points = 100;
   const CdtResult b = triangulate_tiled(resolve_constraints(p), all, cgal_tile_triangulator());
-  EXPECT_TRUE(a.mesh.triangles == b.mesh.triangles);
+  for (const unsigned in_flight : {1u, 2u, 3u}) {
+    TileOptions some = all;
+    some.tiles_in_flight = in_flight;
+    const CdtResult a = triangulate_tiled(resolve_constraints(p), some, cgal_tile_triangulator());
+    EXPECT_TRUE(a.mesh.triangles == b.mesh.triangles) << in_flight << " in flight";
+  }
 }
 
 // The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at
