@@ -212,14 +212,8 @@ int run_triangulate(const TriangulateOptions& options) {
     write.format = format_from_extension(options.output);
   if (options.backend != "auto" && options.backend != "gpu" && options.backend != "cgal")
     throw UsageError("unknown backend '" + options.backend + "' (use auto, gpu or cgal)");
-  std::vector<std::string> outputs =
-      options.output.empty() ? std::vector<std::string>{} : triangulate_outputs(options.output, options.stats_path);
-  if (options.output.empty() && !options.stats_path.empty()) outputs.push_back(options.stats_path);
-  if (!options.tiles_out.empty()) {  // a folder: checked like a file (its parent must exist), without a trailing /
-    std::string dir = std::filesystem::path(options.tiles_out).lexically_normal().string();
-    while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
-    outputs.push_back(dir);
-  }
+  std::vector<std::string> outputs = triangulate_outputs(options.output, options.stats_path);
+  if (!options.tiles_out.empty()) outputs.push_back(tiles_dir_path(options.tiles_out));  // checked like a file
   for (const std::string* extra : {&options.grid_out, &options.contours_out, &options.preview})
     if (!extra->empty()) outputs.push_back(*extra);  // their .prj files hold the mesh's CRS and may be its .prj
   std::vector<std::string> input_paths;  // without their :key=value options

@@ -1,7 +1,9 @@
 // canonicalize: one byte-exact order for a mesh, whatever backend or run produced it. Two sorts, O(n log n).
 #include "core/canonical.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
@@ -19,43 +21,47 @@ bool sorted_and_unique(const std::vector<Point3>& v) {
 
 }  // namespace
 
+void canonicalize_triangles(std::vector<Triangle>& triangles) {
+  // Rotation keeps the orientation.
+  tbb::parallel_for(size_t(0), triangles.size(), [&](size_t i) {
+    Triangle& t = triangles[i];
+    const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
+    t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
+  });
+  const bool sorted = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(1, std::max<size_t>(1, triangles.size()), 1 << 16), true,
+      [&](const tbb::blocked_range<size_t>& r, bool ok) {
+        for (size_t i = r.begin(); ok && i < r.end(); ++i) ok = !(triangles[i] < triangles[i - 1]);
+        return ok;
+      },
+      [](bool a, bool b) { return a && b; });
+  if (!sorted) tbb::parallel_sort(triangles.begin(), triangles.end());
+}
+
 void canonicalize(Mesh& mesh) {
   const std::vector<Point3>& v = mesh.vertices;
-  if (sorted_and_unique(v)) {  // the backends' vertices usually are: only the triangles move
-    tbb::parallel_for(size_t(0), mesh.triangles.size(), [&](size_t i) {
-      Triangle& t = mesh.triangles[i];
-      const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
-      t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
+  if (!sorted_and_unique(v)) {  // the backends' vertices usually are: then only the triangles move
+    std::vector<uint32_t> order(v.size());
+    std::iota(order.begin(), order.end(), 0u);
+    // Ties (equal x, y: an invalid mesh) keep their old order, so even then the result is deterministic.
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      if (v[a].x != v[b].x) return v[a].x < v[b].x;
+      if (v[a].y != v[b].y) return v[a].y < v[b].y;
+      return a < b;
     });
-    tbb::parallel_sort(mesh.triangles.begin(), mesh.triangles.end());
-    return;
+    std::vector<uint32_t> new_index(v.size());
+    std::vector<Point3> sorted(v.size());
+    for (uint32_t i = 0; i < order.size(); ++i) {
+      new_index[order[i]] = i;
+      sorted[i] = v[order[i]];
+    }
+    mesh.vertices = std::move(sorted);
+    for (Triangle& t : mesh.triangles)
+      for (uint32_t& i : t)
+        if (i < new_index.size())
+          i = new_index[i];  // indices out of range are left as they are: verify reports them
   }
-  std::vector<uint32_t> order(v.size());
-  std::iota(order.begin(), order.end(), 0u);
-  // Ties (equal x, y: an invalid mesh) keep their old order, so even then the result is deterministic.
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    if (v[a].x != v[b].x) return v[a].x < v[b].x;
-    if (v[a].y != v[b].y) return v[a].y < v[b].y;
-    return a < b;
-  });
-  std::vector<uint32_t> new_index(v.size());
-  std::vector<Point3> sorted(v.size());
-  for (uint32_t i = 0; i < order.size(); ++i) {
-    new_index[order[i]] = i;
-    sorted[i] = v[order[i]];
-  }
-  mesh.vertices = std::move(sorted);
-
-  for (Triangle& t : mesh.triangles) {
-    // Indices out of range are left as they are: verify reports them.
-    Triangle r = t;
-    for (uint32_t& i : r)
-      if (i < new_index.size()) i = new_index[i];
-    // Rotation keeps the orientation.
-    const int k = int(std::min_element(r.begin(), r.end()) - r.begin());
-    t = {r[k], r[(k + 1) % 3], r[(k + 2) % 3]};
-  }
-  std::sort(mesh.triangles.begin(), mesh.triangles.end());
+  canonicalize_triangles(mesh.triangles);
 }
 
 }  // namespace cdtgpu

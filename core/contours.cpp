@@ -118,7 +118,7 @@ int64_t last_level_at_or_below(double z, double interval) {  // largest k with k
 
 ContourLevels contour_levels(const Mesh& mesh, double interval, uint64_t max_levels) {
   if (!(interval > 0) || !std::isfinite(interval))
-    throw UsageError("the contour interval must be a positive number, not " + std::to_string(interval));
+    throw UsageError("the contour interval must be a positive number, not " + number_text(interval));
   ContourLevels out;
   out.interval = interval;
   if (mesh.triangles.empty()) return out;
@@ -130,9 +130,9 @@ ContourLevels contour_levels(const Mesh& mesh, double interval, uint64_t max_lev
     }
   if (std::fabs(z0 / interval) > 9e15 || std::fabs(z1 / interval) > 9e15 ||
       (z1 - z0) / interval > double(max_levels))
-    throw UsageError("contour interval " + std::to_string(interval) + " gives more than " +
-                     std::to_string(max_levels) + " levels between " + std::to_string(z0) + " and " +
-                     std::to_string(z1) + ": choose a larger --interval");
+    throw UsageError("contour interval " + number_text(interval) + " gives more than " +
+                     std::to_string(max_levels) + " levels between " + number_text(z0) + " and " +
+                     number_text(z1) + ": choose a larger --interval");
   // Level k is at k * interval; a triangle crosses it when its lowest z < level <= its highest z.
   const int64_t k0 = first_level_above(z0, interval), k1 = last_level_at_or_below(z1, interval);
   if (k1 >= k0) out.k0 = k0, out.count = size_t(k1 - k0 + 1);

@@ -14,14 +14,14 @@
 
 #include <algorithm>
 #include <array>
-#include <cstring>
-#include <memory>
 #include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <queue>
 #include <stdexcept>
@@ -225,11 +225,10 @@ bool disk_inside_intervals(const Point3& a, const Point3& b, const Point3& c, co
 // The same, decided in plain doubles when the answer is clear by more than a bound on their error, else by
 // disk_inside_intervals (~3x slower). With u = 2^-53 and M the largest of |b - a|, |c - a| per coordinate,
 // first order: d = 2((b-a) x (c-a)) is off by at most 16 u M^2 and each numerator of the centre by 36 u M^3
-// (the differences' own rounding included); so the centre (from a) is off by e <= (36 u M^3 + |centre| 16 u
-// M^2) / |d|
-// + u |centre| per coordinate, the radius by 1.5 e + 3 u r, a gap to a side by e + 2 u (|a - side| +
-// |centre|). Every bound is taken 4x, and d within 64x its error bound goes to intervals (the second-order
-// terms stay tiny).
+// (the differences' own rounding included); so the centre (from a) is off by
+//   e <= (36 u M^3 + |centre| 16 u M^2) / |d| + u |centre|
+// per coordinate, the radius by 1.5 e + 3 u r, a gap to a side by e + 2 u (|a - side| + |centre|). Every
+// bound is taken 4x, and d within 64x its error bound goes to intervals (the second-order terms stay tiny).
 bool disk_inside(const Point3& a, const Point3& b, const Point3& c, const Rect& r) {
   constexpr double u = 0x1p-53;
   const double bx = b.x - a.x, by = b.y - a.y, cx = c.x - a.x, cy = c.y - a.y;
@@ -278,9 +277,9 @@ std::vector<T> compact(size_t n, Count count, Emit emit) {
   return out;
 }
 
-// The hull chains of p[ids] (ids in (x, y) order): the lower one left to right, then the upper one right to left,
-// collinear boundary points kept (a triangulation's hull edges join consecutive ones). Returns the closed cycle,
-// its first point repeated at the end.
+// The hull chains of p[ids] (ids in (x, y) order): the lower one left to right, then the upper one right to
+// left, collinear boundary points kept (a triangulation's hull edges join consecutive ones). Returns the
+// closed cycle, its first point repeated at the end.
 std::vector<uint32_t> hull_cycle(const std::vector<Point3>& p, const std::vector<uint32_t>& ids) {
   auto turn = [&](uint32_t a, uint32_t b, uint32_t c) {
     return pred::orient2d({p[a].x, p[a].y}, {p[b].x, p[b].y}, {p[c].x, p[c].y});
@@ -299,9 +298,9 @@ std::vector<uint32_t> hull_cycle(const std::vector<Point3>& p, const std::vector
   return h;
 }
 
-// The edges of the convex hull of sorted points, counter-clockwise, as directed keys a << 32 | b. A point on the
-// whole hull is on the hull of any run of the order that holds it, so runs' hull points are found on all cores
-// and the hull of those few is the answer (64M points: 5.7 s on one core before).
+// The edges of the convex hull of sorted points, counter-clockwise, as directed keys a << 32 | b. A point on
+// the whole hull is on the hull of any run of the order that holds it, so runs' hull points are found on all
+// cores and the hull of those few is the answer (64M points: 5.7 s on one core before).
 std::vector<uint64_t> hull_edges(const std::vector<Point3>& p) {
   constexpr size_t kRun = 1 << 16;
   const size_t runs = (p.size() + kRun - 1) / kRun;
@@ -332,7 +331,7 @@ void mark_border(const std::vector<Triangle>& triangles, const std::vector<Point
   const std::vector<uint64_t> hull = hull_edges(local);
   std::vector<uint8_t> touched(local.size(), 0);
   for (uint64_t e : hull) touched[e >> 32] = 1;
-  const std::vector<uint64_t> non_final = compact<uint64_t>(
+  std::vector<uint64_t> non_final = compact<uint64_t>(
       nt, [&](size_t i) { return final_mask[i] ? 0 : 3; },
       [&](size_t i, uint64_t* at) {
         if (final_mask[i]) return at;
@@ -341,8 +340,7 @@ void mark_border(const std::vector<Triangle>& triangles, const std::vector<Point
         return at;
       });
   for (uint64_t e : non_final) touched[e >> 32] = 1;
-  std::vector<uint64_t> sorted_non_final = non_final;
-  tbb::parallel_sort(sorted_non_final.begin(), sorted_non_final.end());
+  tbb::parallel_sort(non_final.begin(), non_final.end());
   auto has = [](const std::vector<uint64_t>& keys, uint64_t key) {
     return std::binary_search(keys.begin(), keys.end(), key);
   };
@@ -352,29 +350,10 @@ void mark_border(const std::vector<Triangle>& triangles, const std::vector<Point
     for (int k = 0; k < 3; ++k) {
       const uint32_t a = t[k], b = t[(k + 1) % 3];
       if (!touched[a] || !touched[b]) continue;
-      if (has(sorted_non_final, uint64_t(b) << 32 | a) || has(hull, uint64_t(a) << 32 | b))
+      if (has(non_final, uint64_t(b) << 32 | a) || has(hull, uint64_t(a) << 32 | b))
         final_mask[i] |= uint8_t(1 << k);
     }
   });
-}
-
-// A triangle list in canonical form (core/canonical.hpp): each rotated to start at its smallest index,
-// sorted. A GPU tile's list comes sorted already, and vertex ids mapped by a sorted id list keep any list
-// sorted.
-void make_run(std::vector<Triangle>& run) {
-  tbb::parallel_for(size_t(0), run.size(), [&](size_t i) {
-    Triangle& t = run[i];
-    const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
-    t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
-  });
-  const bool sorted = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(1, std::max<size_t>(1, run.size()), 1 << 16), true,
-      [&](const tbb::blocked_range<size_t>& r, bool ok) {
-        for (size_t i = r.begin(); ok && i < r.end(); ++i) ok = !(run[i] < run[i - 1]);
-        return ok;
-      },
-      [](bool a, bool b) { return a && b; });
-  if (!sorted) tbb::parallel_sort(run.begin(), run.end());
 }
 
 // The sorted runs merged into one sorted list, in parts on all cores: splitters sampled from the runs, each
@@ -474,7 +453,8 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   ids.insert(ids.end(), own.begin(), own.end());
   ids.insert(ids.end(), outside.begin() + below, outside.end());
   const size_t nl = ids.size();
-  std::unique_ptr<uint32_t[]> rank(new uint32_t[span]);  // set, and read, only at the tile's ids in the column
+  std::unique_ptr<uint32_t[]> rank(
+      new uint32_t[span]);  // set, and read, only at the tile's ids in the column
   std::vector<Point3> local;
   resize_touched(local, nl);
   tbb::parallel_for(size_t(0), nl, [&](size_t i) {
@@ -496,8 +476,8 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   r.cdt_ms = ms_since(t1);
   const std::vector<Triangle>& triangles = mesh.triangles;
   const size_t nt = triangles.size();
-  std::vector<uint8_t> final_mask(nt,
-                                  0);  // bit 3: final; bit k < 3: its edge k is on the final region's border
+  // Bit 3: final; bit k < 3: its edge k is on the final region's border.
+  std::vector<uint8_t> final_mask(nt, 0);
   tbb::parallel_for(size_t(0), nt, [&](size_t i) {
     const Triangle& t = triangles[i];
     final_mask[i] = disk_inside(local[t[0]], local[t[1]], local[t[2]], node.rect) ? 8 : 0;
@@ -526,7 +506,7 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
           if (final_mask[i] & (1 << k)) *at++ = {ids[triangles[i][k]], ids[triangles[i][(k + 1) % 3]]};
         return at;
       });
-  make_run(r.final_triangles);
+  canonicalize_triangles(r.final_triangles);  // a GPU tile's come sorted: sorted ids keep their order
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
   tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
     for (uint32_t id : r.final_triangles[i])
@@ -616,7 +596,7 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   if (options.max_tile_points < 3 || n <= options.max_tile_points) {
     const auto t = Clock::now();
     std::vector<std::vector<Triangle>> all(1, triangulate(v, segments, "the whole input").triangles);
-    make_run(all[0]);
+    canonicalize_triangles(all[0]);
     s.merge_ms = ms_since(t);
     s.merge_vertices = n;
     s.merge_segments = segments.size();
@@ -630,7 +610,8 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   for (size_t t = 0; t < tiles; ++t) tile_of_node[plan.tiles[t]] = uint32_t(t);
 
   // Every segment goes to every tile whose rectangle it meets (whole, with its endpoints): blocks of segments
-  // count their tiles, then write them in block order, so each tile's list is in segment order without a sort.
+  // count their tiles, then write them in block order, so each tile's list is in segment order without a
+  // sort.
   auto for_tiles_of = [&](size_t i, auto&& f) {
     const Point3& a = v[segments[i][0]];
     const Point3& b = v[segments[i][1]];
@@ -692,14 +673,13 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
     tbb::parallel_for(size_t(0), tiles, size_t(1), one_tile);
   } else {
     size_t next = 0;
-    tbb::parallel_pipeline(
-        options.tiles_in_flight,
-        tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                       [&](tbb::flow_control& fc) -> size_t {
-                                         if (next == tiles) fc.stop();
-                                         return next < tiles ? next++ : 0;
-                                       }) &
-            tbb::make_filter<size_t, void>(tbb::filter_mode::parallel, one_tile));
+    tbb::parallel_pipeline(options.tiles_in_flight,
+                           tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                                          [&](tbb::flow_control& fc) -> size_t {
+                                                            if (next == tiles) fc.stop();
+                                                            return next < tiles ? next++ : 0;
+                                                          }) &
+                               tbb::make_filter<size_t, void>(tbb::filter_mode::parallel, one_tile));
   }
 
   // The merge: the vertices not inside the final region, the segments between them (a segment with an end
@@ -763,7 +743,7 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   } else {
     const auto t = Clock::now();
     merged = triangulate(merge_vertices, merge_segments, "merge, level " + std::to_string(level)).triangles;
-    make_run(merged);
+    canonicalize_triangles(merged);
     s.merge_ms = ms_since(t);
     s.merge_vertices = ids.size();
     s.merge_segments = merge_segments.size();
@@ -838,7 +818,9 @@ std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points) {
       p.x0 = std::min(p.x0, v[id].x), p.x1 = std::max(p.x1, v[id].x);
       p.y0 = std::min(p.y0, v[id].y), p.y1 = std::max(p.y1, v[id].y);
     }
-    auto local = [&](uint32_t id) { return uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin()); };
+    auto local = [&](uint32_t id) {
+      return uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
+    };
     for (uint32_t i : triangles_of[t]) {
       const Triangle& g = mesh.triangles[i];
       p.mesh.triangles.push_back({local(g[0]), local(g[1]), local(g[2])});

@@ -32,6 +32,16 @@ void record_stage(GpuCdtStats& s, const char* name, Clock::time_point t0) {
   spdlog::debug("gpu backend: {}: {:.1f} ms", name, s.wall_ms.back().second);
 }
 
+// The host array for the triangles of n vertices (at most 2n), its pages touched on other cores while the GPU
+// works: fresh memory costs a page fault per 4 KiB, ~15 ms for 2.5M points, which the download would wait for.
+std::future<std::vector<Triangle>> triangle_storage(size_t n) {
+  return std::async(std::launch::async, [n] {
+    std::vector<Triangle> v;
+    resize_touched(v, 2 * n);
+    return v;
+  });
+}
+
 }  // namespace
 
 GpuCdt::GpuCdt(const Context& ctx)
@@ -81,14 +91,7 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
 
-  // The host array for the triangles (at most 2n) gets its pages on other cores while the GPU works: fresh
-  // memory costs a page fault per 4 KiB, ~15 ms for 2.5M points, which the download would otherwise wait for.
-  const size_t n = prepared.vertices.size();
-  std::future<std::vector<Triangle>> triangles = std::async(std::launch::async, [n] {
-    std::vector<Triangle> v;
-    resize_touched(v, 2 * n);
-    return v;
-  });
+  std::future<std::vector<Triangle>> triangles = triangle_storage(prepared.vertices.size());
 
   // 1. CPU, on other threads (`resolving`): constraints that pass through vertices are split there, crossings
   //    get Steiner vertices, so that the GPU sees a planar straight-line graph on canonical vertices.
@@ -145,12 +148,7 @@ std::vector<Triangle> GpuCdt::triangulate_graph(const std::vector<Point3>& verti
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
-  const size_t n = vertices.size();
-  std::future<std::vector<Triangle>> storage = std::async(std::launch::async, [n] {  // pages touched meanwhile
-    std::vector<Triangle> v;
-    resize_touched(v, 2 * n);
-    return v;
-  });
+  std::future<std::vector<Triangle>> storage = triangle_storage(vertices.size());
   GpuTriangulation tri = delaunay_of(vertices, s);
   std::vector<Triangle> triangles = constrain_and_download(tri, segments, s, storage.get());
   s.wall_total_ms = ms_since(t_all);

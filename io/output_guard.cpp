@@ -52,9 +52,12 @@ std::string normal(const std::string& path) {
 }  // namespace
 
 std::vector<std::string> triangulate_outputs(const std::string& mesh, const std::string& stats) {
-  std::vector<std::string> out = {mesh};
-  // The writer puts the CRS beside a regular output file (io/writers.cpp write_mesh_file).
-  if (!is_special_output(mesh)) out.push_back(fs::path(mesh).replace_extension(".prj").string());
+  std::vector<std::string> out;
+  if (!mesh.empty()) {  // empty with --tiles-out alone
+    out.push_back(mesh);
+    // The writer puts the CRS beside a regular output file (io/writers.cpp write_mesh_file).
+    if (!is_special_output(mesh)) out.push_back(fs::path(mesh).replace_extension(".prj").string());
+  }
   if (!stats.empty()) out.push_back(stats);
   return out;
 }

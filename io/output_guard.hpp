@@ -13,7 +13,8 @@ namespace cdtgpu {
 void check_outputs_spare_inputs(const std::vector<std::string>& inputs,
                                 const std::vector<std::string>& outputs);
 
-// The files a run of triangulate writes: the mesh, its .prj sidecar (for a regular output file), the stats.
+// The files a run of triangulate writes: the mesh (none when `mesh` is empty), its .prj sidecar (for a regular
+// output file), the stats.
 std::vector<std::string> triangulate_outputs(const std::string& mesh, const std::string& stats);
 
 }  // namespace cdtgpu

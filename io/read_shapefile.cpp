@@ -272,13 +272,8 @@ struct Box {
   std::string text(int axes) const {
     std::string s;
     for (int a = 0; a < axes; ++a)
-      s += (a ? " x " : "") + std::string("[") + number(min[a]) + ", " + number(max[a]) + "]";
+      s += (a ? " x " : "") + std::string("[") + number_text(min[a]) + ", " + number_text(max[a]) + "]";
     return s;
-  }
-  static std::string number(double v) {
-    char buf[32];
-    auto r = std::to_chars(buf, buf + sizeof buf, v);
-    return std::string(buf, r.ptr);
   }
 };
 
@@ -309,8 +304,8 @@ void check_coordinates(const SHPObject& o, const Box& file, bool z_from_geometry
     for (int a = 0; a < axes; ++a)
       if (!std::isfinite(v[a])) throw InputError(path, record, "coordinate is not a finite number");
     auto where = [&] {
-      std::string s = "vertex " + std::to_string(k + 1) + " (" + Box::number(v[0]) + " " + Box::number(v[1]);
-      if (axes == 3) s += " " + Box::number(v[2]);
+      std::string s = "vertex " + std::to_string(k + 1) + " (" + number_text(v[0]) + " " + number_text(v[1]);
+      if (axes == 3) s += " " + number_text(v[2]);
       return s + ")";
     };
     for (int a = 0; a < axes; ++a) {
@@ -353,7 +348,7 @@ void check_lon_lat(const SHPObject& o, const std::string& prj, const std::string
     if (!(o.padfX[k] >= -180 && o.padfX[k] <= 180 && o.padfY[k] >= -90 && o.padfY[k] <= 90))
       throw InputError(
           path, record,
-          "vertex " + std::to_string(k + 1) + " (" + Box::number(o.padfX[k]) + " " + Box::number(o.padfY[k]) +
+          "vertex " + std::to_string(k + 1) + " (" + number_text(o.padfX[k]) + " " + number_text(o.padfY[k]) +
               ") is not a longitude/latitude, and " + prj +
               " says the coordinates are geographic (longitude -180 to 180, latitude -90 to 90)");
 }

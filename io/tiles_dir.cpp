@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-
 #include <nlohmann/json.hpp>
 
 #include "core/canonical.hpp"
@@ -16,25 +15,16 @@
 namespace cdtgpu {
 namespace fs = std::filesystem;
 
-namespace {
+namespace {}  // namespace
 
-const char* extension_of(MeshFormat f) {
-  switch (f) {
-    case MeshFormat::Obj: return ".obj";
-    case MeshFormat::Ply: return ".ply";
-    case MeshFormat::Wkt: return ".wkt";
-    case MeshFormat::LandXml: return ".xml";
-    case MeshFormat::Sms2dm: return ".2dm";
-  }
-  return ".ply";
+std::string tiles_dir_path(const std::string& dir) {
+  const fs::path target = fs::path(dir).lexically_normal();
+  return (target.filename().empty() ? target.parent_path() : target).string();
 }
-
-}  // namespace
 
 void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const WriteOptions& options,
                      const std::string& dir) {
-  const fs::path target = fs::path(dir).lexically_normal();
-  const fs::path clean = target.filename().empty() ? target.parent_path() : target;
+  const fs::path clean = tiles_dir_path(dir);
   std::error_code ec;
   if (fs::exists(clean, ec) && !fs::is_directory(clean, ec))
     throw UsageError("--tiles-out " + dir + ": exists and is not a folder");
@@ -46,14 +36,13 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
     for (size_t t = 0; t < pieces.size(); ++t) {
       const MeshPiece& p = pieces[t];
       char name[32];
-      std::snprintf(name, sizeof name, "tile_%04zu%s", t + 1, extension_of(options.format));
+      std::snprintf(name, sizeof name, "tile_%04zu%s", t + 1, mesh_extension(options.format));
       write_mesh_file(p.mesh, crs, options, (fresh / name).string());
       features.push_back(
           {{"type", "Feature"},
            {"geometry",
             {{"type", "Polygon"},
-             {"coordinates",
-              {{{p.x0, p.y0}, {p.x1, p.y0}, {p.x1, p.y1}, {p.x0, p.y1}, {p.x0, p.y0}}}}}},
+             {"coordinates", {{{p.x0, p.y0}, {p.x1, p.y0}, {p.x1, p.y1}, {p.x0, p.y1}, {p.x0, p.y0}}}}}},
            {"properties",
             {{"tile", t + 1},
              {"file", name},
@@ -63,7 +52,8 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
     nlohmann::json index{{"type", "FeatureCollection"}, {"features", features}};
     if (!crs.name.empty()) index["crs_name"] = crs.name;
     if (crs.epsg) index["crs_epsg"] = crs.epsg;
-    write_file_atomically((fresh / "index.geojson").string(), [&](std::ostream& out) { out << index.dump(1) << '\n'; });
+    write_file_atomically((fresh / "index.geojson").string(),
+                          [&](std::ostream& out) { out << index.dump(1) << '\n'; });
     const fs::path old = clean.string() + ".old-" + std::to_string(::getpid());
     if (fs::exists(clean, ec)) fs::rename(clean, old);
     fs::rename(fresh, clean);
@@ -100,7 +90,8 @@ Mesh read_tiles_dir(const std::string& dir) {
       throw InputError(file, 0, "holds other counts of vertices or triangles than the index says");
     const uint32_t base = uint32_t(all.vertices.size());
     all.vertices.insert(all.vertices.end(), piece.vertices.begin(), piece.vertices.end());
-    for (const Triangle& t : piece.triangles) all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    for (const Triangle& t : piece.triangles)
+      all.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
   }
   // Merge the repeated vertices: sorted by (x, y), the first of each run kept.
   std::vector<uint32_t> order(all.vertices.size());

@@ -17,6 +17,9 @@
 
 namespace cdtgpu {
 
+// The folder DIR names, without a trailing separator ("out/" -> "out"): what write_tiles_dir puts in place.
+std::string tiles_dir_path(const std::string& dir);
+
 // Writes the pieces and the index into a new folder beside DIR, then puts it in DIR's place (the old DIR, if
 // any, is removed only then): a failure leaves DIR as it was. DIR must not be a file.
 void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const WriteOptions& options,

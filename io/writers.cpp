@@ -14,6 +14,7 @@
 #include <charconv>
 #include <cstring>
 #include <filesystem>
+#include <utility>
 #include <stdexcept>
 #include <vector>
 
@@ -213,15 +214,25 @@ std::string lower(std::string s) {
   return s;
 }
 
+// Each format's file extension, both ways.
+constexpr std::pair<MeshFormat, const char*> kExtensions[] = {{MeshFormat::Obj, ".obj"},
+                                                              {MeshFormat::Ply, ".ply"},
+                                                              {MeshFormat::Wkt, ".wkt"},
+                                                              {MeshFormat::LandXml, ".xml"},
+                                                              {MeshFormat::Sms2dm, ".2dm"}};
+
 }  // namespace
+
+const char* mesh_extension(MeshFormat format) {
+  for (const auto& [f, e] : kExtensions)
+    if (f == format) return e;
+  return ".ply";
+}
 
 MeshFormat format_from_extension(const std::string& path) {
   const std::string ext = lower(std::filesystem::path(path).extension().string());
-  if (ext == ".obj") return MeshFormat::Obj;
-  if (ext == ".ply") return MeshFormat::Ply;
-  if (ext == ".wkt") return MeshFormat::Wkt;
-  if (ext == ".xml") return MeshFormat::LandXml;
-  if (ext == ".2dm") return MeshFormat::Sms2dm;
+  for (const auto& [format, e] : kExtensions)
+    if (ext == e) return format;
   throw UsageError("cannot tell the output format of '" + path + "' from its extension '" + ext +
                    "' (use .obj, .ply, .wkt, .xml or .2dm, or --format)");
 }

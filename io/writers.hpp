@@ -19,6 +19,7 @@ struct WriteOptions {
 // From the extension (.obj, .ply, .wkt, .xml (LandXML), .2dm); throws UsageError for anything else.
 MeshFormat format_from_extension(const std::string& path);
 MeshFormat parse_format(const std::string& name);  // "obj", "ply", "wkt", "landxml", "2dm"
+const char* mesh_extension(MeshFormat format);      // ".obj", ".ply", ".wkt", ".xml", ".2dm"
 
 // Records the CRS where the format allows: OBJ a comment line, PLY a comment, WKT nothing in the stream
 // (a .prj beside the file, written by write_mesh_file).
