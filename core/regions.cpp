@@ -1,6 +1,8 @@
-// apply_regions: boundaries, holes and max-edge trimming over a finished CDT. Cost: O(T): per-vertex lists
-// of the 3T half-edges (counting sort) and their twins, one walk per constraint along mesh edges, one flood
-// fill, one compaction.
+// apply_regions: boundaries, holes and max-edge trimming over a finished CDT, on all cores. Cost: O(T) work
+// in parallel passes: per-vertex lists of the 3T half-edges and their twins, one walk per constraint along
+// mesh edges, union-find over triangle adjacency, a breadth-first search over its few components, one
+// compaction. Every pass gives the same result whatever the thread count or schedule: flags are combined by
+// OR and XOR, the walk breaks ties by vertex id, a set's root is its smallest triangle.
 //
 // The constrained mesh edges are found the way verify.cpp finds them: from one end of a constraint, step to
 // the neighbour that lies on the segment (exact orientation for input vertices; within rounding for Steiner
@@ -8,13 +10,26 @@
 #include "core/regions.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_scan.h>
+#include <tbb/parallel_sort.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cfloat>
 #include <cmath>
+#include <deque>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
+
+#include "core/big_array.hpp"
 
 namespace cdtgpu {
 
@@ -24,10 +39,16 @@ using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using P2 = K::Point_2;
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 constexpr uint8_t kConstrained = 1, kRegion = 2;
+constexpr size_t kGrain = 1 << 14;
 
 uint64_t key(uint32_t a, uint32_t b) { return uint64_t(a) << 32 | b; }
 
 bool xy_less(const Point3& a, const Point3& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; }
+
+template <class T>
+std::atomic_ref<T> shared(T& x) {
+  return std::atomic_ref<T>(x);
+}
 
 // Index of the vertex at (x, y) in vertices sorted by (x, y), or kNone.
 uint32_t find_vertex(const std::vector<Point3>& vs, const Point3& p) {
@@ -35,11 +56,49 @@ uint32_t find_vertex(const std::vector<Point3>& vs, const Point3& p) {
   return it != vs.end() && it->x == p.x && it->y == p.y ? uint32_t(it - vs.begin()) : kNone;
 }
 
+template <class F>
+void each(size_t n, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) f(i);
+  });
+}
+
+template <class F>
+uint64_t count_if(size_t n, F&& f) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, kGrain), uint64_t(0),
+      [&](const tbb::blocked_range<size_t>& r, uint64_t sum) {
+        for (size_t i = r.begin(); i < r.end(); ++i) sum += f(i) ? 1 : 0;
+        return sum;
+      },
+      std::plus<uint64_t>());
+}
+
+// Calls emit(i, k) for the k-th index i (in order) with keep(i); returns how many. Parallel scan.
+template <class Keep, class Emit>
+size_t select(size_t n, Keep&& keep, Emit&& emit) {
+  return tbb::parallel_scan(
+      tbb::blocked_range<size_t>(0, n, kGrain), size_t(0),
+      [&](const tbb::blocked_range<size_t>& r, size_t k, bool final) {
+        for (size_t i = r.begin(); i < r.end(); ++i)
+          if (keep(i)) {
+            if (final) emit(i, k);
+            ++k;
+          }
+        return k;
+      },
+      std::plus<size_t>());
+}
+
 // Half-edge h = 3 t + k runs from triangle t's vertex k to vertex k + 1.
+struct Out {
+  uint32_t to, h;
+};
 struct HalfEdges {
-  std::vector<uint32_t> twin;        // kNone on the hull
-  std::vector<uint32_t> first, out;  // CSR: half-edges leaving each vertex
-  std::vector<uint32_t> bprev_edge;  // per vertex: the hull half-edge ending there, or kNone
+  BigArray<uint32_t> twin;        // kNone on the hull
+  BigArray<uint32_t> first;       // CSR: out[first[v], first[v + 1]) leave vertex v, in no set order
+  BigArray<Out> out;
+  BigArray<uint32_t> bprev_edge;  // per vertex: the hull half-edge ending there, or kNone
 };
 
 HalfEdges half_edges(const Mesh& mesh) {
@@ -49,66 +108,73 @@ HalfEdges half_edges(const Mesh& mesh) {
   auto from = [&](size_t h) { return ts[h / 3][h % 3]; };
   auto to = [&](size_t h) { return ts[h / 3][(h % 3 + 1) % 3]; };
   HalfEdges e;
-  // Half-edges leaving each vertex (counting sort), then each one's twin among those leaving its target
-  // (about six): no sort.
-  e.first.assign(size_t(V) + 1, 0);
-  for (size_t h = 0; h < H; ++h) ++e.first[from(h) + 1];
+  e.first = BigArray<uint32_t>(size_t(V) + 1, 0);
+  each(H, [&](size_t h) { shared(e.first[from(h) + 1]).fetch_add(1, std::memory_order_relaxed); });
   for (uint32_t v = 0; v < V; ++v) e.first[v + 1] += e.first[v];
-  e.out.resize(H);
-  std::vector<uint32_t> cursor(e.first.begin(), e.first.end() - 1);
-  for (size_t h = 0; h < H; ++h) e.out[cursor[from(h)]++] = uint32_t(h);
-  cursor = {};
-  e.twin.assign(H, kNone);
-  e.bprev_edge.assign(V, kNone);
-  for (size_t h = 0; h < H; ++h) {
+  BigArray<uint32_t> cursor(V);
+  each(V, [&](size_t v) { cursor[v] = e.first[v]; });
+  e.out = BigArray<Out>(H);
+  each(H, [&](size_t h) {
+    const uint32_t at = shared(cursor[from(h)]).fetch_add(1, std::memory_order_relaxed);
+    e.out[at] = {to(h), uint32_t(h)};
+  });
+  // The twin of a -> b is the one half-edge b -> a among those leaving b (about six). A hull vertex has one
+  // hull half-edge ending there: the hull of a triangulation is convex.
+  e.twin = BigArray<uint32_t>(H);
+  e.bprev_edge = BigArray<uint32_t>(V, kNone);
+  each(H, [&](size_t h) {
     const uint32_t a = from(h), b = to(h);
     for (uint32_t i = e.first[b]; i < e.first[b + 1]; ++i)
-      if (to(e.out[i]) == a) {
-        e.twin[h] = e.out[i];
-        break;
+      if (e.out[i].to == a) {
+        e.twin[h] = e.out[i].h;
+        return;
       }
-    if (e.twin[h] == kNone) e.bprev_edge[b] = uint32_t(h);
-  }
+    e.twin[h] = kNone;
+    e.bprev_edge[b] = uint32_t(h);
+  });
   return e;
 }
 
 uint32_t from_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][h % 3]; }
-uint32_t to_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][(h % 3 + 1) % 3]; }
 
 // Marks the mesh edges along every constraint: kConstrained, plus kRegion for region edges.
 void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std::vector<uint8_t>& region,
-                      const HalfEdges& e, std::vector<uint8_t>& flag) {
+                      const HalfEdges& e, BigArray<uint8_t>& flag) {
   const std::vector<Point3>& mv = mesh.vertices;
   const uint32_t V = uint32_t(mv.size());
-  std::vector<P2> P;
-  P.reserve(V);
-  for (const Point3& p : mv) P.emplace_back(p.x, p.y);
-  std::vector<uint8_t> is_input(V, 0);
-  // Both vertex lists are sorted by (x, y): one merge pass finds every input vertex in the mesh.
-  std::vector<uint32_t> mesh_of(prepared.vertices.size());
-  uint32_t m = 0;
-  for (size_t i = 0; i < prepared.vertices.size(); ++i) {
-    const Point3& p = prepared.vertices[i];
-    while (m < V && xy_less(mv[m], p)) ++m;
-    if (m == V || mv[m].x != p.x || mv[m].y != p.y)
-      throw std::logic_error("regions: input vertex " + std::to_string(i) + " is not in the mesh");
-    mesh_of[i] = m;
-    is_input[m] = 1;
-  }
-  for (size_t c = 0; c < prepared.constraints.size(); ++c) {
+  auto P = [&](uint32_t v) { return P2(mv[v].x, mv[v].y); };
+  BigArray<uint8_t> is_input(V, 0);
+  BigArray<uint32_t> mesh_of(prepared.vertices.size());
+  std::atomic<size_t> missing{SIZE_MAX};
+  each(prepared.vertices.size(), [&](size_t i) {
+    mesh_of[i] = find_vertex(mv, prepared.vertices[i]);
+    if (mesh_of[i] == kNone) {
+      size_t m = missing.load();
+      while (i < m && !missing.compare_exchange_weak(m, i)) {
+      }
+    } else {
+      is_input[mesh_of[i]] = 1;  // input vertices are distinct: one writer per byte
+    }
+  });
+  if (missing != SIZE_MAX)
+    throw std::logic_error("regions: input vertex " + std::to_string(missing.load()) + " is not in the mesh");
+
+  std::atomic<size_t> uncovered{SIZE_MAX};  // the smallest failing constraint, whatever the schedule
+  each(prepared.constraints.size(), [&](size_t c) {
     // Region edges toggle: a mesh edge covered by two region segments (collinear overlaps) is crossed twice.
     const uint8_t toggle = c < region.size() && region[c] ? kRegion : 0;
     const uint32_t A = mesh_of[prepared.constraints[c][0]], B = mesh_of[prepared.constraints[c][1]];
-    const P2 &pa = P[A], &pb = P[B];
+    const P2 pa = P(A), pb = P(B);
     const double ux = pb.x() - pa.x(), uy = pb.y() - pa.y();
     const double len2 = ux * ux + uy * uy, len = std::sqrt(len2);
     const double mag = std::max({std::abs(pa.x()), std::abs(pa.y()), std::abs(pb.x()), std::abs(pb.y())});
     const double tol = 1e-9 * len + 8 * DBL_EPSILON * mag;  // verify.cpp's tolerance for Steiner vertices
     auto on_segment = [&](uint32_t w) {
+      const P2 pw = P(w);
       if (is_input[w])
-        return CGAL::orientation(pa, pb, P[w]) == CGAL::COLLINEAR &&
-               CGAL::collinear_are_strictly_ordered_along_line(pa, P[w], pb);
-      const double wx = P[w].x() - pa.x(), wy = P[w].y() - pa.y();
+        return CGAL::orientation(pa, pb, pw) == CGAL::COLLINEAR &&
+               CGAL::collinear_are_strictly_ordered_along_line(pa, pw, pb);
+      const double wx = pw.x() - pa.x(), wy = pw.y() - pa.y();
       const double along = wx * ux + wy * uy;
       return std::abs(wx * uy - wy * ux) <= tol * len && along > 0 && along < len2;
     };
@@ -117,110 +183,189 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
       uint32_t best = kNone, best_he = kNone;
       double best_along = HUGE_VAL;
       auto consider = [&](uint32_t w, uint32_t h) {
-        if (best_along == -HUGE_VAL) return;
+        if (best == B) return;
         if (w == B) {
-          best = w, best_he = h, best_along = -HUGE_VAL;
+          best = w, best_he = h;
           return;
         }
-        const double along = (P[w].x() - P[cur].x()) * ux + (P[w].y() - P[cur].y()) * uy;
-        if (along > 0 && along < best_along && on_segment(w)) best = w, best_he = h, best_along = along;
+        const double along = (mv[w].x - mv[cur].x) * ux + (mv[w].y - mv[cur].y) * uy;
+        if (along > 0 && (along < best_along || (along == best_along && w < best)) && on_segment(w))
+          best = w, best_he = h, best_along = along;
       };
-      for (uint32_t i = e.first[cur]; i < e.first[cur + 1]; ++i) consider(to_of(mesh, e.out[i]), e.out[i]);
+      for (uint32_t i = e.first[cur]; i < e.first[cur + 1]; ++i) consider(e.out[i].to, e.out[i].h);
       if (e.bprev_edge[cur] != kNone) consider(from_of(mesh, e.bprev_edge[cur]), e.bprev_edge[cur]);
-      if (best == kNone || steps > V)
-        throw std::logic_error("regions: constraint " + std::to_string(c) +
-                               " is not covered by mesh edges (the mesh is not the CDT of its input)");
-      flag[best_he] = uint8_t((flag[best_he] | kConstrained) ^ toggle);
-      if (e.twin[best_he] != kNone) flag[e.twin[best_he]] = flag[best_he];
+      if (best == kNone || steps > V) {
+        size_t m = uncovered.load();
+        while (c < m && !uncovered.compare_exchange_weak(m, c)) {
+        }
+        return;
+      }
+      for (uint32_t h : {best_he, e.twin[best_he]}) {
+        if (h == kNone) continue;
+        shared(flag[h]).fetch_or(kConstrained, std::memory_order_relaxed);
+        if (toggle) shared(flag[h]).fetch_xor(toggle, std::memory_order_relaxed);
+      }
       cur = best;
     }
+  });
+  if (uncovered != SIZE_MAX)
+    throw std::logic_error("regions: constraint " + std::to_string(uncovered.load()) +
+                           " is not covered by mesh edges (the mesh is not the CDT of its input)");
+}
+
+// Concurrent union-find over triangles: a set's root is its smallest member (the larger root is linked under
+// the smaller one), so the sets and their roots do not depend on the order of the unions.
+class Forest {
+ public:
+  explicit Forest(size_t n) : parent_(n) {
+    each(n, [&](size_t i) { parent_[i] = uint32_t(i); });
   }
+  uint32_t find(uint32_t x) {
+    for (;;) {
+      const uint32_t p = shared(parent_[x]).load(std::memory_order_relaxed);
+      if (p == x) return x;
+      const uint32_t g = shared(parent_[p]).load(std::memory_order_relaxed);
+      if (g != p) shared(parent_[x]).store(g, std::memory_order_relaxed);  // path halving: g is an ancestor
+      x = g;
+    }
+  }
+  void unite(uint32_t a, uint32_t b) {
+    for (;;) {
+      a = find(a), b = find(b);
+      if (a == b) return;
+      if (a < b) std::swap(a, b);
+      uint32_t expected = a;
+      if (shared(parent_[a]).compare_exchange_weak(expected, b, std::memory_order_relaxed)) return;
+    }
+  }
+  // Every member's root, once the unions are done.
+  BigArray<uint32_t> roots() {
+    BigArray<uint32_t> r(parent_.size());
+    each(r.size(), [&](size_t i) { r[i] = find(uint32_t(i)); });
+    return r;
+  }
+
+ private:
+  BigArray<uint32_t> parent_;
+};
+
+// Roots of the triangles joined across the half-edges h with joined(h).
+template <class F>
+BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined) {
+  Forest forest(T);
+  each(T, [&](size_t t) {
+    for (size_t h = 3 * t; h < 3 * t + 3; ++h)
+      if (e.twin[h] != kNone && e.twin[h] / 3 > t && joined(h)) forest.unite(uint32_t(t), e.twin[h] / 3);
+  });
+  return forest.roots();
 }
 
 // Nesting level of every triangle: 0 for those reached from beyond the hull without crossing a region edge,
-// +1 for each region edge crossed (breadth first, as CGAL's mark_domains).
-std::vector<uint32_t> nesting_levels(const Mesh& mesh, const HalfEdges& e, const std::vector<uint8_t>& flag) {
-  const size_t T = mesh.triangles.size();
-  std::vector<uint32_t> level(T, kNone);
-  std::vector<std::vector<uint32_t>> pending(2);
-  for (size_t h = 0; h < 3 * T; ++h)
-    if (e.twin[h] == kNone) pending[(flag[h] & kRegion) ? 1 : 0].push_back(uint32_t(h / 3));
-  for (uint32_t L = 0; L < pending.size(); ++L) {
-    std::vector<uint32_t> stack = std::move(pending[L]);
-    while (!stack.empty()) {
-      const uint32_t t = stack.back();
-      stack.pop_back();
-      if (level[t] != kNone) continue;
-      level[t] = L;
-      for (uint32_t h = 3 * t; h < 3 * t + 3; ++h) {
-        const uint32_t n = e.twin[h];
-        if (n == kNone || level[n / 3] != kNone) continue;
-        if (flag[h] & kRegion) {
-          if (pending.size() < L + 2) pending.resize(L + 2);
-          pending[L + 1].push_back(n / 3);
-        } else {
-          stack.push_back(n / 3);
-        }
+// +1 for each region edge crossed (CGAL's mark_domains). Triangles joined by other edges share their level,
+// so the breadth-first search runs over the components only.
+BigArray<uint32_t> nesting_levels(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag) {
+  const BigArray<uint32_t> root = components(e, T, [&](size_t h) { return !(flag[h] & kRegion); });
+  // Crossings between components, both ways, and the hull's entries: (component, 1) across a region edge,
+  // (component, 0) otherwise.
+  tbb::enumerable_thread_specific<std::vector<uint64_t>> cross_local, entry_local;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, 3 * T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+    auto& cross = cross_local.local();
+    auto& entry = entry_local.local();
+    for (size_t h = r.begin(); h < r.end(); ++h) {
+      const uint32_t a = root[h / 3];
+      const bool crossing = flag[h] & kRegion;
+      if (e.twin[h] == kNone)
+        entry.push_back(key(a, crossing));
+      else if (crossing && root[e.twin[h] / 3] != a)
+        cross.push_back(key(a, root[e.twin[h] / 3]));
+    }
+  });
+  std::vector<uint64_t> cross, entry;
+  for (auto& v : cross_local) cross.insert(cross.end(), v.begin(), v.end());
+  for (auto& v : entry_local) entry.insert(entry.end(), v.begin(), v.end());
+  tbb::parallel_sort(cross.begin(), cross.end());
+  std::sort(entry.begin(), entry.end());
+
+  // 0-1 breadth-first search from the outside, by component root.
+  BigArray<uint32_t> level_of_root(T, kNone);
+  std::deque<uint32_t> queue;
+  for (uint64_t k : entry) {
+    const uint32_t a = uint32_t(k >> 32), L = uint32_t(k & 1);
+    if (level_of_root[a] != kNone && level_of_root[a] <= L) continue;
+    level_of_root[a] = L;
+    L == 0 ? queue.push_front(a) : queue.push_back(a);
+  }
+  while (!queue.empty()) {
+    const uint32_t a = queue.front();
+    queue.pop_front();
+    auto it = std::lower_bound(cross.begin(), cross.end(), key(a, 0));
+    for (; it != cross.end() && uint32_t(*it >> 32) == a; ++it) {
+      const uint32_t b = uint32_t(*it);
+      if (level_of_root[b] > level_of_root[a] + 1) {
+        level_of_root[b] = level_of_root[a] + 1;
+        queue.push_back(b);
       }
     }
   }
+  BigArray<uint32_t> level(T);
+  each(T, [&](size_t t) { level[t] = level_of_root[root[t]]; });
   return level;
 }
 
-// Triangles reached from beyond the hull across unconstrained edges longer than max_edge.
-std::vector<uint8_t> trimmed(const Mesh& mesh, const HalfEdges& e, const std::vector<uint8_t>& flag,
+// Triangles reached from beyond the hull across unconstrained edges longer than max_edge: the components,
+// joined by such edges, of the triangles with such an edge on the hull.
+BigArray<uint8_t> trimmed(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& flag,
                              double max_edge) {
   const size_t T = mesh.triangles.size();
   const double limit2 = max_edge * max_edge;
-  auto long_open = [&](uint32_t h) {
+  auto long_open = [&](size_t h) {
     if (flag[h] & kConstrained) return false;
-    const Point3 &a = mesh.vertices[from_of(mesh, h)], &b = mesh.vertices[to_of(mesh, h)];
+    const Point3 &a = mesh.vertices[mesh.triangles[h / 3][h % 3]],
+                 &b = mesh.vertices[mesh.triangles[h / 3][(h % 3 + 1) % 3]];
     const double dx = b.x - a.x, dy = b.y - a.y;
     return dx * dx + dy * dy > limit2;
   };
-  std::vector<uint8_t> gone(T, 0);
-  std::vector<uint32_t> stack;
-  for (uint32_t h = 0; h < 3 * T; ++h)
-    if (e.twin[h] == kNone && !gone[h / 3] && long_open(h)) {
-      gone[h / 3] = 1;
-      stack.push_back(h / 3);
-    }
-  while (!stack.empty()) {
-    const uint32_t t = stack.back();
-    stack.pop_back();
-    for (uint32_t h = 3 * t; h < 3 * t + 3; ++h) {
-      const uint32_t n = e.twin[h];
-      if (n == kNone || gone[n / 3] || !long_open(h)) continue;
-      gone[n / 3] = 1;
-      stack.push_back(n / 3);
-    }
-  }
+  const BigArray<uint32_t> root = components(e, T, long_open);
+  BigArray<uint8_t> seed(T, 0);
+  each(3 * T, [&](size_t h) {
+    if (e.twin[h] == kNone && long_open(h)) shared(seed[root[h / 3]]).store(1, std::memory_order_relaxed);
+  });
+  BigArray<uint8_t> gone(T);
+  each(T, [&](size_t t) { gone[t] = seed[root[t]]; });
   return gone;
 }
 
 }  // namespace
 
 std::vector<uint8_t> region_constraints(const PreparedInput& prepared, const std::vector<Polyline>& rings) {
-  std::vector<uint64_t> segs;
-  for (const Polyline& l : rings) {
+  // Each ring's segments, by the ends' vertex ids (smaller first); a segment whose ends are not both input
+  // vertices is no constraint and is left out (0).
+  std::vector<size_t> start(rings.size() + 1, 0);
+  for (size_t i = 0; i < rings.size(); ++i) {
+    const Polyline& l = rings[i];
     const size_t n = l.points.size();
-    const size_t count = n < 2 ? 0 : (l.closed && n >= 3 ? n : n - 1);
-    for (size_t k = 0; k < count; ++k) {
+    start[i + 1] = start[i] + (n < 2 ? 0 : (l.closed && n >= 3 ? n : n - 1));
+  }
+  std::vector<uint64_t> segs(start.back(), 0);
+  tbb::parallel_for(size_t(0), rings.size(), [&](size_t i) {
+    const Polyline& l = rings[i];
+    const size_t n = l.points.size();
+    for (size_t k = 0; k < start[i + 1] - start[i]; ++k) {
       uint32_t a = find_vertex(prepared.vertices, l.points[k]);
       uint32_t b = find_vertex(prepared.vertices, l.points[(k + 1) % n]);
       if (a == kNone || b == kNone || a == b) continue;
       if (a > b) std::swap(a, b);
-      segs.push_back(key(a, b));
+      segs[start[i] + k] = key(a, b);
     }
-  }
-  std::sort(segs.begin(), segs.end());
+  });
+  tbb::parallel_sort(segs.begin(), segs.end());
   // A segment given by two rings (adjacent parcels, a lake on the boundary) is crossed twice: no region edge.
   std::vector<uint8_t> region(prepared.constraints.size(), 0);
-  for (size_t c = 0; c < region.size(); ++c) {
+  each(region.size(), [&](size_t c) {
     const uint64_t k = key(prepared.constraints[c][0], prepared.constraints[c][1]);
     region[c] =
         (std::upper_bound(segs.begin(), segs.end(), k) - std::lower_bound(segs.begin(), segs.end(), k)) % 2;
-  }
+  });
   return region;
 }
 
@@ -242,53 +387,68 @@ RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts
 
 RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules) {
   RegionStats stats;
-  const size_t T = mesh.triangles.size();
+  const size_t T = mesh.triangles.size(), V = mesh.vertices.size();
   const bool regions =
       std::find(rules.region_edge.begin(), rules.region_edge.end(), 1) != rules.region_edge.end();
   if (T == 0 || (!regions && rules.max_edge <= 0)) return stats;
+  // Pass times for -v: what to look at when the stage grows.
+  auto t0 = std::chrono::steady_clock::now();
+  std::string passes;
+  auto lap = [&](const char* name) {
+    const auto t = std::chrono::steady_clock::now();
+    passes += fmt::format(" {} {:.1f} ms", name, std::chrono::duration<double, std::milli>(t - t0).count());
+    t0 = t;
+  };
   const HalfEdges e = half_edges(mesh);
-  std::vector<uint8_t> flag(3 * T, 0);
+  lap("half-edges");
+  BigArray<uint8_t> flag(3 * T, 0);
   mark_constraints(mesh, prepared, rules.region_edge, e, flag);
+  lap("constraints");
 
-  std::vector<uint8_t> keep(T, 1);
+  BigArray<uint8_t> keep(T, 1);
   if (regions) {
-    const std::vector<uint32_t> level = nesting_levels(mesh, e, flag);
-    for (size_t t = 0; t < T; ++t) {
-      const bool odd = level[t] % 2 == 1;  // every triangle is reached: the mesh is connected
-      keep[t] = odd != rules.outside_kept;
-      stats.triangles_outside += !keep[t];
-    }
+    const BigArray<uint32_t> level = nesting_levels(e, T, flag);
+    // Every triangle is reached (the mesh is connected); kNone would count as odd.
+    each(T, [&](size_t t) { keep[t] = (level[t] % 2 == 1) != rules.outside_kept; });
+    stats.triangles_outside = count_if(T, [&](size_t t) { return !keep[t]; });
+    lap("levels");
   }
   if (rules.max_edge > 0) {
-    const std::vector<uint8_t> gone = trimmed(mesh, e, flag, rules.max_edge);
-    for (size_t t = 0; t < T; ++t)
-      if (gone[t] && keep[t]) {
-        keep[t] = 0;
-        ++stats.triangles_trimmed;
-      }
+    const BigArray<uint8_t> gone = trimmed(mesh, e, flag, rules.max_edge);
+    stats.triangles_trimmed = count_if(T, [&](size_t t) { return gone[t] && keep[t]; });
+    each(T, [&](size_t t) { keep[t] &= !gone[t]; });
+    lap("trim");
   }
 
   // Compaction: kept triangles, then the vertices still used. The renumbering keeps the order of vertices,
-  // so triangles stay sorted and start at their smallest index: the mesh stays canonical.
-  std::vector<Triangle> kept;
-  kept.reserve(T - stats.triangles_outside - stats.triangles_trimmed);
-  std::vector<uint32_t> renumber(mesh.vertices.size(), kNone);
-  for (size_t t = 0; t < T; ++t)
-    if (keep[t]) {
-      kept.push_back(mesh.triangles[t]);
-      for (uint32_t v : mesh.triangles[t]) renumber[v] = 0;
-    }
-  std::vector<Point3> vertices;
-  for (size_t v = 0; v < renumber.size(); ++v)
-    if (renumber[v] == 0) {
-      renumber[v] = uint32_t(vertices.size());
-      vertices.push_back(mesh.vertices[v]);
-    }
-  stats.vertices_removed = mesh.vertices.size() - vertices.size();
-  for (Triangle& t : kept)
-    for (uint32_t& v : t) v = renumber[v];
-  mesh.vertices = std::move(vertices);
-  mesh.triangles = std::move(kept);
+  // so triangles stay sorted and start at their smallest index: the mesh stays canonical. Both are selected
+  // into scratch and copied back, so the mesh's vectors shrink in place (no zeroed reallocation).
+  BigArray<uint8_t> used(V, 0);
+  each(T, [&](size_t t) {
+    if (keep[t])
+      for (uint32_t v : mesh.triangles[t]) shared(used[v]).store(1, std::memory_order_relaxed);
+  });
+  BigArray<uint32_t> renumber(V);
+  BigArray<Point3> vertices(V);
+  const size_t kept_vertices = select(
+      V, [&](size_t v) { return used[v] != 0; },
+      [&](size_t v, size_t k) {
+        renumber[v] = uint32_t(k);
+        vertices[k] = mesh.vertices[v];
+      });
+  BigArray<Triangle> kept(T);
+  const size_t kept_triangles = select(
+      T, [&](size_t t) { return keep[t] != 0; },
+      [&](size_t t, size_t k) {
+        for (int i = 0; i < 3; ++i) kept[k][i] = renumber[mesh.triangles[t][i]];
+      });
+  each(kept_vertices, [&](size_t v) { mesh.vertices[v] = vertices[v]; });
+  each(kept_triangles, [&](size_t t) { mesh.triangles[t] = kept[t]; });
+  mesh.vertices.resize(kept_vertices);
+  mesh.triangles.resize(kept_triangles);
+  stats.vertices_removed = V - kept_vertices;
+  lap("compaction");
+  spdlog::debug("regions:{}", passes);
   return stats;
 }
 

@@ -9,6 +9,7 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 #include <shapefil.h>
 
 #include <array>
@@ -369,6 +370,68 @@ TEST(Regions, CanonicalOrderKept) {
   canonicalize(c);
   EXPECT_EQ(c.vertices, m.vertices);
   EXPECT_EQ(c.triangles, m.triangles);
+}
+
+// Many parcels at a size where every parallel pass of apply_regions splits its work: a boundary of adjacent
+// parcels (their shared edges are no region edges), holes in some of them, islands in the holes, breaklines.
+// With `bay`, no boundary (the hull is the domain) and a bay empty of points cut into it from the left, which
+// max-edge trims. The CDT restricted to the domain, and the same bytes on 1 and 2 threads.
+std::vector<Layer> parcels(bool bay) {
+  std::vector<Point3> pts;
+  for (const Point3& q : scatter(60000, -10, -10, 410, 410, 21))
+    if (!bay || q.x > 120 || std::abs(q.y - 200) > 30) pts.push_back(q);
+  std::vector<Layer> layers;
+  layers.push_back({Role::vertices, pts, {}, {}});
+  Layer bound{Role::boundary, {}, {}, {}}, holes{Role::hole, {}, {}, {}}, lines{Role::breakline, {}, {}, {}};
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; ++j) {
+      const double cx = 25 + 50 * i, cy = 25 + 50 * j;
+      if (!bay) bound.rings.push_back(square(cx, cy, 25));
+      if ((i + j) % 3 == 0) holes.rings.push_back(polygon(cx, cy, 15, 11, 0.1 * i));
+      if ((i + j) % 6 == 0) (bay ? holes : bound).rings.push_back(square(cx + 1, cy - 1, 5));  // an island
+      if ((i * j) % 5 == 1 && i > 2) lines.rings.push_back(polygon(cx + 3, cy + 2, 21, 7, 0.3));
+    }
+  layers.push_back(bound);
+  layers.push_back(holes);
+  layers.push_back(lines);
+  return layers;
+}
+
+TEST(Regions, ParcelsAtScaleMatchTheOracleOnAnyThreadCount) {
+  for (bool bay : {false, true}) {
+    const std::vector<Layer> layers = parcels(bay);
+    Built b = build(layers);
+    PreparedInput p = prepare(b.in);
+    const CdtResult r = triangulate_cgal(p);
+    for (double max_edge : {0.0, 6.0}) {
+      const RegionRules rules = region_rules(b.in, b.parts, p, max_edge);
+      std::vector<Mesh> meshes;
+      std::vector<RegionStats> stats;
+      for (int threads : {1, 2}) {
+        Mesh m = r.mesh;
+        tbb::task_arena arena(threads);
+        stats.push_back(arena.execute([&] { return apply_regions(m, p, rules); }));
+        meshes.push_back(std::move(m));
+      }
+      const std::string what = std::string(bay ? "bay" : "parcels") + ", max-edge " + std::to_string(max_edge);
+      // The oracle takes a segment of two rings as one region edge; ours cancels it (adjacent parcels are
+      // their union), which verify_regions checks.
+      if (bay) expect_same(oracle(layers, max_edge), meshes[0], what);
+      if (!bay && max_edge == 0) {
+        const VerifyReport v = verify_regions(meshes[0], p, rules);
+        EXPECT_TRUE(v.ok()) << what << ": " << (v.failures.empty() ? "" : v.failures[0]);
+      }
+      EXPECT_GT(stats[0].triangles_outside, 1000u) << what;
+      EXPECT_EQ(bay && max_edge > 0, stats[0].triangles_trimmed > 100) << what;
+      for (size_t k = 1; k < meshes.size(); ++k) {
+        EXPECT_EQ(meshes[k].triangles, meshes[0].triangles) << what;
+        EXPECT_EQ(meshes[k].vertices, meshes[0].vertices) << what;
+        EXPECT_EQ(stats[k].triangles_outside, stats[0].triangles_outside) << what;
+        EXPECT_EQ(stats[k].triangles_trimmed, stats[0].triangles_trimmed) << what;
+        EXPECT_EQ(stats[k].vertices_removed, stats[0].vertices_removed) << what;
+      }
+    }
+  }
 }
 
 // verify_regions accepts what apply_regions keeps and rejects the whole CDT, a triangle missing, a triangle
