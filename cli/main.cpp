@@ -122,6 +122,9 @@ int main(int argc, char** argv) {
   v->add_option("mesh", mesh_path, "mesh written by cdtgpu triangulate, or a --tiles-out folder")->required();
   v->add_option("inputs", ver.inputs, "the inputs it was made from, with the same options")->required();
   add_input_options(v, ver, crs, utm_zone, epsg);
+  double verify_max_edge = 0;
+  v->add_option("--max-edge", verify_max_edge, "the --max-edge the mesh was made with (its trimming is checked)")
+      ->check(non_negative);
 
   BenchOptions bench;
   auto* b = app.add_subcommand("bench", "time the paper's workloads with CGAL and the GPU; print the tables");
@@ -146,7 +149,7 @@ int main(int argc, char** argv) {
     }
     if (*v) {
       ver.crs = crs_from(crs, utm_zone, epsg);
-      return run_verify(mesh_path, ver);
+      return run_verify(mesh_path, ver, verify_max_edge);
     }
     if (*b) {
       bench.device = device;

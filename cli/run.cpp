@@ -433,13 +433,13 @@ int run_triangulate(const TriangulateOptions& options) {
   return 0;
 }
 
-int run_verify(const std::string& mesh_path, const InputOptions& options) {
+int run_verify(const std::string& mesh_path, const InputOptions& options, double max_edge) {
   RunStats stats;
   // A --tiles-out folder: the union of its files, each triangle in exactly one (checked), verified as one mesh.
   Mesh mesh = std::filesystem::is_directory(mesh_path) ? read_tiles_dir(mesh_path) : read_mesh_file(mesh_path);
   Loaded l = load(options, stats);
-  const RegionRules rules = region_rules(l.in, l.parts, l.prepared, 0);
-  const bool regions = std::count(rules.region_edge.begin(), rules.region_edge.end(), 1) > 0;
+  const RegionRules rules = region_rules(l.in, l.parts, l.prepared, max_edge);
+  const bool regions = std::count(rules.region_edge.begin(), rules.region_edge.end(), 1) > 0 || max_edge > 0;
   VerifyReport report = regions ? verify_regions(mesh, l.prepared, rules) : verify_mesh(mesh, l.prepared);
   for (const std::string& f : report.failures) spdlog::error("{}: {}", mesh_path, f);
   if (!report.ok()) {

@@ -35,6 +35,6 @@ struct TriangulateOptions {
 
 // Returns the process exit code; throws InputError / UsageError for bad input.
 int run_triangulate(const TriangulateOptions& options);
-int run_verify(const std::string& mesh_path, const InputOptions& options);
+int run_verify(const std::string& mesh_path, const InputOptions& options, double max_edge = 0);
 
 }  // namespace cdtgpu

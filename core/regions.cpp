@@ -1,6 +1,5 @@
 // apply_regions: boundaries, holes and max-edge trimming over a finished CDT, on all cores. Cost: O(T) work
-// in parallel passes: per-vertex lists of the 3T half-edges and their twins, one walk per constraint along
-// mesh edges, union-find over triangle adjacency, a breadth-first search over its few components, one
+// in parallel passes: the twins of the 3T half-edges, one walk per constraint along mesh edges, union-find over triangle adjacency, a breadth-first search over its few components, one
 // compaction. Every pass gives the same result whatever the thread count or schedule: flags are combined by
 // OR and XOR, the walk breaks ties by vertex id, a set's root is its smallest triangle.
 //
@@ -91,16 +90,22 @@ size_t select(size_t n, Keep&& keep, Emit&& emit) {
 }
 
 // Half-edge h = 3 t + k runs from triangle t's vertex k to vertex k + 1.
+uint32_t next_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 1) % 3; }
+uint32_t prev_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 2) % 3; }
+uint32_t from_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][h % 3]; }
+uint32_t to_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][(h % 3 + 1) % 3]; }
+
 struct Out {
   uint32_t to, h;
 };
 struct HalfEdges {
-  BigArray<uint32_t> twin;        // kNone on the hull
-  BigArray<uint32_t> first;       // CSR: out[first[v], first[v + 1]) leave vertex v, in no set order
-  BigArray<Out> out;
-  BigArray<uint32_t> bprev_edge;  // per vertex: the hull half-edge ending there, or kNone
+  BigArray<uint32_t> twin;    // kNone on the hull
+  BigArray<uint32_t> corner;  // per vertex: one half-edge leaving it (the fan around it is walked by twins)
 };
 
+// Twins through per-vertex lists of the half-edges that run down (to a smaller vertex): the twin of an
+// upward half-edge a -> b is the one b -> a in b's list (about three). Each pair is found once, from its
+// upward half.
 HalfEdges half_edges(const Mesh& mesh) {
   const std::vector<Triangle>& ts = mesh.triangles;
   const uint32_t V = uint32_t(mesh.vertices.size());
@@ -108,34 +113,43 @@ HalfEdges half_edges(const Mesh& mesh) {
   auto from = [&](size_t h) { return ts[h / 3][h % 3]; };
   auto to = [&](size_t h) { return ts[h / 3][(h % 3 + 1) % 3]; };
   HalfEdges e;
-  e.first = BigArray<uint32_t>(size_t(V) + 1, 0);
-  each(H, [&](size_t h) { shared(e.first[from(h) + 1]).fetch_add(1, std::memory_order_relaxed); });
-  for (uint32_t v = 0; v < V; ++v) e.first[v + 1] += e.first[v];
-  BigArray<uint32_t> cursor(V);
-  each(V, [&](size_t v) { cursor[v] = e.first[v]; });
-  e.out = BigArray<Out>(H);
+  e.corner = BigArray<uint32_t>(V);
+  BigArray<uint32_t> first(size_t(V) + 1, 0);
   each(H, [&](size_t h) {
-    const uint32_t at = shared(cursor[from(h)]).fetch_add(1, std::memory_order_relaxed);
-    e.out[at] = {to(h), uint32_t(h)};
+    const uint32_t a = from(h);
+    shared(e.corner[a]).store(uint32_t(h), std::memory_order_relaxed);  // any one will do
+    if (a > to(h)) shared(first[a + 1]).fetch_add(1, std::memory_order_relaxed);
   });
-  // The twin of a -> b is the one half-edge b -> a among those leaving b (about six). A hull vertex has one
-  // hull half-edge ending there: the hull of a triangulation is convex.
-  e.twin = BigArray<uint32_t>(H);
-  e.bprev_edge = BigArray<uint32_t>(V, kNone);
+  tbb::parallel_scan(
+      tbb::blocked_range<size_t>(1, size_t(V) + 1, kGrain), uint32_t(0),
+      [&](const tbb::blocked_range<size_t>& r, uint32_t sum, bool final) {
+        for (size_t v = r.begin(); v < r.end(); ++v) {
+          sum += first[v];
+          if (final) first[v] = sum;
+        }
+        return sum;
+      },
+      std::plus<uint32_t>());
+  BigArray<uint32_t> cursor(V);
+  each(V, [&](size_t v) { cursor[v] = first[v]; });
+  BigArray<Out> down(first[V]);
   each(H, [&](size_t h) {
     const uint32_t a = from(h), b = to(h);
-    for (uint32_t i = e.first[b]; i < e.first[b + 1]; ++i)
-      if (e.out[i].to == a) {
-        e.twin[h] = e.out[i].h;
+    if (a > b) down[shared(cursor[a]).fetch_add(1, std::memory_order_relaxed)] = {b, uint32_t(h)};
+  });
+  e.twin = BigArray<uint32_t>(H, kNone);
+  each(H, [&](size_t h) {
+    const uint32_t a = from(h), b = to(h);
+    if (a > b) return;
+    for (uint32_t i = first[b]; i < first[b + 1]; ++i)
+      if (down[i].to == a) {
+        e.twin[h] = down[i].h;
+        e.twin[down[i].h] = uint32_t(h);
         return;
       }
-    e.twin[h] = kNone;
-    e.bprev_edge[b] = uint32_t(h);
   });
   return e;
 }
-
-uint32_t from_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][h % 3]; }
 
 // Marks the mesh edges along every constraint: kConstrained, plus kRegion for region edges.
 void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std::vector<uint8_t>& region,
@@ -145,17 +159,25 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
   auto P = [&](uint32_t v) { return P2(mv[v].x, mv[v].y); };
   BigArray<uint8_t> is_input(V, 0);
   BigArray<uint32_t> mesh_of(prepared.vertices.size());
+  // Both vertex lists are sorted by (x, y): each block finds its first vertex by bisection, then merges.
   std::atomic<size_t> missing{SIZE_MAX};
-  each(prepared.vertices.size(), [&](size_t i) {
-    mesh_of[i] = find_vertex(mv, prepared.vertices[i]);
-    if (mesh_of[i] == kNone) {
-      size_t m = missing.load();
-      while (i < m && !missing.compare_exchange_weak(m, i)) {
-      }
-    } else {
-      is_input[mesh_of[i]] = 1;  // input vertices are distinct: one writer per byte
-    }
-  });
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, prepared.vertices.size(), kGrain),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      uint32_t m = uint32_t(std::lower_bound(mv.begin(), mv.end(), prepared.vertices[r.begin()],
+                                                             xy_less) - mv.begin());
+                      for (size_t i = r.begin(); i < r.end(); ++i) {
+                        const Point3& p = prepared.vertices[i];
+                        while (m < V && xy_less(mv[m], p)) ++m;
+                        if (m == V || mv[m].x != p.x || mv[m].y != p.y) {
+                          size_t first_missing = missing.load();
+                          while (i < first_missing && !missing.compare_exchange_weak(first_missing, i)) {
+                          }
+                          return;
+                        }
+                        mesh_of[i] = m;
+                        is_input[m] = 1;  // input vertices are distinct: one writer per byte
+                      }
+                    });
   if (missing != SIZE_MAX)
     throw std::logic_error("regions: input vertex " + std::to_string(missing.load()) + " is not in the mesh");
 
@@ -192,8 +214,25 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
         if (along > 0 && (along < best_along || (along == best_along && w < best)) && on_segment(w))
           best = w, best_he = h, best_along = along;
       };
-      for (uint32_t i = e.first[cur]; i < e.first[cur + 1]; ++i) consider(e.out[i].to, e.out[i].h);
-      if (e.bprev_edge[cur] != kNone) consider(from_of(mesh, e.bprev_edge[cur]), e.bprev_edge[cur]);
+      // The fan around cur: turn one way through twins of the previous half-edges; at the hull, consider
+      // the hull half-edge ending at cur and turn the other way from the start.
+      const uint32_t h0 = e.corner[cur];
+      uint32_t h = h0;
+      bool hull = false;
+      do {
+        consider(to_of(mesh, h), h);
+        const uint32_t p = prev_of(h);
+        if (e.twin[p] == kNone) {
+          consider(from_of(mesh, p), p);
+          hull = true;
+          break;
+        }
+        h = e.twin[p];
+      } while (h != h0);
+      for (h = h0; hull && e.twin[h] != kNone;) {
+        h = next_of(e.twin[h]);
+        consider(to_of(mesh, h), h);
+      }
       if (best == kNone || steps > V) {
         size_t m = uncovered.load();
         while (c < m && !uncovered.compare_exchange_weak(m, c)) {

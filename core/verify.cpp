@@ -76,7 +76,8 @@ bool collinear(const std::vector<P2>& p) {
 
 }  // namespace
 
-VerifyReport verify_mesh(const Mesh& mesh, const PreparedInput& prepared, size_t max_failures) {
+VerifyReport verify_mesh(const Mesh& mesh, const PreparedInput& prepared, size_t max_failures,
+                         std::vector<Edge>* constrained_edges) {
   VerifyReport report;
   Collector fail{report, std::max<size_t>(max_failures, 1)};
   const std::vector<Point3>& mv = mesh.vertices;
@@ -320,7 +321,10 @@ VerifyReport verify_mesh(const Mesh& mesh, const PreparedInput& prepared, size_t
   for (uint32_t v = 0; v < V; ++v)
     for (uint32_t h = first[v]; h < first[v + 1]; ++h) {
       const uint32_t w = he[h].to;
-      if (constrained[h] && (twin[h] == kNone || v < w)) ++report.constrained_edges;
+      if (constrained[h] && (twin[h] == kNone || v < w)) {
+        ++report.constrained_edges;
+        if (constrained_edges) constrained_edges->push_back({std::min(v, w), std::max(v, w)});
+      }
       if (twin[h] == kNone || w < v || constrained[h]) continue;
       const uint32_t c = he[h].opp, d = he[twin[h]].opp;
       const CGAL::Oriented_side s = predicates.side_of_oriented_circle(P[v], P[w], P[c], P[d], true);
@@ -330,6 +334,7 @@ VerifyReport verify_mesh(const Mesh& mesh, const PreparedInput& prepared, size_t
                  tri(ts, he[h].tri) + " (" + vtx(mv, v) + ", " + vtx(mv, w) + ", " + vtx(mv, c) + ")");
     }
   fail.finish();
+  if (constrained_edges) std::sort(constrained_edges->begin(), constrained_edges->end());
   return report;
 }
 

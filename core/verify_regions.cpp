@@ -1,5 +1,5 @@
-// verify_regions: the reference CDT, a ray-parity inside test per triangle, and a comparison of triangle
-// sets. Cost: the CDT, then per triangle the region segments of one horizontal band (segments are listed in
+// verify_regions: the reference CDT, a ray-parity inside test per triangle, the --max-edge trimming by a flood
+// over the reference's own edge list, and a comparison of triangle sets. Cost: the CDT, then per triangle the region segments of one horizontal band (segments are listed in
 // every band their y range meets).
 #include "core/verify_regions.hpp"
 
@@ -94,12 +94,61 @@ bool interior_point(const P2& a, const P2& b, const P2& c, P2& out) {
   return false;
 }
 
+// The reference CDT's triangles that --max-edge trims: reached from beyond the hull across edges longer than
+// max_edge that lie on no constraint. Its own adjacency (a sorted edge list), independent of apply_regions.
+std::vector<uint8_t> trimmed_reference(const Mesh& m, const std::vector<Edge>& constrained, double max_edge) {
+  struct Side {
+    Edge e;
+    uint32_t t;
+    bool operator<(const Side& o) const { return e != o.e ? e < o.e : t < o.t; }
+  };
+  std::vector<Side> sides;
+  for (uint32_t t = 0; t < m.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = m.triangles[t][k], b = m.triangles[t][(k + 1) % 3];
+      sides.push_back({{std::min(a, b), std::max(a, b)}, t});
+    }
+  std::sort(sides.begin(), sides.end());
+  auto long_open = [&](const Edge& e) {
+    const Point3 &a = m.vertices[e[0]], &b = m.vertices[e[1]];
+    const double dx = b.x - a.x, dy = b.y - a.y;  // the rule's own comparison, squared in doubles
+    return dx * dx + dy * dy > max_edge * max_edge &&
+           !std::binary_search(constrained.begin(), constrained.end(), e);
+  };
+  std::vector<std::vector<uint32_t>> across(m.triangles.size());  // neighbours across long open edges
+  std::vector<uint8_t> gone(m.triangles.size(), 0);
+  std::vector<uint32_t> stack;
+  for (size_t i = 0; i < sides.size();) {
+    size_t j = i;
+    while (j < sides.size() && sides[j].e == sides[i].e) ++j;
+    if (long_open(sides[i].e)) {
+      if (j - i == 1 && !gone[sides[i].t]) {  // a hull edge
+        gone[sides[i].t] = 1;
+        stack.push_back(sides[i].t);
+      }
+      if (j - i == 2) {
+        across[sides[i].t].push_back(sides[i + 1].t);
+        across[sides[i + 1].t].push_back(sides[i].t);
+      }
+    }
+    i = j;
+  }
+  while (!stack.empty()) {
+    const uint32_t t = stack.back();
+    stack.pop_back();
+    for (uint32_t n : across[t])
+      if (!gone[n]) gone[n] = 1, stack.push_back(n);
+  }
+  return gone;
+}
+
 }  // namespace
 
 VerifyReport verify_regions(const Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules,
                             size_t max_failures) {
   const CdtResult full = triangulate_cgal(prepared);
-  VerifyReport report = verify_mesh(full.mesh, prepared, max_failures);
+  std::vector<Edge> constrained;
+  VerifyReport report = verify_mesh(full.mesh, prepared, max_failures, &constrained);
   if (!report.ok()) {
     for (std::string& f : report.failures) f = "reference CDT: " + f;
     return report;
@@ -119,7 +168,12 @@ VerifyReport verify_regions(const Mesh& mesh, const PreparedInput& prepared, con
 
   // The domain's triangles, each counted: +1 when expected, -1 when in the mesh.
   std::map<Corners, int> count;
-  for (const Triangle& t : full.mesh.triangles) {
+  const std::vector<uint8_t> gone = rules.max_edge > 0
+                                        ? trimmed_reference(full.mesh, constrained, rules.max_edge)
+                                        : std::vector<uint8_t>(full.mesh.triangles.size(), 0);
+  for (size_t i = 0; i < full.mesh.triangles.size(); ++i) {
+    const Triangle& t = full.mesh.triangles[i];
+    if (gone[i]) continue;
     const Point3 &a = full.mesh.vertices[t[0]], &b = full.mesh.vertices[t[1]], &c = full.mesh.vertices[t[2]];
     P2 inner;
     if (!interior_point(P2(a.x, a.y), P2(b.x, b.y), P2(c.x, c.y), inner)) {

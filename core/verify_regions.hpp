@@ -6,8 +6,10 @@
 // Independent of apply_regions' flood fill: the CDT of `prepared` is computed with the CGAL backend and
 // checked by verify_mesh; each of its triangles is in the domain when a point strictly inside it (checked
 // with exact orientation) is inside by the parity of region segments crossed by a ray to +x (exact
-// orientation tests, half-open in y), odd or even as RegionRules says. The mesh must hold exactly those
-// triangles, with the CDT's vertices and z. --max-edge trimming is not checked (a trimmed mesh fails).
+// orientation tests, half-open in y), odd or even as RegionRules says, and not trimmed: with rules.max_edge,
+// the triangles reached from beyond the hull across edges longer than it that lie on no constraint (the
+// constrained edges as verify_mesh finds them) are left out. The mesh must hold exactly the rest, with the
+// CDT's vertices and z.
 #pragma once
 #include "core/regions.hpp"
 #include "core/verify.hpp"

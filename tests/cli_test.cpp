@@ -293,6 +293,26 @@ TEST_F(Cli, RolesAndDrapeWithBothBackends) {
   EXPECT_NE(v.err.find("missing"), std::string::npos) << v.err;
 }
 
+// verify --max-edge: a C-shaped point set whose bay --max-edge trims; verify checks the trimming both ways.
+TEST_F(Cli, VerifyChecksMaxEdgeTrimming) {
+  std::string xyz;
+  for (int i = 0; i <= 40; ++i)
+    for (int j = 0; j <= 40; ++j)
+      if (i < 16 || std::abs(j - 20) > 8) xyz += std::to_string(500000 + 5 * i) + " " + std::to_string(6000000 + 5 * j) + " " + std::to_string(i + j) + "\n";
+  write("coast.xyz", xyz);
+  const std::string coast = path("coast.xyz");
+  ASSERT_EQ(run("triangulate " + coast + " --max-edge 20 -o " + path("trimmed.ply") + " -q").code, 0);
+  ASSERT_EQ(run("triangulate " + coast + " -o " + path("whole.ply") + " -q").code, 0);
+  Result v = run("verify " + path("trimmed.ply") + " " + coast + " --max-edge 20");
+  EXPECT_EQ(v.code, 0) << v.err;
+  v = run("verify " + path("trimmed.ply") + " " + coast);
+  EXPECT_EQ(v.code, 1) << v.err;
+  v = run("verify " + path("whole.ply") + " " + coast + " --max-edge 20");
+  EXPECT_EQ(v.code, 1) << v.err;
+  EXPECT_NE(v.err.find("not a triangle of the CDT inside the domain"), std::string::npos) << v.err;
+  EXPECT_EQ(run("verify " + path("whole.ply") + " " + coast + " --max-edge -1").code, 2);
+}
+
 TEST_F(Cli, UnknownInputOptionIsAUsageError) {
   write_terrain();
   Result r = run("triangulate " + path("dem.csv") + ":colour=red -o " + path("out.ply"));

@@ -473,6 +473,30 @@ TEST(VerifyRegions, AcceptsRegionMeshesAndCatchesWrongOnes) {
   }
 }
 
+// verify_regions with max_edge: the trimmed coastline passes; the untrimmed CDT, and the trimmed mesh checked
+// without max_edge, fail.
+TEST(VerifyRegions, ChecksMaxEdgeTrimming) {
+  std::vector<Layer> layers = coastline();
+  layers.push_back({Role::hole, {}, {square(60, 100, 10)}, {}});
+  Built b = build(layers);
+  PreparedInput p = prepare(b.in);
+  CdtResult r = triangulate_cgal(p);
+  const Mesh whole = r.mesh;
+  const RegionRules rules = region_rules(b.in, b.parts, p, 12);
+  const RegionStats s = apply_regions(r.mesh, p, rules);
+  ASSERT_GT(s.triangles_trimmed, 20u);
+  const VerifyReport ok = verify_regions(r.mesh, p, rules);
+  EXPECT_TRUE(ok.ok()) << (ok.failures.empty() ? "" : ok.failures[0]);
+  RegionRules untrimmed = rules;
+  untrimmed.max_edge = 0;
+  EXPECT_FALSE(verify_regions(r.mesh, p, untrimmed).ok());
+  Mesh holed = whole;
+  apply_regions(holed, p, untrimmed);
+  const VerifyReport bad = verify_regions(holed, p, rules);
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.failures[0].find("not a triangle of the CDT inside the domain"), std::string::npos) << bad.failures[0];
+}
+
 // A road (breakline) crossing the boundary: Steiner vertices on region edges, found by the mesh walk. No CGAL
 // oracle here (CGAL's own crossing points are not ours); verify_regions' ray test checks it instead.
 std::vector<Layer> road_across_boundary() {
