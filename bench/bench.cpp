@@ -337,6 +337,9 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
                   "tiles: tiles of at most this many points (default: the CPU's auto size; the GPU: a quarter of the "
                   "input, or what the device holds)");
   cmd->add_flag("--points-only", o.points_only, "tiles: uniform points without constraint segments");
+  cmd->add_option("--devices", o.devices,
+                  "tiles: also GPU tiled rows on several devices, 2, 4, ... up to all of these (all, or indices "
+                  "0,1,... as `cdtgpu devices` lists them)");
   cmd->add_option("--sizes", o.sizes, "point counts replacing the table's, e.g. 50K,100K or 1.5M")->delimiter(',');
   cmd->add_option("--runs", o.runs, "timed runs per backend and workload; the median is reported")
       ->default_val(5)

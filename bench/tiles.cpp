@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <thread>
@@ -18,6 +19,7 @@
 #include "core/workloads.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "gpu/check.hpp"
+#include "gpu/devices.hpp"
 #include "gpu/tile_triangulator.hpp"
 #include "io/atomic_file.hpp"
 
@@ -142,6 +144,20 @@ int run_tiles(const BenchOptions& o) {
               "vs single", "RSS GB", "same");
   std::fflush(stdout);
 
+  // The device counts of the GPU tiled rows: 1 (the picked device; an empty set), then 2, 4, ... and all of
+  // --devices.
+  std::vector<size_t> device_set, gpu_device_counts;
+  if (o.gpu) gpu_device_counts.push_back(0);
+  if (o.gpu && !o.devices.empty()) {
+    device_set = gpu::select_devices(gpu::list_devices(), o.devices, o.device);
+    for (size_t k = 2; k < device_set.size(); k *= 2) gpu_device_counts.push_back(k);
+    if (device_set.size() > 1) gpu_device_counts.push_back(device_set.size());
+    std::printf("GPU tiled rows also on 2 to %zu devices:", device_set.size());
+    for (size_t i : device_set) std::printf(" %zu", i);
+    std::printf("\n");
+  }
+  std::unique_ptr<gpu::Context> ctx_single;
+
   json rows = json::array();
   int failures = 0;
   for (uint64_t n : sizes) {
@@ -177,23 +193,44 @@ int run_tiles(const BenchOptions& o) {
     if (cpu_tile && n <= o.cgal_max_points)
       results.push_back(time_row("tiled", "cgal", o.runs,
                                  [&](Row& r) { tiled_once(p, cpu_tile, cgal_tile_triangulator(), r); }));
-    if (o.gpu) {
-      const gpu::Context ctx = gpu::create_context(co);
-      const gpu::GpuCdt cdt(ctx);
+    // GPU tiles on one device, then on 2, 4, ... of --devices: two tiles in flight a device, as cdtgpu
+    // triangulate runs them; without --tile-points, tiles of a quarter of the input a device (or what the
+    // smallest device holds).
+    for (size_t k : gpu_device_counts) {
+      const std::vector<size_t> picked(device_set.begin(), device_set.begin() + std::min(k, device_set.size()));
+      const std::vector<std::unique_ptr<gpu::Context>> ctxs =
+          picked.empty() ? std::vector<std::unique_ptr<gpu::Context>>{}
+                         : gpu::create_contexts(picked, co);
+      std::vector<std::unique_ptr<gpu::GpuCdt>> cdts;
+      std::vector<const gpu::GpuCdt*> users;
+      uint64_t max_tile = UINT64_MAX;
+      if (picked.empty()) {  // the one device create_context picks
+        ctx_single = std::make_unique<gpu::Context>(gpu::create_context(co));
+        cdts.push_back(std::make_unique<gpu::GpuCdt>(*ctx_single));
+        max_tile = gpu::max_tile_points(*ctx_single);
+      }
+      for (const auto& ctx : ctxs) {
+        cdts.push_back(std::make_unique<gpu::GpuCdt>(*ctx));
+        max_tile = std::min(max_tile, gpu::max_tile_points(*ctx));
+      }
+      for (const auto& c : cdts) users.push_back(c.get());
       const uint64_t gpu_tile =
-          o.tile_points ? o.tile_points : std::min(gpu::max_tile_points(ctx), p.vertices.size() / 4 + 1);
+          o.tile_points ? o.tile_points : std::min(max_tile, p.vertices.size() / (4 * users.size()) + 1);
       gpu::GpuCdtStats sum;
-      const TileTriangulator tri = gpu::gpu_tile_triangulator(cdt, &sum);
-      results.push_back(time_row("tiled", "gpu", o.runs, [&](Row& r) {
+      const TileTriangulator tri = gpu::gpu_tile_triangulator(users, &sum);
+      const std::string backend = users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size());
+      results.push_back(time_row("tiled", backend, o.runs, [&](Row& r) {
         sum = gpu::GpuCdtStats{};
-        tiled_once(p, gpu_tile, tri, r, 2);  // as cdtgpu triangulate runs GPU tiles
+        tiled_once(p, gpu_tile, tri, r, unsigned(2 * users.size()));
       }));
       std::string parts;
       for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
       std::printf(
-          "%9s last tiled GPU run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB\n",
-          "", fmt(sum.gpu_total_ms).c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
+          "%9s last tiled %s run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB\n", "",
+          backend.c_str(), fmt(sum.gpu_total_ms).c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
           fmt(double(sum.peak_device_bytes) / 1e6).c_str());
+      cdts.clear();
+      ctx_single.reset();
     }
     if (results.empty()) continue;
     const Mesh& reference = results.front().mesh;

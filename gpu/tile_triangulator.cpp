@@ -3,6 +3,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <condition_variable>
 #include <memory>
 #include <mutex>
 
@@ -24,20 +25,59 @@ void add(std::vector<std::pair<std::string, double>>& sum,
   }
 }
 
+// The devices not running a tile.
+class DevicePool {
+ public:
+  explicit DevicePool(size_t n) {
+    for (size_t i = n; i-- > 0;) free_.push_back(i);
+  }
+  size_t take() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    freed_.wait(lock, [&] { return !free_.empty(); });
+    const size_t i = free_.back();
+    free_.pop_back();
+    return i;
+  }
+  void give(size_t i) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      free_.push_back(i);
+    }
+    freed_.notify_one();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable freed_;
+  std::vector<size_t> free_;
+};
+
 }  // namespace
 
 TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum) {
-  return [&cdt, sum, lock = std::make_shared<std::mutex>()](
-             const std::vector<Point3>& vertices, const std::vector<Edge>& segments, std::string_view what) {
+  return gpu_tile_triangulator(std::vector<const GpuCdt*>{&cdt}, sum);
+}
+
+TileTriangulator gpu_tile_triangulator(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
+  auto pool = std::make_shared<DevicePool>(cdts.size());
+  auto sum_lock = std::make_shared<std::mutex>();
+  return [cdts = std::move(cdts), sum, pool, sum_lock](const std::vector<Point3>& vertices,
+                                                      const std::vector<Edge>& segments, std::string_view what) {
     // A tile is a resolved graph already: no resolve stage, no copies.
     // Isolated: a thread waiting inside the pipeline's own parallel loops must not pick up another tile,
-    // which would wait for the lock it holds.
+    // which would wait for a device it holds.
     return tbb::this_task_arena::isolate([&] {
-      std::lock_guard<std::mutex> one_at_a_time(*lock);
+      const size_t d = pool->take();
+      struct Give {
+        DevicePool& pool;
+        size_t d;
+        ~Give() { pool.give(d); }
+      } give{*pool, d};
       try {
         GpuCdtStats one;
-        TileMesh mesh{cdt.triangulate_graph(vertices, segments, &one), {}};
+        TileMesh mesh{cdts[d]->triangulate_graph(vertices, segments, &one), {}};
         if (sum) {
+          std::lock_guard<std::mutex> lock(*sum_lock);
           add(sum->wall_ms, one.wall_ms);
           add(sum->gpu_ms, one.gpu_ms);
           sum->gpu_total_ms += one.gpu_total_ms;
@@ -46,8 +86,11 @@ TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum) {
         }
         return mesh;
       } catch (const DeviceError& e) {
+        const std::string on = cdts.size() > 1 ? " on device " + std::to_string(cdts[d]->context().info.index) +
+                                                     " (" + cdts[d]->context().info.name + ")"
+                                               : "";
         throw DeviceError(std::string(what) + " (" + std::to_string(vertices.size()) + " vertices, " +
-                          std::to_string(segments.size()) + " segments): " + e.what());
+                          std::to_string(segments.size()) + " segments)" + on + ": " + e.what());
       }
     });
   };

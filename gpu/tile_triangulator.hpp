@@ -1,7 +1,8 @@
-// Tiles of core/tiles through one device: each tile's CDT is a whole GPU run (gpu/cdt_pipeline), one tile at
-// a time on the device while other threads gather the next tiles and sort out the finished ones.
+// Tiles of core/tiles through one device or several: each tile's CDT is a whole GPU run (gpu/cdt_pipeline), one
+// tile at a time on each device while other threads gather the next tiles and sort out the finished ones.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "core/tiles.hpp"
 #include "gpu/cdt_pipeline.hpp"
@@ -12,6 +13,10 @@ namespace cdtgpu::gpu {
 // when given (and outliving it): every call's stage times added up, by name, and the largest device memory
 // peak.
 TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum = nullptr);
+// Tiles spread over several devices (issue 29): each call takes a free device, waiting while all are busy, so
+// run 2 x cdts.size() tiles in flight (TileOptions::tiles_in_flight). A tile's CDT is the same on every
+// device, so the result does not depend on which device took which tile. A DeviceError names the device too.
+TileTriangulator gpu_tile_triangulator(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum = nullptr);
 
 // The most points a tile of its own may hold on this device: the Delaunay build's slot limit and ~260 bytes
 // of device memory a point (the measured peak, docs/performance.md), the storage buffer range (24 bytes a
