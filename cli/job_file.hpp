@@ -5,7 +5,7 @@
 //     if (j.error.empty()) use(j.number, j.words);         // else the line's quoting was bad: j.error says how
 //
 // Quoting: blanks separate words; '...' keeps everything literally; "..." keeps everything but \" \\ \$ \`
-// (backslash and the character) ; outside quotes a backslash keeps the next character. A # at the start of a
+// (the second character); outside quotes a backslash keeps the next character. A # at the start of a
 // word starts a comment. Blank and comment-only lines are left out.
 #pragma once
 #include <string>

@@ -57,11 +57,11 @@ class Batch : public ::testing::Test {
     return ss.str();
   }
 
-  // `args` go through /bin/sh, so a job line's quoting means the same here as in a job file.
+  // In `dir`. `args` go through /bin/sh, so a job line's quoting means the same here as in a job file.
   Result run(const std::string& args, const std::string& stdin_from = "/dev/null") const {
     const std::string err = path("stderr.txt");
-    const std::string cmd = std::string(CDTGPU_BINARY) + " " + args + " <'" + stdin_from + "' >/dev/null 2>'" +
-                            err + "'";
+    const std::string cmd = "cd " + q("") + " && " + CDTGPU_BINARY + " " + args + " <'" + stdin_from +
+                            "' >/dev/null 2>'" + err + "'";
     const int status = std::system(cmd.c_str());
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err)};
   }
@@ -260,6 +260,25 @@ TEST_F(Batch, ALaterJobReadsWhatAnEarlierJobWrote) {
   EXPECT_EQ(slurp(path("single.ply")), slurp(path("from-contours.ply")));
   ASSERT_EQ(run("triangulate " + q("contours.wkt") + " " + q("grid.asc") + " -q -o " + q("single.obj")).code, 0);
   EXPECT_EQ(slurp(path("single.obj")), slurp(path("both.obj")));
+}
+
+// samples/jobs.txt, the README's example, run from a folder that sees the repository's samples/: every job
+// runs, and its first job's mesh is its single run's and passes verify.
+TEST_F(Batch, TheBundledJobFileRuns) {
+  const std::string samples = std::string(CDTGPU_SOURCE_DIR) + "/samples";
+  fs::create_directory_symlink(samples, dir / "samples");
+  const std::string in = "samples/katoomba/contours.shp:z=ELEV samples/katoomba/dem.xyz "
+                         "samples/katoomba/buildings.shp:z=min";
+  Result r = run("batch samples/jobs.txt");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("batch: 4 jobs, all ok"), std::string::npos) << r.err;
+  ASSERT_EQ(run("triangulate " + in + " -q -o single.ply").code, 0);
+  const Result v = run("verify katoomba.ply " + in);
+  EXPECT_EQ(v.code, 0) << v.err;
+  for (const char* out : {"katoomba.ply", "katoomba.json", "katoomba dem only.obj", "katoomba.xml",
+                          "katoomba-dem.asc", "katoomba-contours.geojson", "katoomba holes.2dm"})
+    EXPECT_TRUE(fs::exists(path(out))) << out;
+  EXPECT_TRUE(slurp(path("katoomba.ply")) == slurp(path("single.ply")));
 }
 
 }  // namespace
