@@ -204,12 +204,10 @@ int run_batch(const BatchOptions& options) {
         std::lock_guard lock(summary_mutex);
         if (b->exit_code) failed_lines.push_back(b->line.number);
       }
-      progress.above([&] {
-        if (b->exit_code)
-          spdlog::error("{}: failed (exit code {}), {:.0f} ms", b->label, b->exit_code, ms);
-        else
-          spdlog::info("{}: ok, {:.0f} ms, {} triangles", b->label, ms, job.stats.counts["triangles"].dump());
-      });
+      if (b->exit_code)
+        spdlog::error("{}: failed (exit code {}), {:.0f} ms", b->label, b->exit_code, ms);
+      else
+        spdlog::info("{}: ok, {:.0f} ms, {} triangles", b->label, ms, job.stats.counts["triangles"].dump());
       const size_t index = b->index;
       b.reset();
       written.done(index);

@@ -1,7 +1,7 @@
 // Which job a thread works on, named at the start of its log lines: a batch runs several jobs at once on its
 // stage threads, and "line 7: merged 3 duplicate points" must say whose points.
 //
-//   use_job_log_pattern(*logger);        // once: "cdtgpu: LEVEL: [JOB: ]MESSAGE"
+//   use_job_log(*logger);                // once: "cdtgpu: LEVEL: [JOB: ]MESSAGE", progress lines cleared first
 //   { JobLogScope scope("line 7"); spdlog::info("..."); }   // "cdtgpu: info: line 7: ..."
 #pragma once
 #include <string>
@@ -21,6 +21,7 @@ class JobLogScope {
   std::string previous_;
 };
 
-void use_job_log_pattern(spdlog::logger& logger);
+// Sets the pattern, and has each message clear the progress lines on the terminal first (cli/progress.hpp).
+void use_job_log(spdlog::logger& logger);
 
 }  // namespace cdtgpu

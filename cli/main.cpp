@@ -20,7 +20,7 @@ using namespace cdtgpu;
 
 int main(int argc, char** argv) {
   auto logger = spdlog::stderr_color_mt("cdtgpu");
-  use_job_log_pattern(*logger);  // "cdtgpu: LEVEL: MESSAGE", a batch's job named before the message
+  use_job_log(*logger);  // "cdtgpu: LEVEL: MESSAGE", a batch's job named before the message
   spdlog::set_default_logger(logger);
   spdlog::set_level(spdlog::level::info);
 

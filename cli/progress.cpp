@@ -8,6 +8,12 @@
 #include <cstdio>
 
 namespace cdtgpu {
+namespace {
+
+std::mutex drawing_mutex;
+std::vector<Progress*> drawing;  // the lines with a drawing thread
+
+}  // namespace
 
 Progress::Progress(std::string stage)
     : Progress([stage, t0 = std::chrono::steady_clock::now()] {
@@ -19,6 +25,10 @@ Progress::Progress(std::string stage)
 
 Progress::Progress(std::function<std::string()> text) : text_(std::move(text)) {
   if (!::isatty(STDERR_FILENO) || !spdlog::should_log(spdlog::level::info)) return;
+  {
+    std::lock_guard lock(drawing_mutex);
+    drawing.push_back(this);
+  }
   thread_ = std::thread([this] {
     using namespace std::chrono;
     std::unique_lock lock(mutex_);
@@ -32,18 +42,23 @@ Progress::Progress(std::function<std::string()> text) : text_(std::move(text)) {
   });
 }
 
-void Progress::above(const std::function<void()>& log) {
-  std::lock_guard lock(mutex_);
-  if (shown_) {
+void Progress::clear_lines() {
+  std::lock_guard all(drawing_mutex);
+  for (Progress* p : drawing) {
+    std::lock_guard lock(p->mutex_);
+    if (!p->shown_) continue;
     std::fputs("\r\033[K", stderr);
     std::fflush(stderr);
-    shown_ = false;
+    p->shown_ = false;
   }
-  log();
 }
 
 void Progress::stop() {
   if (!thread_.joinable()) return;
+  {
+    std::lock_guard lock(drawing_mutex);
+    std::erase(drawing, this);
+  }
   {
     std::lock_guard lock(mutex_);
     done_ = true;

@@ -6,6 +6,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 namespace cdtgpu {
 
@@ -18,8 +19,9 @@ class Progress {
   ~Progress() { stop(); }
   // Ends the line (clears it) before anything else is logged.
   void stop();
-  // Runs `log` with the line cleared and held off, so that what it prints stands on lines of its own.
-  void above(const std::function<void()>& log);
+  // Clears every progress line shown now, so that a log message stands on a line of its own (the redraw comes
+  // with the next tick). cli/job_log's sink calls it before each message.
+  static void clear_lines();
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
 
