@@ -353,8 +353,12 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_flag("--ablation", o.ablation,
                 "the paper's Table 3: the first --sizes value (default 2M points, 40K with --quick) with a tenth, a "
                 "quarter and half as many constraints; the full method and each part switched off");
-  cmd->add_option("--backends", o.backends, "e2e: the child's --backend values to time (default auto,gpu,cgal)")
+  cmd->add_option("--backends", o.backends,
+                  "e2e: the child's --backend values to time, and batch: one `cdtgpu batch` of --batch-jobs jobs "
+                  "(default auto,gpu,cgal,batch)")
       ->delimiter(',');
+  cmd->add_option("--batch-jobs", o.batch_jobs, "e2e: jobs in the batch row, each the row's whole run (default 20)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--formats", o.formats, "e2e: input formats, text (.xyz + .wkt) and/or shp (default text,shp)")
       ->delimiter(',')
       ->check(CLI::IsMember({"text", "shp"}));

@@ -43,7 +43,8 @@ struct BenchOptions {
   std::string device;               // Vulkan device override, as `cdtgpu devices` lists
   bool ablation = false;            // the paper's Table 3 instead of the tables
   // --table e2e (bench/e2e.hpp): `cdtgpu triangulate` timed as a child process, from files to the written PLY
-  std::vector<std::string> backends;  // empty: auto, gpu, cgal
+  std::vector<std::string> backends;  // empty: auto, gpu, cgal, batch (`cdtgpu batch` of batch_jobs auto jobs)
+  int batch_jobs = 20;                // jobs in the batch row's job file, each the row's whole run
   std::vector<std::string> formats;   // empty: text, shp
   std::string binary;                 // the cdtgpu to time; empty: this executable (/proc/self/exe)
   std::string keep_dir;               // keep every input, output, stats file and log here; empty: a temp dir

@@ -160,19 +160,57 @@ std::string work_root(const BenchOptions& o) {
   return tmpl;
 }
 
-// Runs one backend on one format's inputs: first run (empty caches), warm-up, timed runs.
+// A shell word for a job file line (cli/job_file.hpp): single quotes, a quote inside as '\''.
+std::string job_word(const std::string& w) {
+  std::string q = "'";
+  for (char c : w) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+// The batch row: a job file of o.batch_jobs copies of the row's run (`--backend auto`), each to its own PLY and
+// stats; the last job's stats stand for the row (the first pays the device's start).
+struct BatchPlan {
+  std::string jobs_file;
+  std::vector<std::string> outputs, stats;
+};
+BatchPlan write_batch_jobs(const BenchOptions& o, const std::string& dir, const E2eFiles& files,
+                           const std::string& tag) {
+  BatchPlan b;
+  b.jobs_file = (fs::path(dir) / ("jobs-" + tag + ".txt")).string();
+  std::string text;
+  for (int k = 1; k <= o.batch_jobs; ++k) {
+    b.outputs.push_back((fs::path(dir) / ("out-" + tag + "-" + std::to_string(k) + ".ply")).string());
+    b.stats.push_back((fs::path(dir) / ("stats-" + tag + "-" + std::to_string(k) + ".json")).string());
+    for (const std::string& in : files.inputs) text += job_word(in) + " ";
+    text += "-o " + job_word(b.outputs.back()) + " --stats " + job_word(b.stats.back()) + "\n";
+  }
+  write_file_atomically(b.jobs_file, [&](std::ostream& out) { out << text; });
+  return b;
+}
+
+// Runs one backend on one format's inputs: first run (empty caches), warm-up, timed runs. "batch": one
+// `cdtgpu batch` of o.batch_jobs jobs per run, its wall divided by the jobs.
 Cell run_cell(const BenchOptions& o, const std::string& binary, const std::string& dir, const E2eFiles& files,
               const std::string& format, const std::string& backend) {
   Cell c;
   c.format = format;
   c.backend = backend;
   const std::string tag = format + "-" + backend;
+  const bool batch = backend == "batch";
   c.output = (fs::path(dir) / ("out-" + tag + ".ply")).string();
-  const std::string stats = (fs::path(dir) / ("stats-" + tag + ".json")).string();
+  std::string stats = (fs::path(dir) / ("stats-" + tag + ".json")).string();
   const std::string log = (fs::path(dir) / ("log-" + tag + ".txt")).string();
   std::vector<std::string> argv{binary, "triangulate"};
   argv.insert(argv.end(), files.inputs.begin(), files.inputs.end());
   argv.insert(argv.end(), {"-o", c.output, "--stats", stats, "-q", "--backend", backend});
+  BatchPlan plan;
+  if (batch) {
+    plan = write_batch_jobs(o, dir, files, tag);
+    c.output = plan.outputs.front();
+    stats = plan.stats.back();
+    argv = {binary, "batch", plan.jobs_file, "-q"};
+  }
+  const double jobs = batch ? o.batch_jobs : 1;
   if (!o.device.empty()) argv.insert(argv.end(), {"--device", o.device});
 
   // Empty caches: the driver's shader caches and ours (under XDG_CACHE_HOME) start from nothing.
@@ -212,8 +250,9 @@ Cell run_cell(const BenchOptions& o, const std::string& binary, const std::strin
       return c;
     }
     RunFigures f = run_figures(r.stats);
-    c.wall.push_back(r.wall_ms);
-    c.other.push_back(r.wall_ms - f.top_level_ms);
+    c.wall.push_back(r.wall_ms / jobs);
+    // A batch's stages overlap one another's: wall minus one job's stages says nothing there.
+    if (!batch) c.other.push_back(r.wall_ms - f.top_level_ms);
     if (!std::isnan(f.gpu_ms)) c.gpu.push_back(f.gpu_ms);
     for (const auto& [name, ms] : f.stages) c.stages.add(name, ms);
     c.runs.push_back(figures_json(r));
@@ -222,6 +261,14 @@ Cell run_cell(const BenchOptions& o, const std::string& binary, const std::strin
   }
   std::error_code ec;
   c.output_bytes = fs::file_size(c.output, ec);
+  for (size_t k = 1; k < plan.outputs.size(); ++k) {  // every job of the batch wrote the first job's bytes
+    if (!same_bytes(plan.outputs[0], plan.outputs[k])) {
+      c.ok = false;
+      c.error = "batch job " + std::to_string(k + 1) + ": " + plan.outputs[k] + " differs from job 1's";
+      spdlog::error("{}: {}", dir, c.error);
+    }
+    if (o.keep_dir.empty()) fs::remove(plan.outputs[k]);
+  }
   return c;
 }
 
@@ -257,7 +304,7 @@ json cell_json(const Cell& c, uint64_t input_bytes, bool first_run) {
 int run_e2e(const BenchOptions& o) {
   const std::vector<RowPlan> rows = plan_rows(o);
   const std::vector<std::string> backends =
-      o.backends.empty() ? std::vector<std::string>{"auto", "gpu", "cgal"} : o.backends;
+      o.backends.empty() ? std::vector<std::string>{"auto", "gpu", "cgal", "batch"} : o.backends;
   const std::vector<std::string> formats =
       o.formats.empty() ? std::vector<std::string>{"text", "shp"} : o.formats;
   for (const std::string& f : formats)
@@ -278,6 +325,10 @@ int run_e2e(const BenchOptions& o) {
   std::printf("cdtgpu bench --table e2e, %s\n", date.c_str());
   std::printf("CPU: %s, %u hardware threads\n", cpu.c_str(), threads);
   std::printf("child: %s triangulate INPUTS -o OUT.ply --stats S.json -q --backend B\n", binary.c_str());
+  if (std::find(backends.begin(), backends.end(), "batch") != backends.end())
+    std::printf("batch: %s batch JOBS -q, JOBS = %d lines `INPUTS -o OUT-k.ply --stats S-k.json` (auto); wall = "
+                "spawn to exit / %d, stages = the last job's\n",
+                binary.c_str(), o.batch_jobs, o.batch_jobs);
   std::printf(
       "wall = spawn to exit, median of %d runs after 1 warm-up; first = one run before, with empty "
       "shader and pipeline caches; stages from the child's --stats (medians); other = wall - the stages "

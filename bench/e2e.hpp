@@ -3,7 +3,7 @@
 //   BenchOptions o;                      // bench/bench.hpp
 //   o.table = "e2e";
 //   o.sizes = {"20K"};                   // points; each row gets a quarter as many contour segments
-//   o.backends = {"cgal", "gpu"};        // the child's --backend values (default auto, gpu, cgal)
+//   o.backends = {"cgal", "gpu"};        // the child's --backend values (default auto, gpu, cgal, batch)
 //   o.binary = "build/cdtgpu";           // default: this executable
 //   int code = run_e2e(o);               // prints the table; 1 when outputs differ or a run failed
 //
@@ -12,7 +12,9 @@
 // once with empty caches (the first-run figure: XDG_CACHE_HOME, __GL_SHADER_DISK_CACHE_PATH and
 // MESA_SHADER_CACHE_DIR point at fresh empty folders), once as a warm-up, then --runs times; the wall clock
 // is spawn to waitpid, and each run's stats JSON gives its stages. Every PLY written in a row must be
-// byte-identical to the row's first.
+// byte-identical to the row's first. Backend "batch": the child is `cdtgpu batch JOBS -q`, JOBS holding
+// --batch-jobs copies of the run (`--backend auto`, each its own PLY and stats); its wall is spawn to exit
+// divided by the jobs, its stages the last job's, and every job's PLY must equal the row's first too.
 #pragma once
 #include "bench/bench.hpp"
 

@@ -101,13 +101,30 @@ void GpuStart::leave_for_exit() {
 }
 
 gpu::GpuCdt& GpuStart::cdt() {
-  if (!ready_) ready_ = pending_.get();
+  if (!ready_ && !failed_) try {
+      ready_ = pending_.get();
+    } catch (...) {
+      failed_ = std::current_exception();
+    }
+  if (failed_) std::rethrow_exception(failed_);
   return *ready_->cdt;
 }
 
 const gpu::Context& GpuStart::context() {
   cdt();
   return ready_->ctx;
+}
+
+GpuStart& GpuStarts::start(const std::string& device, bool hardware_only, uint64_t expected_points) {
+  std::lock_guard lock(mutex_);
+  std::unique_ptr<GpuStart>& s = starts_[{device, hardware_only}];
+  if (!s) s = std::make_unique<GpuStart>(device, hardware_only, expected_points);
+  return *s;
+}
+
+void GpuStarts::leave_for_exit() {
+  std::lock_guard lock(mutex_);
+  for (auto& [key, s] : starts_) s->leave_for_exit();
 }
 
 }  // namespace cdtgpu

@@ -2,8 +2,11 @@
 // read, and the `--backend auto` rule that decides whether a run uses it.
 #pragma once
 #include <cstdint>
+#include <exception>
 #include <future>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -30,7 +33,7 @@ class GpuStart {
   // triangulation's upload and download will need, ~24 bytes a point, off the critical path.
   GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points = 0);
   ~GpuStart();
-  // Waits for the start; rethrows its DeviceError.
+  // Waits for the start; rethrows its DeviceError (on every call: a failed start is not tried again).
   gpu::GpuCdt& cdt();
   const gpu::Context& context();
   // For a process about to exit: saves the pipeline cache and leaves the device, its buffers and pipelines to
@@ -46,6 +49,21 @@ class GpuStart {
   };
   std::future<std::unique_ptr<Ready>> pending_;
   std::unique_ptr<Ready> ready_;
+  std::exception_ptr failed_;
+};
+
+// The GPU starts of one process, one per (device, hardware_only), each made when first asked for and kept for
+// every later job: a batch pays for one Vulkan device and its pipelines. Thread-safe.
+class GpuStarts {
+ public:
+  // The start for this device and rule: started now with `expected_points`, or the one started before.
+  GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points);
+  // GpuStart::leave_for_exit for each.
+  void leave_for_exit();
+
+ private:
+  std::mutex mutex_;
+  std::map<std::pair<std::string, bool>, std::unique_ptr<GpuStart>> starts_;
 };
 
 }  // namespace cdtgpu

@@ -1,0 +1,249 @@
+#include "cli/batch.hpp"
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <semaphore>
+#include <thread>
+
+#include <spdlog/spdlog.h>
+
+#include "cli/job_file.hpp"
+#include "cli/job_log.hpp"
+#include "cli/progress.hpp"
+#include "cli/stages.hpp"
+#include "core/error.hpp"
+#include "gpu/check.hpp"
+
+namespace cdtgpu {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// Jobs held at once: one being read, one on the device, one being written.
+constexpr std::ptrdiff_t kInFlight = 3;
+
+struct BatchJob {
+  size_t index = 0;  // in file order
+  JobLine line;
+  std::string label;  // "line N"
+  Job job;
+  int exit_code = 0;  // the single run's: 2 bad input or usage, 3 device or other failure
+  Clock::time_point t0;
+};
+
+// A queue between two stage threads; a null job says the stream ended.
+class JobQueue {
+ public:
+  void push(std::unique_ptr<BatchJob> j) {
+    {
+      std::lock_guard lock(mutex_);
+      jobs_.push_back(std::move(j));
+    }
+    cv_.notify_one();
+  }
+  std::unique_ptr<BatchJob> pop() {
+    std::unique_lock lock(mutex_);
+    cv_.wait(lock, [&] { return !jobs_.empty(); });
+    std::unique_ptr<BatchJob> j = std::move(jobs_.front());
+    jobs_.pop_front();
+    return j;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::unique_ptr<BatchJob>> jobs_;
+};
+
+// Runs one stage of a job that has not failed; a failure is logged with the job's line and kept as its exit code
+// (the codes of a single run).
+void stage(BatchJob& b, const std::function<void()>& f) {
+  if (b.exit_code) return;
+  JobLogScope scope(b.label);
+  try {
+    f();
+    return;
+  } catch (const InputError& e) {
+    spdlog::error("{}", e.what());
+    b.exit_code = 2;
+  } catch (const UsageError& e) {
+    spdlog::error("{}", e.what());
+    b.exit_code = 2;
+  } catch (const gpu::DeviceError& e) {
+    spdlog::error("{}", e.what());
+    spdlog::error("--backend cgal computes the same triangulation on the CPU, without a GPU");
+    b.exit_code = 3;
+  } catch (const std::bad_alloc&) {
+    spdlog::error("out of memory");
+    b.exit_code = 3;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    b.exit_code = 3;
+  }
+}
+
+// A path as the batch compares it: absolute, normalised, links resolved where they exist.
+std::string same_file_key(const std::string& path) {
+  std::error_code ec;
+  fs::path p = fs::weakly_canonical(fs::absolute(path), ec);
+  return ec ? fs::absolute(path).lexically_normal().string() : p.string();
+}
+
+// Which job last writes each file, and how many jobs are written (in order): a job reading a file that a job
+// still in flight writes waits until that one is done.
+class Written {
+ public:
+  void will_write(size_t index, const std::vector<std::string>& outputs) {
+    std::lock_guard lock(mutex_);
+    for (const std::string& o : outputs)
+      if (o != "-") writer_[same_file_key(o)] = index;
+  }
+  void wait_for_writers_of(const std::vector<std::string>& inputs) {
+    std::unique_lock lock(mutex_);
+    for (const std::string& in : inputs) {
+      auto it = writer_.find(same_file_key(in));
+      if (it == writer_.end()) continue;
+      const size_t writer = it->second;
+      cv_.wait(lock, [&] { return done_ > writer; });
+    }
+  }
+  void done(size_t index) {
+    {
+      std::lock_guard lock(mutex_);
+      done_ = index + 1;
+    }
+    cv_.notify_all();
+  }
+  size_t count() {
+    std::lock_guard lock(mutex_);
+    return done_;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::map<std::string, size_t> writer_;
+  size_t done_ = 0;
+};
+
+}  // namespace
+
+int run_batch(const BatchOptions& options) {
+  const std::vector<JobLine> lines = read_job_file(options.jobs);
+  if (!options.stats_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(options.stats_dir, ec);
+    if (!fs::is_directory(options.stats_dir))
+      throw UsageError("--stats-dir " + options.stats_dir + ": cannot create the folder");
+  }
+  GpuStarts gpus;  // one device for every job
+  JobQueue to_device, to_writer;
+  std::counting_semaphore<kInFlight> slots(kInFlight);
+  Written written;
+  std::mutex summary_mutex;
+  std::vector<int> failed_lines;
+
+  Progress progress([&] {
+    const size_t done = written.count();
+    std::lock_guard lock(summary_mutex);
+    return "batch: " + std::to_string(done) + " of " + std::to_string(lines.size()) + " jobs done" +
+           (failed_lines.empty() ? "" : " (" + std::to_string(failed_lines.size()) + " failed)");
+  });
+
+  // Reading: the line's options, the output checks, the inputs read and prepared.
+  std::thread reader([&] {
+    for (size_t i = 0; i < lines.size(); ++i) {
+      slots.acquire();
+      auto b = std::make_unique<BatchJob>();
+      b->index = i;
+      b->line = lines[i];
+      b->label = "line " + std::to_string(b->line.number);
+      b->t0 = Clock::now();
+      Job& job = b->job;
+      stage(*b, [&] {
+        if (!b->line.error.empty()) throw UsageError(b->line.error);
+        job.options = parse_job_words(b->line.words, options.defaults);
+        job.stage_progress = false;
+        if (!options.stats_dir.empty())
+          job.stats_copy = (fs::path(options.stats_dir) / (std::to_string(b->line.number) + ".json")).string();
+        if (options.jobs == "-")
+          for (const std::string& in : job.options.input.inputs)
+            if (in == "-") throw UsageError("stdin holds the job list: a job cannot read WKT from it");
+        check_job(job);
+        written.wait_for_writers_of(job.input_paths);
+        written.will_write(i, job.outputs);
+        start_gpu_early(job, gpus);
+        read_job(job);
+        choose_backend(job, gpus);
+        prepare_job(job);
+      });
+      to_device.push(std::move(b));
+    }
+    to_device.push(nullptr);
+  });
+
+  // Writing: the outputs, the stats, the job's summary line.
+  std::thread writer([&] {
+    while (std::unique_ptr<BatchJob> b = to_writer.pop()) {
+      Job& job = b->job;
+      stage(*b, [&] {
+        write_outputs(job);
+        count_results(job);
+      });
+      stage(*b, [&] { release_job(job); });
+      stage(*b, [&] { write_job_stats(job); });
+      const double ms = std::chrono::duration<double, std::milli>(Clock::now() - b->t0).count();
+      {
+        std::lock_guard lock(summary_mutex);
+        if (b->exit_code) failed_lines.push_back(b->line.number);
+      }
+      if (b->exit_code)
+        spdlog::error("{}: failed (exit code {}), {:.0f} ms", b->label, b->exit_code, ms);
+      else
+        spdlog::info("{}: ok, {:.0f} ms, {} triangles", b->label, ms, job.stats.counts["triangles"].dump());
+      const size_t index = b->index;
+      b.reset();
+      written.done(index);
+      slots.release();
+    }
+  });
+
+  // The device's stages, one job at a time, on this thread.
+  while (std::unique_ptr<BatchJob> b = to_device.pop()) {
+    Job& job = b->job;
+    stage(*b, [&] {
+      triangulate_job(job);
+      apply_job_regions(job);
+      derive_outputs(job);
+    });
+    if (b->exit_code) {  // a failed job's device objects go now, on the device's thread
+      job.gpu_raster.reset();
+      job.gpu_contours.reset();
+    }
+    to_writer.push(std::move(b));
+  }
+  to_writer.push(nullptr);
+  reader.join();
+  writer.join();
+  progress.stop();
+  gpus.leave_for_exit();
+
+  if (failed_lines.empty()) {
+    spdlog::info("batch: {} jobs, all ok", lines.size());
+    return 0;
+  }
+  std::string which;
+  for (int n : failed_lines) which += (which.empty() ? "" : ", ") + std::to_string(n);
+  spdlog::error("batch: {} of {} jobs failed (line{} {})", failed_lines.size(), lines.size(),
+                failed_lines.size() > 1 ? "s" : "", which);
+  return kSomeJobsFailed;
+}
+
+}  // namespace cdtgpu

@@ -1,0 +1,82 @@
+// One `cdtgpu triangulate` run as data: its options, and what each stage (cli/stages.hpp) made of it. The single
+// run and `cdtgpu batch` (cli/batch.hpp) fill it by the same stage functions, in the same order.
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/cdt_cgal.hpp"
+#include "core/contours.hpp"
+#include "core/input_parts.hpp"
+#include "core/prepare.hpp"
+#include "core/projection.hpp"
+#include "core/raster.hpp"
+#include "core/stats.hpp"
+#include "gpu/contours.hpp"
+#include "gpu/raster.hpp"
+#include "io/readers.hpp"
+#include "io/writers.hpp"
+
+namespace cdtgpu {
+
+struct InputOptions {
+  std::vector<std::string> inputs;
+  ReadOptions read;
+  CrsRequest crs;
+};
+
+struct TriangulateOptions {
+  InputOptions input;
+  std::string output;        // "-" for stdout; empty: --tiles-out only
+  std::string format;        // empty: from the output's extension
+  WriteOptions write;
+  std::string backend = "auto";  // auto (default: cli/gpu_start.hpp), gpu or cgal (the CPU reference)
+  std::string device;           // Vulkan device override for the gpu backend
+  std::string stats_path;    // empty: none
+  std::string grid_out;      // ESRI ASCII grid of the TIN (core/raster.hpp); empty: none
+  double cell = 1.0;         // its cell size
+  std::string contours_out;  // contour lines as WKT (core/contours.hpp); empty: none
+  double interval = 10.0;    // their interval
+  std::string preview;       // hillshaded PNG of the TIN (core/hillshade.hpp); empty: none
+  double max_edge = 0;       // > 0: concave-hull trimming (core/regions.hpp)
+  int64_t max_tile_points = -1;  // tiles of at most this many points (core/tiles.hpp); 0: never; -1: auto
+  std::string tiles_out;         // the mesh as one file per tile plus index.geojson (io/tiles_dir.hpp); empty: none
+};
+
+class GpuStart;
+
+struct Job {
+  TriangulateOptions options;
+  bool stage_progress = true;  // a progress line per long stage on a terminal (a batch draws its own)
+  std::string stats_copy;      // a second --stats file (batch --stats-dir); empty: none
+
+  // check_job
+  WriteOptions write;                   // with the format decided
+  std::vector<std::string> input_paths;  // the inputs without their :key=value options
+  std::vector<std::string> outputs;      // every file the run writes (checked against the inputs)
+  RunStats stats;
+
+  // read_job, prepare_job
+  InputSet in;
+  std::vector<InputPart> parts;  // what each input added, with its role and z rule
+  Crs crs;
+  PreparedInput prepared;
+
+  // choose_backend
+  bool want_gpu = false;
+  std::string backend_reason;
+  GpuStart* start = nullptr;  // the GPU's start, once asked for
+
+  // triangulate_job (gpu: the device ran it; the raster and contour passes then run there too)
+  CdtResult result;
+  bool gpu = false;
+  std::optional<gpu::GpuRasteriser> gpu_raster;
+  std::optional<gpu::GpuContourer> gpu_contours;
+
+  // derive_outputs
+  std::optional<Raster> grid, preview;
+  std::vector<Contour> contours;
+};
+
+}  // namespace cdtgpu

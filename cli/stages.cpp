@@ -1,0 +1,454 @@
+#include "cli/stages.hpp"
+
+#include <chrono>
+#include <future>
+#include <optional>
+#include <thread>
+
+#include <spdlog/spdlog.h>
+
+#include "cli/progress.hpp"
+#include "core/cdt_cgal.hpp"
+#include "core/drape.hpp"
+#include "core/error.hpp"
+#include "core/hillshade.hpp"
+#include "core/regions.hpp"
+#include "core/resolve.hpp"
+#include "core/tiles.hpp"
+#include "gpu/cdt_pipeline.hpp"
+#include "gpu/check.hpp"
+#include "gpu/tile_triangulator.hpp"
+#include "gpu/tin.hpp"
+#include "io/atomic_file.hpp"
+#include "io/gis_writers.hpp"
+#include "io/input_spec.hpp"
+#include "io/output_guard.hpp"
+#include "io/tiles_dir.hpp"
+#include "io/write_png.hpp"
+
+namespace cdtgpu {
+namespace {
+
+// Times a stage; a stage over a second gets a progress line on a terminal and a log line even without -v.
+template <class F>
+auto timed(Job& job, const std::string& name, F&& f) {
+  std::optional<Progress> progress;
+  if (job.stage_progress) progress.emplace(name);
+  auto t0 = std::chrono::steady_clock::now();
+  auto finish = [&] {
+    progress.reset();
+    double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    job.stats.stage_ms.emplace_back(name, ms);
+    spdlog::log(ms > 1000 ? spdlog::level::info : spdlog::level::debug, "{}: {:.1f} ms", name, ms);
+  };
+  if constexpr (std::is_void_v<decltype(f())>) {
+    f();
+    finish();
+  } else {
+    auto r = f();
+    finish();
+    return r;
+  }
+}
+
+uint64_t point_count(const InputSet& in) {
+  uint64_t n = in.points.size();
+  for (const Polyline& line : in.lines) n += line.points.size();
+  return n;
+}
+
+bool hardware_only(const TriangulateOptions& o) { return o.backend == "auto" && o.device.empty(); }
+
+// Why auto left the GPU for the CPU part-way (stats backend_reason, and a warning).
+std::string gpu_refused(const gpu::DeviceError& e) {
+  return std::string("the GPU could not take this input (") + e.what() +
+         "): the CPU backend computes the same triangulation";
+}
+
+// The tiled CDT (core/tiles) of a resolved input, its figures in the stats.
+// in_flight: tiles worked on at once (0: as many as the cores take; a device's: 2, core/tiles.hpp).
+CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
+                               const TileTriangulator& triangulate, unsigned in_flight = 0) {
+  TileOptions opt;
+  opt.max_tile_points = tile_points;
+  opt.tiles_in_flight = in_flight;
+  TileStats ts;
+  CdtResult r = timed(job, "triangulate: tiles and merge", [&] {
+    return triangulate_tiled(std::move(in), opt, triangulate, &ts);
+  });
+  job.stats.stage_ms.emplace_back("triangulate: tiles", ts.tiles_ms);
+  job.stats.stage_ms.emplace_back("triangulate: merge", ts.merge_ms);
+  auto& c = job.stats.counts;
+  c["tile_points"] = tile_points;
+  c["tiles"] = ts.tiles;
+  c["tile_levels"] = ts.levels;
+  c["tile_final_triangles"] = ts.final_triangles;
+  c["merge_vertices"] = ts.merge_vertices;
+  c["merge_segments"] = ts.merge_segments;
+  c["merge_triangles"] = ts.merge_triangles;
+  spdlog::info("{} tiles of at most {} points in {} level(s): {} triangles final in their tiles, a merge of {} "
+               "vertices and {} segments gave {}", ts.tiles, tile_points, ts.levels, ts.final_triangles,
+               ts.merge_vertices, ts.merge_segments, ts.merge_triangles);
+  return r;
+}
+
+// The CPU backend: the reference CDT in one piece, or tiles on every core (`--max-tile-points`, or auto: core/tiles'
+// auto_cpu_tile_points). Both give the same bytes.
+CdtResult triangulate_cpu(Job& job) {
+  const uint64_t n = job.prepared.vertices.size();
+  const int64_t max_tile_points = job.options.max_tile_points;
+  const uint64_t tile = max_tile_points >= 0 ? uint64_t(max_tile_points)
+                                             : auto_cpu_tile_points(n, std::thread::hardware_concurrency());
+  if (tile < 3 || n <= tile) return triangulate_cgal(job.prepared);
+  ResolvedInput in = timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); });
+  return triangulate_in_tiles(job, std::move(in), tile, cgal_tile_triangulator());
+}
+
+// The GPU's tile size: `--max-tile-points`, or auto: tiles only for an input beyond what the device holds.
+uint64_t gpu_tile_points(const gpu::Context& ctx, uint64_t vertices, int64_t max_tile_points) {
+  if (max_tile_points >= 0) return uint64_t(max_tile_points);
+  const uint64_t limit = gpu::max_tile_points(ctx);
+  return vertices > limit ? limit : 0;
+}
+
+// The GPU backend on a started device, the CPU's resolve stage running on other threads meanwhile.
+CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const double& resolve_ms) {
+  RunStats& stats = job.stats;
+  GpuStart& start = *job.start;
+  gpu::GpuCdt& cdt = start.cdt();
+  stats.stage_ms.emplace_back("gpu start: context (own thread)", start.context_ms);
+  stats.stage_ms.emplace_back("gpu start: pipelines queued (own thread)", start.pipelines_ms);
+  stats.stage_ms.emplace_back("gpu start: staging memory (own thread)", start.staging_ms);
+  stats.device = start.context().info.name;
+  spdlog::debug("device: {} ({} {})", stats.device, start.context().info.driver_name,
+                start.context().info.driver_info);
+  // With the GPU backend, grids (and the preview's grid) and contour lines are made on the GPU too, with the
+  // CPU's values bit for bit. Their pipelines are asked for now, so they compile while the CDT runs.
+  const TriangulateOptions& options = job.options;
+  if (!options.grid_out.empty() || !options.preview.empty()) job.gpu_raster.emplace(start.context(), cdt.primitives());
+  if (!options.contours_out.empty()) job.gpu_contours.emplace(start.context(), cdt.primitives());
+  // Called in a DeviceError's handler. Auto: the CPU computes the same triangulation (a device too small for
+  // the input, or out of memory); a forced GPU rethrows.
+  auto on_cpu_instead = [&](const gpu::DeviceError& e) {
+    if (options.backend == "gpu") throw;
+    stats.backend = "cgal";
+    stats.backend_reason = gpu_refused(e);
+    spdlog::warn("{}", stats.backend_reason);
+    job.gpu = false;
+    job.gpu_raster.reset();
+    job.gpu_contours.reset();
+    return triangulate_cpu(job);
+  };
+  const uint64_t tile = gpu_tile_points(start.context(), job.prepared.vertices.size(), options.max_tile_points);
+  if (tile >= 3 && job.prepared.vertices.size() > tile) {
+    ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
+    stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+    try {
+      return triangulate_in_tiles(job, std::move(in), tile, gpu::gpu_tile_triangulator(cdt), 2);
+    } catch (const gpu::DeviceError& e) {
+      return on_cpu_instead(e);
+    }
+  }
+  gpu::GpuCdtStats gs;
+  CdtResult r;
+  try {
+    r = cdt.triangulate(job.prepared, std::move(resolving), &gs);
+  } catch (const gpu::DeviceError& e) {
+    return on_cpu_instead(e);
+  }
+  stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+  for (const auto& [name, ms] : gs.wall_ms) stats.stage_ms.emplace_back("triangulate: " + name, ms);
+  auto& g = stats.gpu_stage_ms;
+  for (const auto& [name, ms] : gs.gpu_ms) g[name] = (g.contains(name) ? g[name].get<double>() : 0.0) + ms;
+  g["total"] = gs.gpu_total_ms;
+  for (const auto& [name, ms] : gs.gpu_ms) spdlog::debug("gpu {}: {:.3f} ms", name, ms);
+  spdlog::debug("gpu total {:.2f} ms, peak device memory {} bytes", gs.gpu_total_ms, gs.peak_device_bytes);
+  stats.counts["constraint_splits_at_vertices"] = gs.split_at_vertices;
+  stats.counts["gpu_delaunay_rounds"] = gs.delaunay.rounds;
+  stats.counts["gpu_delaunay_built_twice"] = gs.delaunay_built_twice;
+  stats.counts["gpu_constraint_flip_rounds"] = gs.constraints.flip_rounds;
+  stats.counts["gpu_legalise_rounds"] = gs.constraints.legalise_rounds;
+  stats.counts["gpu_peak_device_bytes"] = gs.peak_device_bytes;
+  return r;
+}
+
+// A .prj beside a device, FIFO or /dev/stdout makes no sense (it would be /dev/stdout.prj): the CRS name in the
+// stream is all such an output gets.
+Crs crs_for(const Job& job, const std::string& path) {
+  Crs c = job.crs;
+  if (is_special_output(path)) c.wkt.clear();
+  return c;
+}
+
+}  // namespace
+
+void check_job(Job& job) {
+  const TriangulateOptions& options = job.options;
+  job.write = options.write;
+  if (options.output.empty() && options.tiles_out.empty())
+    throw UsageError("no output: give -o FILE (or - for stdout) and/or --tiles-out DIR");
+  if (!options.format.empty())
+    job.write.format = parse_format(options.format);
+  else if (options.output == "-")
+    throw UsageError("writing to stdout needs --format (obj, ply, wkt, landxml or 2dm)");
+  else if (!options.output.empty())
+    job.write.format = format_from_extension(options.output);
+  if (options.backend != "auto" && options.backend != "gpu" && options.backend != "cgal")
+    throw UsageError("unknown backend '" + options.backend + "' (use auto, gpu or cgal)");
+  job.outputs = triangulate_outputs(options.output, options.stats_path);
+  if (!job.stats_copy.empty()) job.outputs.push_back(job.stats_copy);
+  if (!options.tiles_out.empty()) job.outputs.push_back(tiles_dir_path(options.tiles_out));  // checked like a file
+  for (const std::string* extra : {&options.grid_out, &options.contours_out, &options.preview})
+    if (!extra->empty()) job.outputs.push_back(*extra);  // their .prj files hold the mesh's CRS and may be its .prj
+  job.input_paths.clear();
+  for (const std::string& arg : options.input.inputs) job.input_paths.push_back(parse_input_spec(arg).path);
+  check_outputs_spare_inputs(job.input_paths, job.outputs);
+}
+
+// The GPU starts on its own thread while the inputs are read: forced, or when auto may pick it (the files are
+// large enough to hold auto_min_points() points).
+void start_gpu_early(Job& job, GpuStarts& gpus) {
+  const TriangulateOptions& options = job.options;
+  const uint64_t estimate = options.backend != "cgal" ? estimate_input_points(job.input_paths) : 0;
+  spdlog::debug("about {} input points in the files", estimate);
+  if (options.backend == "gpu" || (options.backend == "auto" && estimate >= auto_min_points()))
+    job.start = &gpus.start(options.device, hardware_only(options), estimate);
+}
+
+// Read and projected; what prepare_job needs next.
+void read_job(Job& job) {
+  std::vector<InputSpec> specs;
+  for (const std::string& arg : job.options.input.inputs) specs.push_back(parse_input_spec(arg));
+  timed(job, "read", [&] { job.parts = read_inputs(specs, job.options.input.read, job.in); });
+  job.crs = choose_crs(job.in, job.options.input.crs);
+  timed(job, "project", [&] { project(job.in, job.crs); });
+  const DrapeStats drape = timed(job, "drape", [&] { return apply_z_rules(job.in, job.parts); });
+  if (drape.draped_vertices)
+    spdlog::info("draped {} vertices ({} beyond the surface's hull took the z of its nearest edge)",
+                 drape.draped_vertices, drape.outside_surface);
+  job.stats.counts["draped_vertices"] = drape.draped_vertices;
+  uint64_t zero_z = 0;
+  for (size_t i = 0; i < drape.zero_z.size(); ++i)
+    if (drape.zero_z[i]) {
+      zero_z += drape.zero_z[i];
+      spdlog::info("{}: {} vertices have no z and get 0 (:z=drape drapes them, :z=0 says so)", specs[i].path,
+                   drape.zero_z[i]);
+    }
+  job.stats.counts["vertices_without_z"] = zero_z;
+}
+
+// Auto: the GPU from auto_min_points() points read. Started now if the files' estimate did not start it, so
+// that it overlaps prepare; a device named with --device is used as it is.
+void choose_backend(Job& job, GpuStarts& gpus) {
+  const TriangulateOptions& options = job.options;
+  const uint64_t min_points = auto_min_points();
+  const uint64_t n = point_count(job.in);
+  job.backend_reason = "--backend " + options.backend;
+  job.want_gpu = options.backend == "gpu";
+  if (options.backend == "auto") {
+    job.want_gpu = n >= min_points;
+    if (!job.want_gpu)
+      job.backend_reason = std::to_string(n) + " input points, fewer than " + std::to_string(min_points) +
+                           ": the CPU is faster than the GPU's start-up";
+    else if (!job.start)
+      job.start = &gpus.start(options.device, hardware_only(options), n);
+  }
+}
+
+// The merge stays on the CPU even when the device is ready: on all 16 cores of the H100 machine it took 31-44 ms
+// for 2.5M points, the GPU's (gpu/dedupe, the same result) ~59 ms with its transfers.
+void prepare_job(Job& job) {
+  job.prepared = timed(job, "prepare", [&] { return prepare(job.in, merge_points); });
+  spdlog::info("CRS: {}", job.crs.name);
+
+  const Repairs& r = job.in.repairs;
+  const PreparedInput& p = job.prepared;
+  if (p.merged_duplicates)
+    spdlog::info("merged {} duplicate points into existing vertices", p.merged_duplicates);
+  if (p.z_conflicts)
+    spdlog::warn("{} merged points had different z (largest difference {}): the first one read was kept",
+                 p.z_conflicts, p.max_z_conflict);
+  if (p.duplicate_segments) spdlog::info("{} repeated constraint segments counted once", p.duplicate_segments);
+  if (r.repeated_vertices) spdlog::info("repaired {} repeated vertices (zero-length segments)", r.repeated_vertices);
+  if (r.rings_closed) spdlog::info("closed {} rings that did not end at their first vertex", r.rings_closed);
+  if (r.degenerate_lines) spdlog::info("{} lines with a single distinct vertex kept as points", r.degenerate_lines);
+  if (r.null_shapes) spdlog::info("skipped {} NULL shapes (no geometry)", r.null_shapes);
+  if (r.nodata_cells) spdlog::info("skipped {} NODATA grid cells", r.nodata_cells);
+
+  auto& c = job.stats.counts;
+  c["input_points"] = p.input_points;
+  c["merged_duplicates"] = p.merged_duplicates;
+  c["z_conflicts"] = p.z_conflicts;
+  c["input_segments"] = p.input_segments;
+  c["duplicate_segments"] = p.duplicate_segments;
+  c["constraints"] = p.constraints.size();
+  c["repeated_vertices_removed"] = r.repeated_vertices;
+  c["rings_closed"] = r.rings_closed;
+  c["degenerate_lines"] = r.degenerate_lines;
+  c["null_shapes"] = r.null_shapes;
+  c["nodata_cells"] = r.nodata_cells;
+  job.stats.crs = job.crs.name;
+  job.stats.crs_epsg = job.crs.epsg;
+}
+
+// The GPU is waited for as late as possible, so that its start (~160 ms on the H100 machine) overlaps the CPU's
+// work: reading, the duplicate merge and resolving the constraints. Auto falls back to the CPU when the start
+// fails or the device refuses the input; a forced GPU throws.
+void triangulate_job(Job& job) {
+  RunStats& stats = job.stats;
+  stats.backend = "cgal";
+  // The GPU path's CPU resolve stage starts now, on other threads, beside the device's start and then the
+  // Delaunay build (gpu::GpuCdt::triangulate waits for it where it needs the constraints).
+  double resolve_ms = 0;
+  std::future<ResolvedInput> resolving;
+  if (job.want_gpu)
+    resolving = std::async(std::launch::async, [&] {
+      const auto t0 = std::chrono::steady_clock::now();
+      ResolvedInput r = resolve_constraints(job.prepared);
+      resolve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      return r;
+    });
+  job.result = timed(job, "triangulate", [&] {
+    if (job.want_gpu) {
+      timed(job, "triangulate: gpu start wait", [&] {
+        try {
+          job.start->cdt();
+          job.gpu = true;
+          if (job.options.backend == "auto")
+            job.backend_reason = std::to_string(point_count(job.in)) + " input points on a GPU";
+        } catch (const gpu::DeviceError& e) {
+          if (job.options.backend == "gpu") throw;
+          job.backend_reason = std::string("no GPU to use (") + e.what() + ")";
+        }
+      });
+    }
+    stats.backend = job.gpu ? "gpu" : "cgal";
+    stats.backend_reason = job.backend_reason;
+    spdlog::debug("backend {}: {}", stats.backend, job.backend_reason);
+    return job.gpu ? triangulate_gpu(job, resolving, resolve_ms) : triangulate_cpu(job);
+  });
+}
+
+void apply_job_regions(Job& job) {
+  const RegionRules rules = region_rules(job.in, job.parts, job.prepared, job.options.max_edge);
+  const RegionStats rs = timed(job, "regions", [&] { return apply_regions(job.result.mesh, job.prepared, rules); });
+  if (rs.triangles_outside || rs.triangles_trimmed)
+    spdlog::info("dropped {} triangles outside boundaries or inside holes, {} by --max-edge", rs.triangles_outside,
+                 rs.triangles_trimmed);
+  job.stats.counts["triangles_outside_regions"] = rs.triangles_outside;
+  job.stats.counts["triangles_trimmed"] = rs.triangles_trimmed;
+  job.stats.counts["vertices_outside_regions"] = rs.vertices_removed;
+  if (job.result.mesh.triangles.empty())
+    spdlog::warn(rs.triangles_outside || rs.triangles_trimmed
+                     ? "no triangles: boundaries, holes and --max-edge dropped them all"
+                     : "no triangles: fewer than 3 distinct points, or all points collinear");
+}
+
+// Derived outputs are computed before anything is written: a grid that cannot be made writes nothing. The
+// device's part ends here (its buffers are freed), so that a batch writes this job while the next one runs there.
+void derive_outputs(Job& job) {
+  const TriangulateOptions& options = job.options;
+  const Mesh& mesh = job.result.mesh;
+  std::optional<gpu::DeviceTin> tin;  // the final mesh on the device, uploaded once for all of them
+  auto device_tin = [&]() -> const gpu::DeviceTin& {
+    if (!tin) tin = timed(job, "tin upload", [&] { return gpu::upload_tin(job.start->context(), mesh); });
+    return *tin;
+  };
+  // A device that cannot hold the work (a mesh or a grid row beyond its buffer range) leaves it to the CPU,
+  // whose result is the same.
+  auto on_cpu = [&](const gpu::DeviceError& e, const char* what) {
+    spdlog::warn("{} on the CPU: {}", what, e.what());
+    job.stats.stage_ms.emplace_back(std::string(what) + ": on the CPU after a device refusal", 0.0);
+  };
+  auto grid_of = [&](double cell, const char* name) {
+    const GridSpec spec = grid_for(mesh, cell);
+    if (job.gpu_raster) try {
+        Raster r = job.gpu_raster->rasterise(device_tin(), spec);
+        job.stats.gpu_stage_ms[name] = job.gpu_raster->gpu_ms;
+        return r;
+      } catch (const gpu::DeviceError& e) {
+        on_cpu(e, name);
+      }
+    return rasterise(mesh, spec);
+  };
+  if (!options.grid_out.empty()) job.grid = timed(job, "grid", [&] { return grid_of(options.cell, "grid"); });
+  if (!options.contours_out.empty())
+    job.contours = timed(job, "contours", [&] {
+      if (job.gpu_contours) try {
+          std::vector<Contour> lines = job.gpu_contours->lines(device_tin(), mesh, options.interval);
+          job.stats.gpu_stage_ms["contours"] = job.gpu_contours->gpu_ms;
+          job.stats.stage_ms.emplace_back("contours: host sort and chaining", job.gpu_contours->chain_ms);
+          return lines;
+        } catch (const gpu::DeviceError& e) {
+          on_cpu(e, "contours");
+        }
+      return contour_lines(mesh, options.interval);
+    });
+  if (!options.preview.empty())
+    job.preview = timed(job, "preview", [&] { return grid_of(preview_cell(mesh, 1000), "preview"); });
+  tin.reset();
+  job.gpu_raster.reset();
+  job.gpu_contours.reset();
+}
+
+void write_outputs(Job& job) {
+  const TriangulateOptions& options = job.options;
+  timed(job, "write", [&] {
+    if (!options.output.empty())
+      write_mesh_file(job.result.mesh, crs_for(job, options.output), job.write, options.output);
+    if (!options.tiles_out.empty()) {
+      // Pieces as large as the run's tiles, else a million points a file.
+      const uint64_t piece = options.max_tile_points > 0 ? uint64_t(options.max_tile_points) : 1'000'000;
+      const std::vector<MeshPiece> pieces = split_mesh(job.result.mesh, piece);
+      write_tiles_dir(pieces, job.crs, job.write, options.tiles_out);
+      job.stats.counts["tile_files"] = pieces.size();
+    }
+    if (job.grid) write_ascii_grid_file(*job.grid, crs_for(job, options.grid_out), options.grid_out);
+    if (!options.contours_out.empty())
+      write_contours_wkt_file(job.contours, crs_for(job, options.contours_out), options.contours_out);
+    if (job.preview) {
+      std::vector<uint8_t> rgba = hillshade_rgba(*job.preview);
+      draw_edges(rgba, job.preview->spec, job.prepared.vertices, job.prepared.constraints);
+      write_png_file(options.preview, job.preview->spec.ncols, job.preview->spec.nrows, rgba);
+    }
+  });
+}
+
+void count_results(Job& job) {
+  auto& c = job.stats.counts;
+  const CdtResult& result = job.result;
+  if (job.grid) c["grid_cells"] = job.grid->z.size();
+  if (!job.options.contours_out.empty()) c["contour_lines"] = job.contours.size();
+  c["steiner_points"] = result.steiner_points;
+  c["vertices"] = result.mesh.vertices.size();
+  c["triangles"] = result.mesh.triangles.size();
+  spdlog::info("{} vertices, {} triangles ({} constraints, {} Steiner points)", result.mesh.vertices.size(),
+               result.mesh.triangles.size(), job.prepared.constraints.size(), result.steiner_points);
+  if (job.gpu) {
+    // Both are the process's totals: in a batch, every job's so far.
+    job.stats.stage_ms.emplace_back("triangulate: pipeline waits", gpu::pipeline_wait_ms());
+    job.stats.stage_ms.emplace_back("gpu: memory allocation and release (all threads)", gpu::memory_ms());
+    spdlog::debug("gpu memory allocation and release: {:.1f} ms (all threads)", gpu::memory_ms());
+  }
+}
+
+void release_job(Job& job, GpuStarts* exiting) {
+  timed(job, "release", [&] {
+    if (exiting) exiting->leave_for_exit();
+    job.in = InputSet{};
+    job.parts = {};
+    job.prepared = PreparedInput{};
+    job.result = CdtResult{};
+    job.grid.reset();
+    job.preview.reset();
+    job.contours = {};
+  });
+}
+
+void write_job_stats(const Job& job) {
+  for (const std::string* path : {&job.options.stats_path, &job.stats_copy})
+    if (!path->empty())
+      write_file_atomically(*path, [&](std::ostream& out) { out << job.stats.to_json().dump(2) << '\n'; });
+}
+
+}  // namespace cdtgpu

@@ -1,0 +1,44 @@
+// The stages of one `cdtgpu triangulate` run, each a function of the Job (cli/job.hpp) that fills in what it
+// made. run_triangulate (cli/run.cpp) calls them in a row; cdtgpu batch (cli/batch.cpp) calls the same ones on
+// three threads, so that reading one job and writing another overlap the triangulation of a third.
+//
+//   Job job{options};
+//   GpuStarts gpus;                 // one Vulkan device for every job of the process
+//   check_job(job);                 // usage errors before anything is read
+//   start_gpu_early(job, gpus);     // large files: the device starts while they are read
+//   read_job(job);                  // read, project, drape
+//   choose_backend(job, gpus);      // auto: by the points read
+//   prepare_job(job);               // duplicates merged, segments indexed
+//   triangulate_job(job);           // CGAL, the GPU, or tiles of either        } the device's stages: one
+//   apply_job_regions(job);         // boundaries, holes, --max-edge            } job at a time in a batch
+//   derive_outputs(job);            // grid, contours, preview's raster         }
+//   write_outputs(job);             // mesh, tiles, grid, contours, preview
+//   count_results(job);             // the last counts into job.stats
+//   release_job(job);
+//   write_job_stats(job);           // --stats
+//
+// Every stage times itself into job.stats.stage_ms under the name the stats have always used. Bad input throws
+// InputError / UsageError, a device that fails a forced GPU run throws gpu::DeviceError; auto falls back to the
+// CPU with the same bytes.
+#pragma once
+#include "cli/gpu_start.hpp"
+#include "cli/job.hpp"
+
+namespace cdtgpu {
+
+void check_job(Job& job);
+void start_gpu_early(Job& job, GpuStarts& gpus);
+void read_job(Job& job);
+void choose_backend(Job& job, GpuStarts& gpus);
+void prepare_job(Job& job);
+void triangulate_job(Job& job);
+void apply_job_regions(Job& job);
+void derive_outputs(Job& job);
+void write_outputs(Job& job);
+void count_results(Job& job);
+// Frees the job's data (timed as "release"); `exiting`: the process ends after this job, so the GPU's
+// pipelines are saved and the device is left to the operating system (GpuStart::leave_for_exit).
+void release_job(Job& job, GpuStarts* exiting = nullptr);
+void write_job_stats(const Job& job);
+
+}  // namespace cdtgpu

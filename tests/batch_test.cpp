@@ -1,0 +1,284 @@
+// cdtgpu batch end to end: the binary on job files, each job's outputs compared with its own `cdtgpu triangulate`.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string err;
+};
+
+class Batch : public ::testing::Test {
+ public:
+  fs::path dir;
+
+  // A folder name with a space, so that every job line needs its quoting.
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("cdtgpu_batch_" + std::to_string(::getpid()) + "_" +
+                                       ::testing::UnitTest::GetInstance()->current_test_info()->name()) /
+          "with space";
+    fs::remove_all(dir.parent_path());
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir.parent_path()); }
+
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+  // The path with a backslash before each space, the third way a job line (and a shell) can keep it one word.
+  std::string backslashed(const std::string& name) const {
+    std::string p;
+    for (char c : path(name)) p += c == ' ' ? std::string("\\ ") : std::string(1, c);
+    return p;
+  }
+  // The path in single quotes, as a shell and a job line both read it.
+  std::string q(const std::string& name) const { return "'" + path(name) + "'"; }
+
+  void write(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name), std::ios::binary) << text;
+  }
+
+  static std::string slurp(const std::string& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+  }
+
+  // In `dir`. `args` go through /bin/sh, so a job line's quoting means the same here as in a job file.
+  Result run(const std::string& args, const std::string& stdin_from = "/dev/null") const {
+    const std::string err = path("stderr.txt");
+    const std::string cmd = "cd " + q("") + " && " + CDTGPU_BINARY + " " + args + " <'" + stdin_from +
+                            "' >/dev/null 2>'" + err + "'";
+    const int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err)};
+  }
+
+  nlohmann::json stats(const std::string& name) const { return nlohmann::json::parse(slurp(path(name))); }
+
+  // 400 jittered DEM points, two lines and a building ring in projected metres; a boundary, a lake and a house
+  // for the regions; a small ESRI ASCII grid.
+  void write_inputs() const {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(0, 1);
+    std::ostringstream xyz;
+    xyz << "x,y,z\n";
+    for (int i = 0; i < 20; ++i)
+      for (int j = 0; j < 20; ++j)
+        xyz << 500000 + i * 10 + u(rng) << ',' << 6000000 + j * 10 + u(rng) << ',' << 100 + i + j * 0.5 << '\n';
+    write("dem.csv", xyz.str());
+    write("lines.wkt",
+          "LINESTRING Z (500005 6000005 110, 500100 6000050 111, 500185 6000180 112)\n"
+          "POLYGON Z ((500120 6000020 130, 500140 6000020 130, 500140 6000040 130, 500120 6000040 130, "
+          "500120 6000020 130))\n");
+    write("area.wkt", "POLYGON ((500030 6000030, 500170 6000030, 500170 6000170, 500030 6000170, 500030 6000030))\n");
+    write("lake.wkt", "POLYGON ((500060 6000060, 500090 6000060, 500090 6000090, 500060 6000090, 500060 6000060))\n");
+    write("house.wkt", "POLYGON ((500150.5 6000100.5, 500160.5 6000100.5, 500160.5 6000110.5, 500150.5 6000110.5))\n");
+    std::ostringstream asc;
+    asc << "ncols 12\nnrows 9\nxllcorner 501000\nyllcorner 6001000\ncellsize 5\nNODATA_value -9999\n";
+    for (int r = 0; r < 9; ++r) {
+      for (int c = 0; c < 12; ++c) asc << (r == 4 && c == 4 ? -9999.0 : 50 + r * 0.75 + c * c * 0.1) << ' ';
+      asc << '\n';
+    }
+    write("grid.asc", asc.str());
+  }
+
+  void write_jobs(const std::string& name, const std::vector<std::string>& lines) const {
+    std::string text;
+    for (const std::string& l : lines) text += l + "\n";
+    write(name, text);
+  }
+};
+
+// One job's arguments, its output files named after `prefix` (what a single run and a batch write must match).
+struct JobSpec {
+  std::function<std::string(const std::string&)> args;
+  std::vector<std::string> outputs;  // file names after the prefix
+};
+
+// Several jobs mixing formats, options, regions, --max-edge, tiles, grid, contours and preview, and both
+// backends (the GPU on whatever device there is; lavapipe in CI): the batch writes every job's bytes and
+// --stats counts as the jobs run one by one, and --stats-dir keeps a copy of each job's stats.
+TEST_F(Batch, JobsWriteTheBytesOfTheirSingleRuns) {
+  write_inputs();
+  const std::string s = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
+  const std::string terrain = q("dem.csv") + " " + q("lines.wkt");
+  const std::vector<JobSpec> jobs = {
+      {[&](const std::string& p) {
+         return "'" + s + "contours.shp:z=ELEV' " + s + "dem.xyz " + s + "buildings.shp:z=min -o " +
+                q(p + "sample.ply") + " --grid-out " + q(p + "sample.asc") + " --cell 10 --contours-out " +
+                q(p + "sample.wkt") + " --interval 20 --preview " + q(p + "sample.png");
+       },
+       {"sample.ply", "sample.prj", "sample.asc", "sample.wkt", "sample.png"}},
+      {[&](const std::string& p) {
+         return q("dem.csv") + " " + q("area.wkt") + ":role=boundary " + q("lake.wkt") + ":role=hole " +
+                q("house.wkt") + ":z=drape --max-edge 50 -o " + q(p + "regions.obj");
+       },
+       {"regions.obj", "regions.prj"}},  // no .prj in either: WKT has no CRS
+      {[&](const std::string& p) {
+         return terrain + " --backend gpu -o " + q(p + "gpu.wkt") + " --grid-out " + q(p + "gpu.asc") +
+                " --cell 2.5 --contours-out " + q(p + "gpu-contours.geojson") + " --interval 2";
+       },
+       {"gpu.wkt", "gpu.asc", "gpu-contours.geojson"}},
+      {[&](const std::string& p) { return q("grid.asc") + " -o " + q(p + "grid.2dm"); }, {"grid.2dm", "grid.prj"}},
+      {[&](const std::string& p) {
+         return terrain + " --backend cgal --max-tile-points 100 --ascii -o " + q(p + "tiled.ply");
+       },
+       {"tiled.ply"}},
+      {[&](const std::string& p) { return q("dem.csv") + " --backend gpu --crs none -o " + q(p + "gpu2.ply"); },
+       {"gpu2.ply"}},
+  };
+  std::vector<std::string> lines{"# six jobs, each also run on its own", ""};
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    const std::string n = std::to_string(i);
+    Result r = run("triangulate " + jobs[i].args("single-") + " -q --stats " + q("single-" + n + ".json"));
+    ASSERT_EQ(r.code, 0) << i << ": " << r.err;
+    // With or without the command's name first.
+    lines.push_back((i == 0 ? "triangulate " : "") + jobs[i].args("batch-") + " --stats " + q("batch-" + n + ".json"));
+  }
+  write_jobs("jobs.txt", lines);
+  Result b = run("batch " + q("jobs.txt") + " --stats-dir " + q("stats dir"));
+  ASSERT_EQ(b.code, 0) << b.err;
+  for (size_t i = 0; i < jobs.size(); ++i) {
+    const std::string n = std::to_string(i);
+    for (const std::string& out : jobs[i].outputs) {
+      ASSERT_EQ(fs::exists(path("batch-" + out)), fs::exists(path("single-" + out))) << out;
+      EXPECT_TRUE(slurp(path("single-" + out)) == slurp(path("batch-" + out))) << out;
+    }
+    nlohmann::json single = stats("single-" + n + ".json"), batch = stats("batch-" + n + ".json");
+    // Its line in the file: two lines before the first job.
+    EXPECT_EQ(slurp(path("batch-" + n + ".json")), slurp(path("stats dir/" + std::to_string(i + 3) + ".json")));
+    EXPECT_EQ(batch["backend"], single["backend"]) << n;
+    EXPECT_EQ(batch["crs"], single["crs"]) << n;
+    // The device's scratch buffers stay allocated from one job to the next (that is much of what a batch saves),
+    // so the second GPU job's peak device memory counts what the first left there.
+    if (i == 5) {
+      EXPECT_GE(batch["counts"]["gpu_peak_device_bytes"], single["counts"]["gpu_peak_device_bytes"]);
+      batch["counts"].erase("gpu_peak_device_bytes");
+      single["counts"].erase("gpu_peak_device_bytes");
+    }
+    EXPECT_EQ(batch["counts"], single["counts"]) << n;
+    EXPECT_NE(b.err.find("line " + std::to_string(i + 3) + ": ok, "), std::string::npos) << b.err;
+  }
+  EXPECT_EQ(stats("batch-2.json")["backend"], "gpu");
+  EXPECT_EQ(stats("batch-2.json")["device"], stats("batch-5.json")["device"]);
+  EXPECT_NE(b.err.find("batch: 6 jobs, all ok"), std::string::npos) << b.err;
+}
+
+// A missing input, an unknown option, a quote left open and a device that does not exist: each named with its
+// line, the other jobs written, the failing job's old output untouched, exit code 4.
+TEST_F(Batch, BadLinesAreReportedAndTheOthersRun) {
+  write_inputs();
+  write("keep.ply", "old bytes");
+  write_jobs("jobs.txt", {
+                             q("dem.csv") + " -o " + q("good1.ply"),
+                             q("missing.xyz") + " -o " + q("keep.ply"),
+                             q("dem.csv") + " -o " + q("x.ply") + " --no-such-option",
+                             q("dem.csv") + " -o '" + path("y.ply"),
+                             q("dem.csv") + " --backend gpu --device no-such-gpu -o " + q("dev.ply"),
+                             "triangulate " + q("dem.csv") + " -o " + q("good2.ply"),
+                         });
+  Result r = run("batch " + q("jobs.txt") + " --stats-dir " + q("stats"));
+  EXPECT_EQ(r.code, 4) << r.err;
+  EXPECT_TRUE(fs::exists(path("good1.ply")));
+  EXPECT_TRUE(fs::exists(path("good2.ply")));
+  EXPECT_EQ(slurp(path("keep.ply")), "old bytes");
+  for (const char* name : {"x.ply", "y.ply", "dev.ply", "stats/2.json", "stats/3.json", "stats/4.json",
+                           "stats/5.json"})
+    EXPECT_FALSE(fs::exists(path(name))) << name;
+  EXPECT_TRUE(fs::exists(path("stats/1.json")));
+  EXPECT_TRUE(fs::exists(path("stats/6.json")));
+  size_t keep_files = 0;
+  for (auto& e : fs::directory_iterator(dir)) keep_files += e.path().filename().string().rfind("keep", 0) == 0;
+  EXPECT_EQ(keep_files, 1u) << "temporary file left behind";
+  for (const std::string& expect : {"line 2: " + path("missing.xyz"), std::string("line 3: "),
+                                    std::string("--no-such-option"), std::string("line 4: a single quote is not closed"),
+                                    std::string("line 5: "), std::string("no-such-gpu"),
+                                    std::string("line 5: failed (exit code 3)"),
+                                    std::string("line 2: failed (exit code 2)"), std::string("line 1: ok"),
+                                    std::string("line 6: ok"), std::string("4 of 6 jobs failed (lines 2, 3, 4, 5)")})
+    EXPECT_NE(r.err.find(expect), std::string::npos) << expect << "\n" << r.err;
+
+  Result none = run("batch " + q("no-jobs.txt"));
+  EXPECT_EQ(none.code, 2);
+  EXPECT_NE(none.err.find("no-jobs.txt: cannot read the job file"), std::string::npos) << none.err;
+}
+
+// Jobs on stdin, with comments, blank lines, CRLF line ends and each kind of quoting; the batch's --backend
+// applies to lines without their own.
+TEST_F(Batch, JobsFromStdinWithCommentsAndQuoting) {
+  write_inputs();
+  const std::string d = path("");
+  write("jobs.txt",
+        "# comment line\n"
+        "\n"
+        "   \t\n"
+        "triangulate \"" + d + "dem.csv\" -o \"" + d + "double \\\"quoted\\\".ply\" -q   # a comment after a job\r\n" +
+        "'" + d + "dem.csv' -o " + backslashed("back slash.obj") +
+        " --backend gpu --stats '" + d + "b.json'\n" +
+        "'" + d + "lines.wkt' -o '" + d + "it'\\''s.wkt' --stats '" + d + "c.json'\n");
+  Result r = run("batch - --backend cgal --stats-dir " + q("sd"), path("jobs.txt"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(path("double \"quoted\".ply")));
+  ASSERT_TRUE(fs::exists(path("back slash.obj")));
+  ASSERT_TRUE(fs::exists(path("it's.wkt")));
+  EXPECT_EQ(stats("sd/4.json")["backend"], "cgal");
+  EXPECT_EQ(stats("b.json")["backend"], "gpu");  // the line's own --backend
+  EXPECT_EQ(stats("c.json")["backend"], "cgal");
+  ASSERT_EQ(run("triangulate " + q("dem.csv") + " -q -o " + q("one.obj")).code, 0);
+  EXPECT_EQ(slurp(path("one.obj")), slurp(path("back slash.obj")));
+
+  // A job reading WKT from stdin while stdin holds the job list.
+  write("stdin-jobs.txt", "- -o '" + d + "s.ply'\n");
+  r = run("batch -", path("stdin-jobs.txt"));
+  EXPECT_EQ(r.code, 4);
+  EXPECT_NE(r.err.find("line 1: stdin holds the job list"), std::string::npos) << r.err;
+}
+
+// A job that reads what an earlier job writes waits for that write, whatever the overlap of their stages.
+TEST_F(Batch, ALaterJobReadsWhatAnEarlierJobWrote) {
+  write_inputs();
+  write_jobs("jobs.txt", {q("dem.csv") + " -o " + q("tin.ply") + " --contours-out " + q("contours.wkt") +
+                              " --interval 1",
+                          q("contours.wkt") + " -o " + q("from-contours.ply"),
+                          q("contours.wkt") + " " + q("grid.asc") + " -o " + q("both.obj")});
+  Result r = run("batch " + q("jobs.txt"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(run("triangulate " + q("contours.wkt") + " -q -o " + q("single.ply")).code, 0);
+  EXPECT_EQ(slurp(path("single.ply")), slurp(path("from-contours.ply")));
+  ASSERT_EQ(run("triangulate " + q("contours.wkt") + " " + q("grid.asc") + " -q -o " + q("single.obj")).code, 0);
+  EXPECT_EQ(slurp(path("single.obj")), slurp(path("both.obj")));
+}
+
+// samples/jobs.txt, the README's example, run from a folder that sees the repository's samples/: every job
+// runs, and its first job's mesh is its single run's and passes verify.
+TEST_F(Batch, TheBundledJobFileRuns) {
+  const std::string samples = std::string(CDTGPU_SOURCE_DIR) + "/samples";
+  fs::create_directory_symlink(samples, dir / "samples");
+  const std::string in = "samples/katoomba/contours.shp:z=ELEV samples/katoomba/dem.xyz "
+                         "samples/katoomba/buildings.shp:z=min";
+  Result r = run("batch samples/jobs.txt");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("batch: 4 jobs, all ok"), std::string::npos) << r.err;
+  ASSERT_EQ(run("triangulate " + in + " -q -o single.ply").code, 0);
+  const Result v = run("verify katoomba.ply " + in);
+  EXPECT_EQ(v.code, 0) << v.err;
+  for (const char* out : {"katoomba.ply", "katoomba.json", "katoomba dem only.obj", "katoomba.xml",
+                          "katoomba-dem.asc", "katoomba-contours.geojson", "katoomba holes.2dm"})
+    EXPECT_TRUE(fs::exists(path(out))) << out;
+  EXPECT_TRUE(slurp(path("katoomba.ply")) == slurp(path("single.ply")));
+}
+
+}  // namespace
