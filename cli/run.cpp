@@ -401,7 +401,7 @@ int run_triangulate(const TriangulateOptions& options) {
       write_tiles_dir(pieces, l.crs, write, options.tiles_out);
       stats.counts["tile_files"] = pieces.size();
     }
-    if (grid) write_ascii_grid_file(*grid, crs_for(options.grid_out), options.grid_out);
+    if (grid) write_grid_file(*grid, crs_for(options.grid_out), options.grid_out);
     if (!options.contours_out.empty())
       write_contours_wkt_file(contours, crs_for(options.contours_out), options.contours_out);
     if (preview) {
