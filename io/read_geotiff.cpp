@@ -190,12 +190,20 @@ int key(GTIF* gt, geokey_t k) {
   return GTIFKeyGetSHORT(gt, k, &v, 0, 1) == 1 ? int(v) : 0;
 }
 
-// Raster type and CRS from the GeoKeys. The CRS becomes source_crs_wkt when no input before set one.
+// Raster type and CRS from the GeoKeys (true: PixelIsPoint). The CRS becomes source_crs_wkt when no input
+// before set one. Damaged keys are an error.
 bool read_geokeys(tiff::Handle& h, const std::string& name, InputSet& in) {
-  GTIF* gt = tiff::geokeys(h);
-  if (!gt) {
-    spdlog::warn("{}: no GeoKeys ({}): PixelIsArea assumed, no CRS", name, h.message());
+  uint16_t n = 0;
+  uint16_t* directory = nullptr;
+  // GDAL writes none for a raster without a CRS: its tiepoint is then the corner (PixelIsArea).
+  if (!TIFFGetField(h.tif(), TIFFTAG_GEOKEYDIRECTORY, &n, &directory)) {
+    spdlog::info("{}: no GeoKeys: cells read as PixelIsArea, no CRS", name);
     return false;
+  }
+  GTIF* gt = tiff::geokeys(h);
+  if (!gt || !h.message().empty()) {
+    if (gt) GTIFFree(gt);
+    throw InputError(name, 0, "its GeoKeys cannot be read: " + h.message());
   }
   const int raster = key(gt, GTRasterTypeGeoKey), model = key(gt, GTModelTypeGeoKey);
   const int pcs = key(gt, ProjectedCSTypeGeoKey), gcs = key(gt, GeographicTypeGeoKey);
@@ -246,6 +254,19 @@ std::unique_ptr<unsigned char[]> decode(std::string_view bytes, const std::strin
       const uint64_t row0 = uint64_t(b / l.across) * l.block_h;
       const uint32_t rows = uint32_t(std::min<uint64_t>(l.block_h, l.height - row0));
       tmsize_t got = 0, want = 0;
+      int err = 0;
+      const uint64_t at = TIFFGetStrileOffsetWithErr(h->tif(), b, &err);
+      const uint64_t size = err ? 0 : TIFFGetStrileByteCountWithErr(h->tif(), b, &err);
+      if (err || at > bytes.size() || size > bytes.size() - at) {
+        std::lock_guard lock(mutex);
+        if (b < first_bad) {
+          first_bad = b;
+          why = err ? "its offset or byte count cannot be read"
+                    : "its " + std::to_string(size) + " bytes at offset " + std::to_string(at) +
+                          " run past the end of the file (" + std::to_string(bytes.size()) + " bytes): truncated";
+        }
+        continue;
+      }
       if (!l.tiled) {
         want = tmsize_t(rows * row_bytes);
         got = TIFFReadEncodedStrip(h->tif(), b, image.get() + row0 * row_bytes, want);
