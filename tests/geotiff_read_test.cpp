@@ -298,6 +298,24 @@ TEST(GeoTiffRead, DamagedStripsAndUnknownCompressionsNameTheStrip) {
 
 // ---- GeoTIFFs written by GDAL (gdal_translate from the .asc) ----
 
+// Two written once by gdal_translate 3.6 and kept in tests/data (so CI without gdal-bin reads GDAL's files):
+// grid_corner.asc as Int16 strips with -a_srs EPSG:7856; grid_center.asc (dx 1, dy 2) as Float32 16x16
+// tiles, DEFLATE + predictor 3, AREA_OR_POINT=Point.
+TEST(GeoTiffRead, CheckedInGdalFilesGiveTheirAscVertices) {
+  const std::string dir = std::string(CDTGPU_SOURCE_DIR) + "/tests/data/readers/";
+  for (const auto& [base, tif_name] : {std::pair<std::string, std::string>{"grid_corner", "grid_corner_int16.tif"},
+                                       {"grid_center", "grid_center_float32.tif"}}) {
+    SCOPED_TRACE(base);
+    const std::string tif = dir + tif_name;
+    InputSet asc;
+    std::istringstream text(slurp(dir + base + ".asc"));
+    read_ascii_grid(text, base, asc);
+    expect_same_points(read_tif(tif), asc);
+  }
+  EXPECT_EQ(read_tif(dir + "grid_corner_int16.tif").source_crs_wkt, epsg_wkt(7856));
+}
+
+
 bool have_gdal() { return have_tool("gdal_translate"); }
 #define SKIP_WITHOUT_GDAL() \
   if (!have_gdal()) GTEST_SKIP() << "gdal_translate not installed (Debian: gdal-bin): GDAL-written GeoTIFFs not tried"
