@@ -33,6 +33,9 @@ namespace {
 
 enum class Sample { u, i, f };
 
+// Real tiles are at most a few MiB (4096 x 4096 doubles: 128 MiB); a header claiming more is damage.
+constexpr uint64_t kMaxTileBytes = uint64_t(1) << 30;
+
 struct Layout {
   uint32_t width = 0, height = 0;
   uint16_t bits = 0;
@@ -42,6 +45,11 @@ struct Layout {
   uint32_t across = 1;                // blocks per block row
   uint32_t blocks = 0;
   size_t bytes() const { return bits / 8; }
+  uint64_t block_bytes() const { return uint64_t(block_w) * block_h * bytes(); }
+  // Cells decoded, edge tiles' padding included.
+  uint64_t padded_cells() const {
+    return uint64_t(across) * block_w * ((uint64_t(height) + block_h - 1) / block_h) * block_h;
+  }
   std::string block_name(uint32_t b) const {
     if (!tiled) return "strip " + std::to_string(b);
     return "tile " + std::to_string(b) + " (tile row " + std::to_string(b / across) + ", column " +
@@ -116,6 +124,10 @@ Layout read_layout(TIFF* t, const std::string& name) {
                      std::to_string(stored) + (l.tiled ? " tiles" : " strips") + " stored, the image needs " +
                          std::to_string(expected));
   l.blocks = uint32_t(expected);
+  if (l.tiled && l.block_bytes() > kMaxTileBytes)
+    throw InputError(name, 0,
+                     "tiles of " + std::to_string(l.block_w) + " x " + std::to_string(l.block_h) +
+                         " cells: larger than cdtgpu decodes (1 GiB a tile)");
   return l;
 }
 
@@ -242,13 +254,15 @@ std::unique_ptr<unsigned char[]> decode(std::string_view bytes, const std::strin
   const size_t row_bytes = size_t(l.width) * l.bytes();
   std::unique_ptr<unsigned char[]> image(new unsigned char[row_bytes * l.height]);
   tbb::enumerable_thread_specific<std::optional<tiff::Handle>> handles;
+  tbb::enumerable_thread_specific<std::vector<unsigned char>> tiles;
   std::atomic<uint32_t> first_bad{l.blocks};
   std::mutex mutex;
   std::string why;  // the message of first_bad
   tbb::parallel_for(tbb::blocked_range<uint32_t>(0, l.blocks, 1), [&](const tbb::blocked_range<uint32_t>& r) {
     std::optional<tiff::Handle>& h = handles.local();
     if (!h) h = tiff::open_read(bytes, name, limits.max_alloc);
-    std::vector<unsigned char> tile(l.tiled ? size_t(l.block_w) * l.block_h * l.bytes() : 0);
+    std::vector<unsigned char>& tile = tiles.local();
+    tile.resize(l.tiled ? l.block_bytes() : 0);
     for (uint32_t b = r.begin(); b < r.end(); ++b) {
       if (b > first_bad.load()) return;
       const uint64_t row0 = uint64_t(b / l.across) * l.block_h;
@@ -332,7 +346,7 @@ void read_geotiff_bytes(std::string_view bytes, const std::string& name, InputSe
   Nodata nd = read_nodata(h.tif(), name);
   if (read_geokeys(h, name, in)) g.half = 0;
   const uint64_t cells = uint64_t(l.width) * l.height;
-  if (limits.max_cells && cells > limits.max_cells)
+  if (limits.max_cells && l.padded_cells() > limits.max_cells)
     throw InputError(name, 0, std::to_string(l.width) + " x " + std::to_string(l.height) + " cells, more than " +
                                   std::to_string(limits.max_cells) + " allowed here");
   for (uint64_t row : {uint64_t(0), uint64_t(l.height - 1)})
