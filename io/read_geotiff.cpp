@@ -309,29 +309,79 @@ std::unique_ptr<unsigned char[]> decode(std::string_view bytes, const std::strin
 }
 
 template <typename T>
-double sample_at(const unsigned char* p) {
+double load(const unsigned char* p) {
   T v;
   std::memcpy(&v, p, sizeof v);
   return double(v);
 }
 
-using SampleFn = double (*)(const unsigned char*);
-
-SampleFn sample_fn(const Layout& l) {
+// f(T{}) for the file's sample type.
+template <typename F>
+uint64_t with_sample_type(const Layout& l, F&& f) {
   switch (l.sample) {
     case Sample::u:
-      return l.bits == 8    ? sample_at<uint8_t>
-             : l.bits == 16 ? sample_at<uint16_t>
-             : l.bits == 32 ? sample_at<uint32_t>
-                            : sample_at<uint64_t>;
+      return l.bits == 8 ? f(uint8_t{}) : l.bits == 16 ? f(uint16_t{}) : l.bits == 32 ? f(uint32_t{}) : f(uint64_t{});
     case Sample::i:
-      return l.bits == 8    ? sample_at<int8_t>
-             : l.bits == 16 ? sample_at<int16_t>
-             : l.bits == 32 ? sample_at<int32_t>
-                            : sample_at<int64_t>;
+      return l.bits == 8 ? f(int8_t{}) : l.bits == 16 ? f(int16_t{}) : l.bits == 32 ? f(int32_t{}) : f(int64_t{});
     case Sample::f: break;
   }
-  return l.bits == 32 ? sample_at<float> : sample_at<double>;
+  return l.bits == 32 ? f(float{}) : f(double{});
+}
+
+// The valid cells as vertices, appended to in.points in row-major order; returns how many. Rows in bands of
+// about 64K cells: count the valid cells of each band, then write them at their offsets. T: the sample type.
+template <typename T>
+uint64_t cells_to_points(const unsigned char* image, const Layout& l, const Georef& g, const Nodata& nd,
+                         const std::string& name, InputSet& in) {
+  const size_t row_bytes = size_t(l.width) * sizeof(T);
+  auto is_nodata = [&](double v) { return nd.has && (v == nd.value || (std::isnan(nd.value) && std::isnan(v))); };
+
+  const uint64_t band_rows = std::max<uint64_t>(1, 65536 / l.width);
+  const uint64_t bands = (l.height + band_rows - 1) / band_rows;
+  std::vector<uint64_t> valid(bands + 1, 0);  // then its prefix sums
+  std::atomic<uint64_t> first_bad{UINT64_MAX};  // the first NaN / infinite cell, row-major
+  tbb::parallel_for(uint64_t(0), bands, [&](uint64_t k) {
+    const unsigned char* p = image + k * band_rows * row_bytes;
+    const uint64_t end = std::min<uint64_t>(l.height, (k + 1) * band_rows) * l.width;
+    uint64_t n = 0;
+    for (uint64_t c = k * band_rows * l.width; c < end; ++c, p += sizeof(T)) {
+      const double v = load<T>(p);
+      if (is_nodata(v)) continue;
+      if (!std::isfinite(v)) {
+        uint64_t seen = first_bad.load();
+        while (c < seen && !first_bad.compare_exchange_weak(seen, c)) {
+        }
+        return;
+      }
+      ++n;
+    }
+    valid[k + 1] = n;
+  });
+  if (first_bad != UINT64_MAX) {
+    const uint64_t row = first_bad / l.width, col = first_bad % l.width;
+    throw InputError(name, 0,
+                     l.block_name(l.block_of(row, col)) + ": the cell at row " + std::to_string(row) +
+                         ", column " + std::to_string(col) + " is " +
+                         number_text(load<T>(image + first_bad * sizeof(T))) +
+                         (nd.has ? ", not the NODATA value " + number_text(nd.value)
+                                 : ", and the file has no GDAL_NODATA tag to say it is missing"));
+  }
+  for (uint64_t k = 0; k < bands; ++k) valid[k + 1] += valid[k];
+  const size_t first = in.points.size();
+  in.points.resize(first + valid[bands]);
+  tbb::parallel_for(uint64_t(0), bands, [&](uint64_t k) {
+    Point3* out = in.points.data() + first + valid[k];
+    const uint64_t row_end = std::min<uint64_t>(l.height, (k + 1) * band_rows);
+    for (uint64_t row = k * band_rows; row < row_end; ++row) {
+      const unsigned char* p = image + row * row_bytes;
+      const double y = g.y(row);
+      for (uint64_t col = 0; col < l.width; ++col, p += sizeof(T)) {
+        const double v = load<T>(p);
+        if (!is_nodata(v)) *out++ = Point3{g.x(col), y, v};
+      }
+    }
+  });
+  return valid[bands];
 }
 
 }  // namespace
@@ -355,58 +405,11 @@ void read_geotiff_bytes(std::string_view bytes, const std::string& name, InputSe
   if (nd.has && l.sample == Sample::f && l.bits == 32) nd.value = double(float(nd.value));
 
   const std::unique_ptr<unsigned char[]> image = decode(bytes, name, l, limits);
-  const SampleFn at = sample_fn(l);
-  const size_t row_bytes = size_t(l.width) * l.bytes();
-  auto is_nodata = [&](double v) { return nd.has && (v == nd.value || (std::isnan(nd.value) && std::isnan(v))); };
-
-  // Rows in bands of about 64K cells: count the valid cells of each band, then write them at their offsets.
-  const uint64_t band_rows = std::max<uint64_t>(1, 65536 / l.width);
-  const uint64_t bands = (l.height + band_rows - 1) / band_rows;
-  std::vector<uint64_t> valid(bands + 1, 0);
-  std::atomic<uint64_t> first_bad{UINT64_MAX};  // the first NaN / infinite cell, row-major
-  tbb::parallel_for(uint64_t(0), bands, [&](uint64_t k) {
-    const unsigned char* p = image.get() + k * band_rows * row_bytes;
-    const uint64_t end = std::min<uint64_t>(l.height, (k + 1) * band_rows) * l.width;
-    uint64_t n = 0;
-    for (uint64_t c = k * band_rows * l.width; c < end; ++c, p += l.bytes()) {
-      const double v = at(p);
-      if (is_nodata(v)) continue;
-      if (!std::isfinite(v)) {
-        uint64_t seen = first_bad.load();
-        while (c < seen && !first_bad.compare_exchange_weak(seen, c)) {
-        }
-        return;
-      }
-      ++n;
-    }
-    valid[k + 1] = n;
+  const uint64_t valid = with_sample_type(l, [&](auto zero) {
+    return cells_to_points<decltype(zero)>(image.get(), l, g, nd, name, in);
   });
-  if (first_bad != UINT64_MAX) {
-    const uint64_t row = first_bad / l.width, col = first_bad % l.width;
-    throw InputError(name, 0,
-                     l.block_name(l.block_of(row, col)) + ": the cell at row " + std::to_string(row) +
-                         ", column " + std::to_string(col) + " is " +
-                         number_text(at(image.get() + first_bad * l.bytes())) +
-                         (nd.has ? ", not the NODATA value " + number_text(nd.value)
-                                 : ", and the file has no GDAL_NODATA tag to say it is missing"));
-  }
-  for (uint64_t k = 0; k < bands; ++k) valid[k + 1] += valid[k];
-  const size_t first = in.points.size();
-  in.points.resize(first + valid[bands]);
-  tbb::parallel_for(uint64_t(0), bands, [&](uint64_t k) {
-    Point3* out = in.points.data() + first + valid[k];
-    const uint64_t row_end = std::min<uint64_t>(l.height, (k + 1) * band_rows);
-    for (uint64_t row = k * band_rows; row < row_end; ++row) {
-      const unsigned char* p = image.get() + row * row_bytes;
-      const double y = g.y(row);
-      for (uint64_t col = 0; col < l.width; ++col, p += l.bytes()) {
-        const double v = at(p);
-        if (!is_nodata(v)) *out++ = Point3{g.x(col), y, v};
-      }
-    }
-  });
-  in.repairs.nodata_cells += cells - valid[bands];
-  if (valid[bands] == 0) throw InputError(name, 0, "no geometry (every cell is NODATA)");
+  in.repairs.nodata_cells += cells - valid;
+  if (valid == 0) throw InputError(name, 0, "no geometry (every cell is NODATA)");
 }
 
 void read_geotiff(const std::string& path, InputSet& in) {

@@ -83,6 +83,7 @@ struct TiffOptions {
   int pcs = 7856;              // ProjectedCSTypeGeoKey (0: none; KvUserDefined: with `projection` and `datum`)
   int gcs = 0;                 // GeographicTypeGeoKey, for a geographic raster (pcs 0)
   int projection = 0, datum = 0;
+  bool bigtiff = false;
 };
 
 template <typename T>
@@ -118,7 +119,7 @@ inline void write_tiff(const std::string& path, const TiffOptions& o, const std:
     case Type::f32: fill<float>(bytes, values); break;
     case Type::f64: fill<double>(bytes, values); break;
   }
-  TIFF* tif = XTIFFOpen(path.c_str(), "w");
+  TIFF* tif = XTIFFOpen(path.c_str(), o.bigtiff ? "w8" : "w");
   ASSERT_NE(tif, nullptr);
   TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, o.width);
   TIFFSetField(tif, TIFFTAG_IMAGELENGTH, o.height);

@@ -100,6 +100,18 @@ TEST(GeoTiffRead, CompressedFilesDecodeTheSame) {
     }
 }
 
+TEST(GeoTiffRead, BigTiffReadsAsClassicTiff) {
+  Scratch s;
+  TiffOptions o;
+  o.type = Type::f64, o.tiled = true, o.compression = COMPRESSION_ADOBE_DEFLATE, o.nodata = "99";
+  const std::vector<double> v = cells(o);
+  write_tiff(s.path("classic.tif"), o, v);
+  o.bigtiff = true;
+  write_tiff(s.path("big.tif"), o, v);
+  ASSERT_EQ(slurp(s.path("big.tif"))[2], 43);  // BigTIFF's version number
+  expect_same_points(read_tif(s.path("big.tif")), read_tif(s.path("classic.tif")));
+}
+
 TEST(GeoTiffRead, OneThreadAndAllThreadsReadTheSame) {
   Scratch s;
   TiffOptions o;
