@@ -1,12 +1,12 @@
-// GeoTIFF DEM reader (io/geotiff.hpp). The file is mapped once; every strip or tile is decoded into one image of
-// native samples by the thread that picks it (each thread has its own libtiff handle over the same bytes), then
-// rows are turned into vertices in parallel, in row-major order as the .asc reader gives them.
+// GeoTIFF DEM reader (io/geotiff.hpp). The file is mapped once; every strip or tile is decoded into one image
+// of native samples by the thread that picks it (each thread has its own libtiff handle over the same bytes),
+// then rows are turned into vertices in parallel, in row-major order as the .asc reader gives them.
 #include <geokeys.h>
 #include <geovalues.h>
-#include <xtiffio.h>
-
+#include <spdlog/spdlog.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <xtiffio.h>
 
 #include <algorithm>
 #include <atomic>
@@ -18,8 +18,6 @@
 #include <mutex>
 #include <optional>
 #include <vector>
-
-#include <spdlog/spdlog.h>
 
 #include "core/error.hpp"
 #include "core/repair.hpp"
@@ -96,14 +94,16 @@ Layout read_layout(TIFF* t, const std::string& name) {
     l.sample = Sample::f;
   else
     throw InputError(name, 0,
-                     "samples of " + std::to_string(l.bits) + " bits, sample format " + std::to_string(format) +
+                     "samples of " + std::to_string(l.bits) + " bits, sample format " +
+                         std::to_string(format) +
                          ": cdtgpu reads 8, 16, 32 and 64-bit integers (formats 1 and 2) and 32 and 64-bit "
                          "floats (format 3)");
   const auto compression = get_defaulted<uint16_t>(t, TIFFTAG_COMPRESSION);
   if (!TIFFIsCODECConfigured(compression)) {
     const TIFFCodec* c = TIFFFindCODEC(compression);
     throw InputError(name, 0,
-                     "compression " + std::to_string(compression) + (c ? std::string(" (") + c->name + ")" : "") +
+                     "compression " + std::to_string(compression) +
+                         (c ? std::string(" (") + c->name + ")" : "") +
                          " is not one this build of libtiff decodes");
   }
   l.tiled = TIFFIsTiled(t);
@@ -150,8 +150,9 @@ Georef read_georef(TIFF* t, const std::string& name) {
     g.sx = matrix[0], g.X = matrix[3], g.ey = matrix[5], g.Y = matrix[7];
   } else if (has_tie) {
     throw InputError(name, 0,
-                     std::to_string(n_tie / 6) + " ground control points (ModelTiepoint) without a pixel "
-                     "scale: warp it to a regular grid first (e.g. gdalwarp)");
+                     std::to_string(n_tie / 6) +
+                         " ground control points (ModelTiepoint) without a pixel "
+                         "scale: warp it to a regular grid first (e.g. gdalwarp)");
   } else {
     throw InputError(name, 0,
                      "no georeference: neither ModelTiepoint + ModelPixelScale nor ModelTransformation tags");
@@ -223,25 +224,31 @@ bool read_geokeys(tiff::Handle& h, const std::string& name, InputSet& in) {
   GTIFFree(gt);
   std::string wkt;
   if (model == ModelTypeProjected) {
-    const int code = pcs && pcs != KvUserDefined ? pcs : utm_code(projection, gcs && gcs != KvUserDefined ? gcs : datum);
+    const int code =
+        pcs && pcs != KvUserDefined ? pcs : utm_code(projection, gcs && gcs != KvUserDefined ? gcs : datum);
     wkt = code == 4326 || code == 4283 || code == 7844 ? std::string() : epsg_wkt(code);
     if (wkt.empty())
-      spdlog::warn("{}: projected CRS {} is not one cdtgpu names (WGS 84 / UTM, GDA94 and GDA2020 / MGA): "
-                   "coordinates kept as read, outputs without a CRS",
-                   name, pcs && pcs != KvUserDefined ? "EPSG:" + std::to_string(pcs) : std::string("(user-defined)"));
+      spdlog::warn(
+          "{}: projected CRS {} is not one cdtgpu names (WGS 84 / UTM, GDA94 and GDA2020 / MGA): "
+          "coordinates kept as read, outputs without a CRS",
+          name, pcs && pcs != KvUserDefined ? "EPSG:" + std::to_string(pcs) : std::string("(user-defined)"));
   } else if (model == ModelTypeGeographic) {
     const int code = gcs && gcs != KvUserDefined ? gcs
-                     : datum == 6326                ? 4326
-                     : datum == 6283                ? 4283
-                     : datum == 1168                ? 7844
-                                                    : 0;
+                     : datum == 6326             ? 4326
+                     : datum == 6283             ? 4283
+                     : datum == 1168             ? 7844
+                                                 : 0;
     wkt = code == 4326 || code == 4283 || code == 7844 ? epsg_wkt(code) : std::string();
     // Read as lon/lat on an unknown datum: --crs auto refuses it (as for such a .prj), --crs none keeps it.
     if (wkt.empty())
-      wkt = "GEOGCS[\"" + (code ? "EPSG:" + std::to_string(code) : std::string("user-defined datum " + std::to_string(datum))) + "\"]";
+      wkt = "GEOGCS[\"" +
+            (code ? "EPSG:" + std::to_string(code)
+                  : std::string("user-defined datum " + std::to_string(datum))) +
+            "\"]";
   } else if (model != 0) {
-    throw InputError(name, 0, "GTModelTypeGeoKey " + std::to_string(model) +
-                                  ": cdtgpu reads projected (1) and geographic (2) rasters");
+    throw InputError(name, 0,
+                     "GTModelTypeGeoKey " + std::to_string(model) +
+                         ": cdtgpu reads projected (1) and geographic (2) rasters");
   }
   if (in.source_crs_wkt.empty()) in.source_crs_wkt = wkt;
   return raster == RasterPixelIsPoint;
@@ -250,7 +257,7 @@ bool read_geokeys(tiff::Handle& h, const std::string& name, InputSet& in) {
 // The image, decoded on all cores into one buffer of native samples (row-major, width samples a row).
 // Left uninitialised: every byte is decoded into (the pages first touched by the decoding threads).
 std::unique_ptr<unsigned char[]> decode(std::string_view bytes, const std::string& name, const Layout& l,
-                                       const GeoTiffLimits& limits) {
+                                        const GeoTiffLimits& limits) {
   const size_t row_bytes = size_t(l.width) * l.bytes();
   std::unique_ptr<unsigned char[]> image(new unsigned char[row_bytes * l.height]);
   tbb::enumerable_thread_specific<std::optional<tiff::Handle>> handles;
@@ -277,7 +284,8 @@ std::unique_ptr<unsigned char[]> decode(std::string_view bytes, const std::strin
           first_bad = b;
           why = err ? "its offset or byte count cannot be read"
                     : "its " + std::to_string(size) + " bytes at offset " + std::to_string(at) +
-                          " run past the end of the file (" + std::to_string(bytes.size()) + " bytes): truncated";
+                          " run past the end of the file (" + std::to_string(bytes.size()) +
+                          " bytes): truncated";
         }
         continue;
       }
@@ -320,10 +328,17 @@ template <typename F>
 uint64_t with_sample_type(const Layout& l, F&& f) {
   switch (l.sample) {
     case Sample::u:
-      return l.bits == 8 ? f(uint8_t{}) : l.bits == 16 ? f(uint16_t{}) : l.bits == 32 ? f(uint32_t{}) : f(uint64_t{});
+      return l.bits == 8    ? f(uint8_t{})
+             : l.bits == 16 ? f(uint16_t{})
+             : l.bits == 32 ? f(uint32_t{})
+                            : f(uint64_t{});
     case Sample::i:
-      return l.bits == 8 ? f(int8_t{}) : l.bits == 16 ? f(int16_t{}) : l.bits == 32 ? f(int32_t{}) : f(int64_t{});
-    case Sample::f: break;
+      return l.bits == 8    ? f(int8_t{})
+             : l.bits == 16 ? f(int16_t{})
+             : l.bits == 32 ? f(int32_t{})
+                            : f(int64_t{});
+    case Sample::f:
+      break;
   }
   return l.bits == 32 ? f(float{}) : f(double{});
 }
@@ -334,11 +349,13 @@ template <typename T>
 uint64_t cells_to_points(const unsigned char* image, const Layout& l, const Georef& g, const Nodata& nd,
                          const std::string& name, InputSet& in) {
   const size_t row_bytes = size_t(l.width) * sizeof(T);
-  auto is_nodata = [&](double v) { return nd.has && (v == nd.value || (std::isnan(nd.value) && std::isnan(v))); };
+  auto is_nodata = [&](double v) {
+    return nd.has && (v == nd.value || (std::isnan(nd.value) && std::isnan(v)));
+  };
 
   const uint64_t band_rows = std::max<uint64_t>(1, 65536 / l.width);
   const uint64_t bands = (l.height + band_rows - 1) / band_rows;
-  std::vector<uint64_t> valid(bands + 1, 0);  // then its prefix sums
+  std::vector<uint64_t> valid(bands + 1, 0);    // then its prefix sums
   std::atomic<uint64_t> first_bad{UINT64_MAX};  // the first NaN / infinite cell, row-major
   tbb::parallel_for(uint64_t(0), bands, [&](uint64_t k) {
     const unsigned char* p = image + k * band_rows * row_bytes;
@@ -397,17 +414,18 @@ void read_geotiff_bytes(std::string_view bytes, const std::string& name, InputSe
   if (read_geokeys(h, name, in)) g.half = 0;
   const uint64_t cells = uint64_t(l.width) * l.height;
   if (limits.max_cells && l.padded_cells() > limits.max_cells)
-    throw InputError(name, 0, std::to_string(l.width) + " x " + std::to_string(l.height) + " cells, more than " +
-                                  std::to_string(limits.max_cells) + " allowed here");
+    throw InputError(name, 0,
+                     std::to_string(l.width) + " x " + std::to_string(l.height) + " cells, more than " +
+                         std::to_string(limits.max_cells) + " allowed here");
   for (uint64_t row : {uint64_t(0), uint64_t(l.height - 1)})
-    for (uint64_t col : {uint64_t(0), uint64_t(l.width - 1)}) check_finite(in, source, 0, {g.x(col), g.y(row), 0});
+    for (uint64_t col : {uint64_t(0), uint64_t(l.width - 1)})
+      check_finite(in, source, 0, {g.x(col), g.y(row), 0});
   // A float band's NODATA is compared as the float it stands for (GDAL writes the double of the float).
   if (nd.has && l.sample == Sample::f && l.bits == 32) nd.value = double(float(nd.value));
 
   const std::unique_ptr<unsigned char[]> image = decode(bytes, name, l, limits);
-  const uint64_t valid = with_sample_type(l, [&](auto zero) {
-    return cells_to_points<decltype(zero)>(image.get(), l, g, nd, name, in);
-  });
+  const uint64_t valid = with_sample_type(
+      l, [&](auto zero) { return cells_to_points<decltype(zero)>(image.get(), l, g, nd, name, in); });
   in.repairs.nodata_cells += cells - valid;
   if (valid == 0) throw InputError(name, 0, "no geometry (every cell is NODATA)");
 }

@@ -110,8 +110,8 @@ TIFF* open(const char* name, const char* mode, State* s, uint64_t max_alloc) {
   TIFFOpenOptionsSetErrorHandlerExtR(opts, on_error, s);
   TIFFOpenOptionsSetWarningHandlerExtR(opts, on_warning, s);
   if (max_alloc) TIFFOpenOptionsSetMaxSingleMemAlloc(opts, tmsize_t(max_alloc));
-  TIFF* tif = TIFFClientOpenExt(name, mode, s, read_proc, write_proc, seek_proc, close_proc, size_proc, map_proc,
-                                unmap_proc, opts);
+  TIFF* tif = TIFFClientOpenExt(name, mode, s, read_proc, write_proc, seek_proc, close_proc, size_proc,
+                                map_proc, unmap_proc, opts);
   TIFFOpenOptionsFree(opts);
   return tif;
 }

@@ -45,8 +45,8 @@ Handle open_read(std::string_view bytes, const std::string& name, uint64_t max_a
 // A TIFF written into memory. Throws std::runtime_error when libtiff cannot start one.
 Handle open_write(bool bigtiff);
 
-// libgeotiff's view of the handle's GeoKeys (GTIFFree it); its messages go to the handle's message(). Null when
-// libgeotiff fails.
+// libgeotiff's view of the handle's GeoKeys (GTIFFree it); its messages go to the handle's message(). Null
+// when libgeotiff fails.
 GTIF* geokeys(Handle& h);
 
 }  // namespace cdtgpu::tiff

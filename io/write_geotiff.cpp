@@ -1,14 +1,13 @@
 // GeoTIFF grid writer (io/geotiff.hpp). libtiff compresses a tile at a time on one thread, so the tiles are
 // prepared here instead, each on its own core: rounded to float, the floating-point predictor applied (TIFF
-// Technical Note 3, as libtiff's fpDiff does it), DEFLATE-compressed with libdeflate; libtiff then writes them
-// raw, in order, with the tags. The same raster gives the same bytes on any number of cores.
+// Technical Note 3, as libtiff's fpDiff does it), DEFLATE-compressed with libdeflate; libtiff then writes
+// them raw, in order, with the tags. The same raster gives the same bytes on any number of cores.
 #include <geokeys.h>
 #include <geovalues.h>
-#include <xtiffio.h>
 #include <libdeflate.h>
-
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <xtiffio.h>
 
 #include <cstring>
 #include <stdexcept>
@@ -80,7 +79,8 @@ void set_geokeys(tiff::Handle& h, const Crs& crs) {
     GTIFKeySet(gt, ProjectedCSTypeGeoKey, TYPE_SHORT, 1, crs.epsg);
     GTIFKeySet(gt, ProjLinearUnitsGeoKey, TYPE_SHORT, 1, Linear_Meter);
   }
-  if (!crs.name.empty() && crs.name != "none") GTIFKeySet(gt, GTCitationGeoKey, TYPE_ASCII, 0, crs.name.c_str());
+  if (!crs.name.empty() && crs.name != "none")
+    GTIFKeySet(gt, GTCitationGeoKey, TYPE_ASCII, 0, crs.name.c_str());
   const bool ok = GTIFWriteKeys(gt);
   GTIFFree(gt);
   if (!ok) throw std::runtime_error("libgeotiff cannot write the GeoKeys: " + h.message());
@@ -92,7 +92,8 @@ std::string geotiff_grid_bytes(const Raster& r, const Crs& crs) {
   const GridSpec& g = r.spec;
   if (g.ncols == 0 || g.nrows == 0 || g.ncols > UINT32_MAX || g.nrows > UINT32_MAX)
     throw std::runtime_error("a GeoTIFF grid needs 1 to 2^32-1 rows and columns");
-  const uint32_t across = uint32_t((g.ncols + kTile - 1) / kTile), down = uint32_t((g.nrows + kTile - 1) / kTile);
+  const uint32_t across = uint32_t((g.ncols + kTile - 1) / kTile),
+                 down = uint32_t((g.nrows + kTile - 1) / kTile);
   const std::vector<std::vector<unsigned char>> tiles = compress_tiles(r, across, across * down);
   uint64_t total = 0;
   for (const auto& t : tiles) total += t.size();
@@ -127,7 +128,8 @@ std::string geotiff_grid_bytes(const Raster& r, const Crs& crs) {
 
 void write_geotiff_grid_file(const Raster& raster, const Crs& crs, const std::string& path) {
   const std::string bytes = geotiff_grid_bytes(raster, crs);
-  write_file_atomically(path, [&](std::ostream& out) { out.write(bytes.data(), std::streamsize(bytes.size())); });
+  write_file_atomically(path,
+                        [&](std::ostream& out) { out.write(bytes.data(), std::streamsize(bytes.size())); });
   write_prj_beside(path, crs);
 }
 

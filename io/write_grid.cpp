@@ -44,36 +44,32 @@ void write_ascii_grid(const Raster& raster, std::ostream& out) {
   uint64_t next = 0;
   tbb::parallel_pipeline(
       size_t(4 * tbb::this_task_arena::max_concurrency()),
-      tbb::make_filter<void, Block*>(tbb::filter_mode::serial_in_order,
-                                     [&](tbb::flow_control& fc) -> Block* {
-                                       if (next >= g.nrows) {
-                                         fc.stop();
-                                         return nullptr;
-                                       }
-                                       auto* b = new Block{next, std::min(block_rows, g.nrows - next), {}, 0};
-                                       next += b->rows;
-                                       return b;
-                                     }) &
-          tbb::make_filter<Block*, Block*>(tbb::filter_mode::parallel,
-                                           [&](Block* b) {
-                                             // Each value, a space or line end after it.
-                                             b->text.reset(new char[b->rows * g.ncols * (TextOut::kMaxNumberChars + 1)]);
-                                             char* p = b->text.get();
-                                             for (uint64_t row = b->row0; row < b->row0 + b->rows; ++row) {
-                                               const double* z = raster.z.data() + row * g.ncols;
-                                               for (uint64_t col = 0; col < g.ncols; ++col) {
-                                                 if (col) *p++ = ' ';
-                                                 p = TextOut::put_number(p, z[col]);
-                                               }
-                                               *p++ = '\n';
-                                             }
-                                             b->size = size_t(p - b->text.get());
-                                             return b;
-                                           }) &
-          tbb::make_filter<Block*, void>(tbb::filter_mode::serial_in_order, [&](Block* b) {
-            std::unique_ptr<Block> own(b);
-            if (out) out.write(b->text.get(), std::streamsize(b->size));
-          }));
+      tbb::make_filter<void, Block*>(tbb::filter_mode::serial_in_order, [&](tbb::flow_control& fc) -> Block* {
+        if (next >= g.nrows) {
+          fc.stop();
+          return nullptr;
+        }
+        auto* b = new Block{next, std::min(block_rows, g.nrows - next), {}, 0};
+        next += b->rows;
+        return b;
+      }) & tbb::make_filter<Block*, Block*>(tbb::filter_mode::parallel, [&](Block* b) {
+        // Each value, a space or line end after it.
+        b->text.reset(new char[b->rows * g.ncols * (TextOut::kMaxNumberChars + 1)]);
+        char* p = b->text.get();
+        for (uint64_t row = b->row0; row < b->row0 + b->rows; ++row) {
+          const double* z = raster.z.data() + row * g.ncols;
+          for (uint64_t col = 0; col < g.ncols; ++col) {
+            if (col) *p++ = ' ';
+            p = TextOut::put_number(p, z[col]);
+          }
+          *p++ = '\n';
+        }
+        b->size = size_t(p - b->text.get());
+        return b;
+      }) & tbb::make_filter<Block*, void>(tbb::filter_mode::serial_in_order, [&](Block* b) {
+        std::unique_ptr<Block> own(b);
+        if (out) out.write(b->text.get(), std::streamsize(b->size));
+      }));
   if (!out) throw std::runtime_error("write failed");
 }
 

@@ -74,14 +74,14 @@ struct TiffOptions {
   uint16_t compression = COMPRESSION_NONE;
   uint16_t predictor = 0;
   uint16_t samples = 1;
-  bool point = false;           // PixelIsPoint
-  bool raster_type_key = true;  // write GTRasterTypeGeoKey
-  std::string nodata;           // GDAL_NODATA text, none when empty
+  bool point = false;                              // PixelIsPoint
+  bool raster_type_key = true;                     // write GTRasterTypeGeoKey
+  std::string nodata;                              // GDAL_NODATA text, none when empty
   double X = 300000, Y = 6250046, sx = 2, sy = 2;  // tiepoint (0, 0) -> (X, Y), pixel scale
   bool georef = true;
   std::vector<double> matrix;  // ModelTransformation instead of the tiepoint and scale
-  int pcs = 7856;              // ProjectedCSTypeGeoKey (0: none; KvUserDefined: with `projection` and `datum`)
-  int gcs = 0;                 // GeographicTypeGeoKey, for a geographic raster (pcs 0)
+  int pcs = 7856;  // ProjectedCSTypeGeoKey (0: none; KvUserDefined: with `projection` and `datum`)
+  int gcs = 0;     // GeographicTypeGeoKey, for a geographic raster (pcs 0)
   int projection = 0, datum = 0;
   bool bigtiff = false;
 };
@@ -100,24 +100,46 @@ inline void write_tiff(const std::string& path, const TiffOptions& o, const std:
   static const bool once = (XTIFFInitialize(), true);
   (void)once;
   const Type t = o.type;
-  const int bits = t == Type::u8 || t == Type::i8 ? 8 : t == Type::u16 || t == Type::i16 ? 16
-                   : t == Type::u32 || t == Type::i32 || t == Type::f32                  ? 32
-                                                                                         : 64;
+  const int bits = t == Type::u8 || t == Type::i8                       ? 8
+                   : t == Type::u16 || t == Type::i16                   ? 16
+                   : t == Type::u32 || t == Type::i32 || t == Type::f32 ? 32
+                                                                        : 64;
   const uint16_t format = t == Type::f32 || t == Type::f64 ? SAMPLEFORMAT_IEEEFP
-                          : t == Type::i8 || t == Type::i16 || t == Type::i32 || t == Type::i64 ? SAMPLEFORMAT_INT
-                                                                                                : SAMPLEFORMAT_UINT;
+                          : t == Type::i8 || t == Type::i16 || t == Type::i32 || t == Type::i64
+                              ? SAMPLEFORMAT_INT
+                              : SAMPLEFORMAT_UINT;
   std::vector<unsigned char> bytes;
   switch (t) {
-    case Type::u8: fill<uint8_t>(bytes, values); break;
-    case Type::i8: fill<int8_t>(bytes, values); break;
-    case Type::u16: fill<uint16_t>(bytes, values); break;
-    case Type::i16: fill<int16_t>(bytes, values); break;
-    case Type::u32: fill<uint32_t>(bytes, values); break;
-    case Type::i32: fill<int32_t>(bytes, values); break;
-    case Type::u64: fill<uint64_t>(bytes, values); break;
-    case Type::i64: fill<int64_t>(bytes, values); break;
-    case Type::f32: fill<float>(bytes, values); break;
-    case Type::f64: fill<double>(bytes, values); break;
+    case Type::u8:
+      fill<uint8_t>(bytes, values);
+      break;
+    case Type::i8:
+      fill<int8_t>(bytes, values);
+      break;
+    case Type::u16:
+      fill<uint16_t>(bytes, values);
+      break;
+    case Type::i16:
+      fill<int16_t>(bytes, values);
+      break;
+    case Type::u32:
+      fill<uint32_t>(bytes, values);
+      break;
+    case Type::i32:
+      fill<int32_t>(bytes, values);
+      break;
+    case Type::u64:
+      fill<uint64_t>(bytes, values);
+      break;
+    case Type::i64:
+      fill<int64_t>(bytes, values);
+      break;
+    case Type::f32:
+      fill<float>(bytes, values);
+      break;
+    case Type::f64:
+      fill<double>(bytes, values);
+      break;
   }
   TIFF* tif = XTIFFOpen(path.c_str(), o.bigtiff ? "w8" : "w");
   ASSERT_NE(tif, nullptr);
@@ -169,20 +191,22 @@ inline void write_tiff(const std::string& path, const TiffOptions& o, const std:
         std::fill(tile.begin(), tile.end(), 0);
         for (uint32_t r = r0; r < std::min(o.height, r0 + o.block); ++r)
           for (uint32_t c = c0; c < std::min(o.width, c0 + o.block); ++c)
-            std::memcpy(tile.data() + (size_t(r - r0) * o.block + (c - c0)) * px, bytes.data() + r * row + c * px,
-                        px);
+            std::memcpy(tile.data() + (size_t(r - r0) * o.block + (c - c0)) * px,
+                        bytes.data() + r * row + c * px, px);
         ASSERT_GE(TIFFWriteTile(tif, tile.data(), c0, r0, 0, 0), 0);
       }
   } else {
     TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, o.block);
-    for (uint32_t r = 0; r < o.height; ++r) ASSERT_EQ(TIFFWriteScanline(tif, bytes.data() + r * row, r, 0), 1);
+    for (uint32_t r = 0; r < o.height; ++r)
+      ASSERT_EQ(TIFFWriteScanline(tif, bytes.data() + r * row, r, 0), 1);
   }
   XTIFFClose(tif);
 }
 
 // An ESRI ASCII grid of the same cells: the corner (PixelIsArea) or centre (PixelIsPoint) of the southwest
 // cell, values as the shortest text of their double.
-inline std::string asc_text(const TiffOptions& o, const std::vector<double>& values, const std::string& nodata) {
+inline std::string asc_text(const TiffOptions& o, const std::vector<double>& values,
+                            const std::string& nodata) {
   std::ostringstream s;
   s.precision(17);
   const double south = o.Y - double(o.height) * o.sy;

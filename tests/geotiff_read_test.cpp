@@ -4,7 +4,6 @@
 // and from GDAL's gdal_translate (when gdal-bin is installed), and the CLI gives the same mesh bytes for a
 // .tif as for its .asc.
 #include <gtest/gtest.h>
-
 #include <tbb/task_arena.h>
 
 #include <cmath>
@@ -68,7 +67,8 @@ TEST(GeoTiffRead, EverySampleTypeInStripsAndTilesGivesTheAscVertices) {
         TiffOptions o;
         o.type = t, o.tiled = tiled, o.point = point, o.nodata = "99";
         o.block = tiled ? 16 : 5;
-        SCOPED_TRACE(std::string(type_name(t)) + (tiled ? " tiled" : " stripped") + (point ? " point" : " area"));
+        SCOPED_TRACE(std::string(type_name(t)) + (tiled ? " tiled" : " stripped") +
+                     (point ? " point" : " area"));
         const std::vector<double> v = cells(o);
         const std::string path = s.path("dem.tif");
         write_tiff(path, o, v);
@@ -85,15 +85,16 @@ TEST(GeoTiffRead, CompressedFilesDecodeTheSame) {
     uint16_t compression, predictor;
     Type type;
   };
-  for (const Case c : {Case{COMPRESSION_ADOBE_DEFLATE, 3, Type::f32}, Case{COMPRESSION_ADOBE_DEFLATE, 2, Type::i16},
-                       Case{COMPRESSION_LZW, 2, Type::u16}, Case{COMPRESSION_LZW, 3, Type::f64},
-                       Case{COMPRESSION_PACKBITS, 0, Type::u8}})
+  for (const Case c : {Case{COMPRESSION_ADOBE_DEFLATE, 3, Type::f32},
+                       Case{COMPRESSION_ADOBE_DEFLATE, 2, Type::i16}, Case{COMPRESSION_LZW, 2, Type::u16},
+                       Case{COMPRESSION_LZW, 3, Type::f64}, Case{COMPRESSION_PACKBITS, 0, Type::u8}})
     for (bool tiled : {false, true}) {
       TiffOptions o;
-      o.type = c.type, o.tiled = tiled, o.compression = c.compression, o.predictor = c.predictor, o.nodata = "99";
+      o.type = c.type, o.tiled = tiled, o.compression = c.compression, o.predictor = c.predictor,
+      o.nodata = "99";
       o.width = 300, o.height = 170, o.block = tiled ? 64 : 7;  // many strips and tiles, edge tiles partial
-      SCOPED_TRACE("compression " + std::to_string(c.compression) + " predictor " + std::to_string(c.predictor) +
-                   (tiled ? " tiled" : " stripped"));
+      SCOPED_TRACE("compression " + std::to_string(c.compression) + " predictor " +
+                   std::to_string(c.predictor) + (tiled ? " tiled" : " stripped"));
       const std::vector<double> v = cells(o);
       write_tiff(s.path("dem.tif"), o, v);
       expect_same_points(read_tif(s.path("dem.tif")), read_asc(asc_text(o, v, "99")));
@@ -236,7 +237,8 @@ TEST(GeoTiffRead, NanOrInfinityThatIsNotNodataNamesItsTileAndCell) {
   v[size_t(3) * o.width + 4] = INFINITY;
   o.tiled = false, o.block = 2;
   write_tiff(s.path("inf.tif"), o, v);
-  EXPECT_NE(error_of(s.path("inf.tif")).find("strip 1: the cell at row 3, column 4 is inf"), std::string::npos)
+  EXPECT_NE(error_of(s.path("inf.tif")).find("strip 1: the cell at row 3, column 4 is inf"),
+            std::string::npos)
       << error_of(s.path("inf.tif"));
 }
 
@@ -315,8 +317,9 @@ TEST(GeoTiffRead, DamagedStripsAndUnknownCompressionsNameTheStrip) {
 // tiles, DEFLATE + predictor 3, AREA_OR_POINT=Point.
 TEST(GeoTiffRead, CheckedInGdalFilesGiveTheirAscVertices) {
   const std::string dir = std::string(CDTGPU_SOURCE_DIR) + "/tests/data/readers/";
-  for (const auto& [base, tif_name] : {std::pair<std::string, std::string>{"grid_corner", "grid_corner_int16.tif"},
-                                       {"grid_center", "grid_center_float32.tif"}}) {
+  for (const auto& [base, tif_name] :
+       {std::pair<std::string, std::string>{"grid_corner", "grid_corner_int16.tif"},
+        {"grid_center", "grid_center_float32.tif"}}) {
     SCOPED_TRACE(base);
     const std::string tif = dir + tif_name;
     InputSet asc;
@@ -327,10 +330,10 @@ TEST(GeoTiffRead, CheckedInGdalFilesGiveTheirAscVertices) {
   EXPECT_EQ(read_tif(dir + "grid_corner_int16.tif").source_crs_wkt, epsg_wkt(7856));
 }
 
-
 bool have_gdal() { return have_tool("gdal_translate"); }
 #define SKIP_WITHOUT_GDAL() \
-  if (!have_gdal()) GTEST_SKIP() << "gdal_translate not installed (Debian: gdal-bin): GDAL-written GeoTIFFs not tried"
+  if (!have_gdal())         \
+  GTEST_SKIP() << "gdal_translate not installed (Debian: gdal-bin): GDAL-written GeoTIFFs not tried"
 
 TEST(GeoTiffRead, GdalTranslateOutputsGiveTheAscVertices) {
   SKIP_WITHOUT_GDAL();
@@ -348,8 +351,10 @@ TEST(GeoTiffRead, GdalTranslateOutputsGiveTheAscVertices) {
       {Type::i32, "Int32", "-co TILED=YES -co BLOCKXSIZE=16 -co BLOCKYSIZE=16 -co COMPRESS=PACKBITS", false},
       {Type::f32, "Float32", "-co TILED=NO -co BLOCKYSIZE=3 -co COMPRESS=DEFLATE -co PREDICTOR=3", true},
       {Type::f32, "Float32", "-co TILED=YES -co BLOCKXSIZE=16 -co BLOCKYSIZE=16 -co COMPRESS=LZW", false},
-      {Type::f64, "Float64", "-co TILED=YES -co BLOCKXSIZE=32 -co BLOCKYSIZE=32 -co COMPRESS=DEFLATE "
-                             "-co PREDICTOR=3", true},
+      {Type::f64, "Float64",
+       "-co TILED=YES -co BLOCKXSIZE=32 -co BLOCKYSIZE=32 -co COMPRESS=DEFLATE "
+       "-co PREDICTOR=3",
+       true},
   };
   for (const Case& c : cases) {
     TiffOptions o;
@@ -359,10 +364,10 @@ TEST(GeoTiffRead, GdalTranslateOutputsGiveTheAscVertices) {
     const std::string asc = asc_text(o, v, "99");
     put(s.path("dem.asc"), asc);
     // GDAL reads an .asc with decimals as Float32 unless told otherwise.
-    const std::string cmd = std::string("gdal_translate -q --config AAIGRID_DATATYPE Float64 -of GTiff -ot ") +
-                            c.ot + " " + c.options +
-                            (c.point ? " -mo AREA_OR_POINT=Point" : "") + " " + s.path("dem.asc") + " " +
-                            s.path("dem.tif");
+    const std::string cmd =
+        std::string("gdal_translate -q --config AAIGRID_DATATYPE Float64 -of GTiff -ot ") + c.ot + " " +
+        c.options + (c.point ? " -mo AREA_OR_POINT=Point" : "") + " " + s.path("dem.asc") + " " +
+        s.path("dem.tif");
     ASSERT_EQ(shell(cmd), 0) << cmd;
     expect_same_points(read_tif(s.path("dem.tif")), read_asc(asc));
   }
@@ -401,12 +406,15 @@ TEST(GeoTiffRead, TheCliWritesTheSameMeshForTheTifAsForTheAsc) {
   TiffOptions o;
   o.type = Type::f32;
   put(s.path("dem.asc"), asc_text(o, cells(o), "99"));
-  ASSERT_EQ(shell("gdal_translate -q -co TILED=YES -co BLOCKXSIZE=16 -co BLOCKYSIZE=16 -co COMPRESS=DEFLATE " +
-                  s.path("dem.asc") + " " + s.path("dem.tif")),
-            0);
+  ASSERT_EQ(
+      shell("gdal_translate -q -co TILED=YES -co BLOCKXSIZE=16 -co BLOCKYSIZE=16 -co COMPRESS=DEFLATE " +
+            s.path("dem.asc") + " " + s.path("dem.tif")),
+      0);
   const std::string cli = std::string(CDTGPU_BINARY) + " triangulate -q --crs none ";
-  ASSERT_EQ(shell(cli + s.path("dem.asc") + " -o " + s.path("asc.ply") + " --stats " + s.path("asc.json")), 0);
-  ASSERT_EQ(shell(cli + s.path("dem.tif") + " -o " + s.path("tif.ply") + " --stats " + s.path("tif.json")), 0);
+  ASSERT_EQ(shell(cli + s.path("dem.asc") + " -o " + s.path("asc.ply") + " --stats " + s.path("asc.json")),
+            0);
+  ASSERT_EQ(shell(cli + s.path("dem.tif") + " -o " + s.path("tif.ply") + " --stats " + s.path("tif.json")),
+            0);
   EXPECT_EQ(slurp(s.path("asc.ply")), slurp(s.path("tif.ply")));
   EXPECT_NE(slurp(s.path("tif.json")).find("\"nodata_cells\""), std::string::npos);
   // A bad file: exit code 2, the file named.

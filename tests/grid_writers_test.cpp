@@ -4,7 +4,6 @@
 // float, carries the CRS's EPSG code, and has the same bytes on every run and any number of cores; the CLI
 // writes it for --grid-out x.tif.
 #include <gtest/gtest.h>
-
 #include <tbb/task_arena.h>
 
 #include <cmath>
@@ -71,7 +70,8 @@ std::string parallel_ascii(const Raster& r) {
 
 TEST(AsciiGrid, FormattedOnAllCoresItIsTheTextOneThreadWrites) {
   // Many blocks of rows; one row longer than a block; a single cell; on one core and on all.
-  for (const auto& [ncols, nrows] : {std::pair<uint64_t, uint64_t>{700, 300}, {70000, 3}, {1, 1}, {3, 1000}}) {
+  for (const auto& [ncols, nrows] :
+       {std::pair<uint64_t, uint64_t>{700, 300}, {70000, 3}, {1, 1}, {3, 1000}}) {
     const Raster r = awkward_raster(ncols, nrows);
     const std::string expected = sequential_ascii(r);
     EXPECT_EQ(parallel_ascii(r), expected) << ncols << " x " << nrows;
@@ -171,8 +171,8 @@ TEST(GeoTiffGrid, GdalReadsItsCellsNodataAndEpsgCode) {
     expected.push_back(double(float(r.z[i])));
   }
   put(s.path("where.txt"), where.str());
-  ASSERT_EQ(shell("gdallocationinfo -valonly -geoloc " + s.path("dem.tif") + " < " + s.path("where.txt") + " > " +
-                  s.path("values.txt")),
+  ASSERT_EQ(shell("gdallocationinfo -valonly -geoloc " + s.path("dem.tif") + " < " + s.path("where.txt") +
+                  " > " + s.path("values.txt")),
             0);
   std::istringstream values(slurp(s.path("values.txt")));
   for (size_t k = 0; k < expected.size(); ++k) {
