@@ -29,6 +29,7 @@
 #include "gpu/primitives.hpp"
 #include "gpu/raster.hpp"
 #include "gpu/tin.hpp"
+#include "io/geotiff.hpp"
 #include "io/gis_writers.hpp"
 
 namespace cdtgpu {
@@ -129,7 +130,8 @@ int run_grid(const BenchOptions& o) {
       "| points | triangles | grid cells | CPU grid ms | GPU grid ms (device) | TIN upload ms | CPU contours "
       "ms "
       "| GPU contours ms (device, host chaining) | lines | same | process cgal ms (grid, write) | process "
-      "gpu ms (grid, write) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+      "gpu ms (grid, write) | .asc write ms | .tif write ms (MB) | .tif read ms "
+      "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   std::fflush(stdout);
 
   json rows = json::array();
@@ -172,11 +174,34 @@ int run_grid(const BenchOptions& o) {
             chain.push_back(contourer.chain_ms);
     }
     const bool same = same_grid(cpu_r, gpu_r) && wkt_of(cpu_c) == wkt_of(gpu_c);
-    cpu_r = Raster{}, gpu_r = Raster{};
-
-    // The whole process, files in, mesh + grid + contours out.
+    gpu_r = Raster{};
     const fs::path dir = fs::temp_directory_path() / ("cdtgpu_bench_grid_" + std::to_string(::getpid()));
     fs::create_directories(dir);
+
+    // The grid's files, in-process: ESRI ASCII and GeoTIFF written (synced, renamed), the GeoTIFF read back.
+    std::vector<double> asc_write, tif_write, tif_read;
+    uint64_t tif_bytes = 0;
+    Crs no_crs;
+    for (int run = 0; run <= o.runs; ++run) {
+      auto t = Clock::now();
+      write_ascii_grid_file(cpu_r, no_crs, (dir / "w.asc").string());
+      if (run) asc_write.push_back(ms_since(t));
+      fs::remove(dir / "w.asc");
+      t = Clock::now();
+      write_geotiff_grid_file(cpu_r, no_crs, (dir / "w.tif").string());
+      if (run) tif_write.push_back(ms_since(t));
+      tif_bytes = fs::file_size(dir / "w.tif");
+      t = Clock::now();
+      {
+        InputSet back;
+        read_geotiff((dir / "w.tif").string(), back);
+      }
+      if (run) tif_read.push_back(ms_since(t));
+    }
+    fs::remove(dir / "w.tif");
+    cpu_r = Raster{};
+
+    // The whole process, files in, mesh + grid + contours out.
     E2eWorkload w;
     w.input = in;
     const E2eFiles files = write_e2e_text(w, dir.string());
@@ -200,7 +225,7 @@ int run_grid(const BenchOptions& o) {
       if (c.code != 0) return std::string("failed");
       return fmt(c.wall_ms) + " (" + fmt(stage(c.stats, "grid")) + ", " + fmt(stage(c.stats, "write")) + ")";
     };
-    std::printf("| %llu | %zu | %llu x %llu | %s | %s (%s) | %s | %s | %s (%s, %s) | %zu | %s | %s | %s |\n",
+    std::printf("| %llu | %zu | %llu x %llu | %s | %s (%s) | %s | %s | %s (%s, %s) | %zu | %s | %s | %s | %s | %s (%.1f) | %s |\n",
                 static_cast<unsigned long long>(mesh.vertices.size()), mesh.triangles.size(),
                 static_cast<unsigned long long>(spec.ncols), static_cast<unsigned long long>(spec.nrows),
                 fmt(median(cpu_grid)).c_str(), fmt(median(gpu_grid)).c_str(),
@@ -208,7 +233,8 @@ int run_grid(const BenchOptions& o) {
                 fmt(median(cpu_lines)).c_str(), fmt(median(gpu_lines)).c_str(),
                 fmt(median(gpu_lines_dev)).c_str(), fmt(median(chain)).c_str(), cpu_c.size(),
                 same && same_files ? "yes" : (same ? "files differ" : "NO"), process(proc[0]).c_str(),
-                process(proc[1]).c_str());
+                process(proc[1]).c_str(), fmt(median(asc_write)).c_str(), fmt(median(tif_write)).c_str(),
+                double(tif_bytes) / 1e6, fmt(median(tif_read)).c_str());
     std::fflush(stdout);
     rows.push_back(
         {{"points", mesh.vertices.size()},
@@ -227,6 +253,10 @@ int run_grid(const BenchOptions& o) {
          {"gpu_contours_host_chaining_ms", chain},
          {"contour_lines", cpu_c.size()},
          {"same_in_process", same},
+         {"asc_write_ms", asc_write},
+         {"tif_write_ms", tif_write},
+         {"tif_bytes", tif_bytes},
+         {"tif_read_ms", tif_read},
          {"same_files", same_files},
          {"process_cgal", {{"wall_ms", proc[0].wall_ms}, {"exit", proc[0].code}, {"stats", proc[0].stats}}},
          {"process_gpu", {{"wall_ms", proc[1].wall_ms}, {"exit", proc[1].code}, {"stats", proc[1].stats}}}});

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "gpu/buffers.hpp"
+#include "io/geotiff.hpp"
 
 namespace cdtgpu {
 
@@ -21,9 +22,10 @@ namespace {
 
 // Points in a text file, from its size and the first 64 KiB: lines for XYZ, coordinates (commas and line ends)
 // for WKT. An ASCII grid says its size in its header (ncols x nrows); a shapefile point record is 28 bytes or
-// more, so size / 28 bounds it.
+// more, so size / 28 bounds it; a GeoTIFF's header says its cells.
 uint64_t estimate_points(const std::string& path, uint64_t size, const std::string& ext) {
   if (ext == ".shp") return size / 28;
+  if (ext == ".tif" || ext == ".tiff") return geotiff_cell_count(path);
   std::ifstream in(path, std::ios::binary);
   std::string head(64 << 10, '\0');
   in.read(head.data(), std::streamsize(head.size()));

@@ -46,7 +46,7 @@ void add_input_options(CLI::App* cmd, InputOptions& in, CrsArgs& crs) {
 void add_triangulate_options(CLI::App* t, TriangulateArgs& args) {
   TriangulateOptions& tri = args.tri;
   t->add_option("inputs", tri.input.inputs,
-                "input files: .shp .wkt .xyz .csv .txt .asc, or - for WKT on stdin; each may end in options "
+                "input files: .shp .wkt .xyz .csv .txt .asc .tif, or - for WKT on stdin; each may end in options "
                 ":role=breakline|vertices|boundary|hole and/or z=FIELD|NUMBER|drape|min|mean|max, comma-separated "
                 "(e.g. lakes.shp:role=hole, footprints.shp:role=breakline,z=drape)")
       ->required();
@@ -60,7 +60,7 @@ void add_triangulate_options(CLI::App* t, TriangulateArgs& args) {
                 "CGAL), gpu (Vulkan compute, any device, lavapipe included) or cgal (the CPU reference)")
       ->default_val("auto")
       ->check(CLI::IsMember({"auto", "gpu", "cgal"}));
-  t->add_option("--grid-out", tri.grid_out, "also write the TIN as a DEM grid (ESRI ASCII .asc), NODATA outside");
+  t->add_option("--grid-out", tri.grid_out, "also write the TIN as a DEM grid (.tif: GeoTIFF; else ESRI ASCII .asc), NODATA outside");
   t->add_option("--cell", tri.cell, "grid cell size; cell centres at its multiples")->default_val(1.0)->check(positive);
   t->add_option("--contours-out", tri.contours_out,
                 "also write contour lines: WKT LINESTRING Z, one per line (.geojson: GeoJSON)");

@@ -403,7 +403,7 @@ void write_outputs(Job& job) {
       write_tiles_dir(pieces, job.crs, job.write, options.tiles_out);
       job.stats.counts["tile_files"] = pieces.size();
     }
-    if (job.grid) write_ascii_grid_file(*job.grid, crs_for(job, options.grid_out), options.grid_out);
+    if (job.grid) write_grid_file(*job.grid, crs_for(job, options.grid_out), options.grid_out);
     if (!options.contours_out.empty())
       write_contours_wkt_file(job.contours, crs_for(job, options.contours_out), options.contours_out);
     if (job.preview) {

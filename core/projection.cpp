@@ -357,6 +357,21 @@ Crs choose_crs(const InputSet& in, const CrsRequest& request) {
   return make_crs(info.datum, info.zone, info.north);
 }
 
+std::string epsg_wkt(int code) {
+  EpsgInfo info{};
+  if (epsg_info(code, info)) return crs_wkt(info.datum, info.zone, info.north);
+  const std::string degree = "PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]]";
+  const std::string grs80 = "SPHEROID[\"GRS_1980\",6378137.0," + fmt_number(kGrs80InverseFlattening) + "]],";
+  switch (code) {
+    case 4326:
+      return "GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\",SPHEROID[\"WGS_1984\",6378137.0," +
+             fmt_number(kWgs84InverseFlattening) + "]]," + degree;
+    case 4283: return "GEOGCS[\"GCS_GDA_1994\",DATUM[\"D_GDA_1994\"," + grs80 + degree;
+    case 7844: return "GEOGCS[\"GCS_GDA2020\",DATUM[\"D_GDA2020\"," + grs80 + degree;
+    default: return {};
+  }
+}
+
 void project(InputSet& in, const Crs& crs) {
   if (!crs.from_geographic) return;
   const double a = GeographicLib::Constants::WGS84_a();  // GRS80 has the same equatorial radius

@@ -31,6 +31,11 @@ struct Crs {
 // projection is requested for input that is not lon/lat.
 Crs choose_crs(const InputSet& in, const CrsRequest& request);
 
+// The ESRI .prj WKT1 cdtgpu writes for an EPSG code it knows: the projected codes parse_crs takes and the
+// geographic 4326 (WGS 84), 4283 (GDA94), 7844 (GDA2020); empty for any other. Readers of formats that name
+// their CRS by code (GeoTIFF keys) hand it on as if a .prj had said it.
+std::string epsg_wkt(int code);
+
 // Projects every point and polyline vertex in place when crs.from_geographic.
 void project(InputSet& in, const Crs& crs);
 

@@ -4,6 +4,7 @@
 //
 //   fuzz_wkt(data, size);        // read_wkt on the bytes
 //   fuzz_shapefile(data, size);  // [flags][shp length u32][shx length u32] shp shx dbf, from memory
+//   fuzz_geotiff(data, size);    // read_geotiff_bytes on the bytes
 #pragma once
 #include <unistd.h>
 
@@ -16,6 +17,7 @@
 #include <string_view>
 
 #include "core/error.hpp"
+#include "io/geotiff.hpp"
 #include "io/mapped_files.hpp"
 #include "io/readers.hpp"
 #include "io/writers.hpp"
@@ -56,6 +58,18 @@ inline void fuzz_ascii_grid(const uint8_t* data, size_t size) {
     InputSet in;
     auto s = stream(data, size);
     read_ascii_grid(s, "fuzz.asc", in);
+  });
+}
+
+// The GeoTIFF reader on the bytes, from memory. The limits keep a header that claims a huge raster from
+// exhausting the fuzzer's memory (the CLI has none: such a file decodes, or fails, strip by strip).
+inline void fuzz_geotiff(const uint8_t* data, size_t size) {
+  expect_only_input_errors([&] {
+    InputSet in;
+    GeoTiffLimits limits;
+    limits.max_cells = 1 << 20;
+    limits.max_alloc = 64 << 20;
+    read_geotiff_bytes(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.tif", in, limits);
   });
 }
 

@@ -16,9 +16,11 @@
 namespace cdtgpu {
 
 // ncols, nrows, xllcenter, yllcenter (the southwest cell centre), cellsize, NODATA_value -9999, then the rows
-// north to south; values as the shortest text that reads back to the same double.
+// north to south; values as the shortest text that reads back to the same double. Formatted on all cores.
 void write_ascii_grid(const Raster& raster, std::ostream& out);
 void write_ascii_grid_file(const Raster& raster, const Crs& crs, const std::string& path);
+// By extension: .tif / .tiff a GeoTIFF (io/geotiff.hpp), anything else an ESRI ASCII grid.
+void write_grid_file(const Raster& raster, const Crs& crs, const std::string& path);
 
 // One "LINESTRING Z (x y z, ...)" line per contour, in the order given; a closed contour repeats its first
 // point.

@@ -13,6 +13,7 @@
 #include <spdlog/spdlog.h>
 
 #include "core/error.hpp"
+#include "io/geotiff.hpp"
 #include "io/text_source.hpp"
 
 namespace cdtgpu {
@@ -66,10 +67,12 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
     read_mapped(path, read_xyz_text, in);
   else if (ext == ".asc")
     read_text_file(path, read_ascii_grid, in);
+  else if (ext == ".tif" || ext == ".tiff")
+    read_geotiff(path, in);
   else
     throw InputError(path, 0,
                      "unknown input format '" + (ext.empty() ? std::string("(no extension)") : ext) +
-                         "' (expected .shp, .wkt, .xyz, .csv, .txt or .asc, or - for WKT on stdin)");
+                         "' (expected .shp, .wkt, .xyz, .csv, .txt, .asc or .tif, or - for WKT on stdin)");
 }
 
 GlobalZField::GlobalZField(const ReadOptions& options) : options_(options) {}

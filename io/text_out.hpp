@@ -43,15 +43,18 @@ class TextOut {
   // 500000); civil and hydraulic tools expect coordinates in fixed notation, so magnitudes from 1e-4 to 1e16
   // are written fixed (still the shortest digits that read back exactly), others as to_chars chooses.
   TextOut& number(double v) {
+    if (n_ + kMaxNumberChars > buf_.size()) flush();
+    n_ = size_t(put_number(buf_.data() + n_, v) - buf_.data());
+    return *this;
+  }
+  // The most characters number(double) writes.
+  static constexpr size_t kMaxNumberChars = 48;
+  // number(double)'s text at p (room for kMaxNumberChars); returns its end. For writers that format on
+  // several threads into buffers of their own.
+  static char* put_number(char* p, double v) {
     const double a = std::fabs(v);
-    if (a >= 1e-4 && a < 1e16) {
-      if (n_ + 48 > buf_.size()) flush();
-      n_ =
-          size_t(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v, std::chars_format::fixed).ptr -
-                 buf_.data());
-      return *this;
-    }
-    return chars(v);
+    if (a >= 1e-4 && a < 1e16) return std::to_chars(p, p + kMaxNumberChars, v, std::chars_format::fixed).ptr;
+    return std::to_chars(p, p + kMaxNumberChars, v).ptr;
   }
   TextOut& number(uint64_t v) { return chars(v); }
   TextOut& number(int64_t v) { return chars(v); }

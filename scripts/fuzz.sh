@@ -3,7 +3,7 @@
 # runs each for SECONDS (default 60) from seed corpora made of tests/data and samples/. Crashes land in
 # $FUZZ_DIR/artifacts/<target>/; add each to tests/data/fuzz/<target>/ (tests/fuzz_regression_test.cpp replays
 # them). Prints per target: executions, coverage (cov, ft) and crash files; exits 1 when any target crashed.
-#   scripts/fuzz.sh [seconds] [target...]      targets: wkt xyz ascii_grid mesh shapefile (default all)
+#   scripts/fuzz.sh [seconds] [target...]      targets: wkt xyz ascii_grid mesh shapefile geotiff (default all)
 # Environment: JOBS (build jobs, default 2); FORK=N (N worker processes per target, libFuzzer -fork);
 # RUNS=N (stop each target after N executions instead of the time); FUZZ_BIN=dir (fuzz_* binaries built
 # elsewhere, e.g. packed for a many-core machine without a compiler: no build here).
@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(wkt xyz ascii_grid mesh shapefile)
+[ ${#targets[@]} -gt 0 ] || targets=(wkt xyz ascii_grid mesh shapefile geotiff)
 CXX=${CXX:-clang++-14}
 jobs=${JOBS:-2}
 dir=${FUZZ_DIR:-build-fuzz}
@@ -26,11 +26,12 @@ mkdir -p "$dir"
 
 seeds=$dir/seeds
 rm -rf "$seeds"
-mkdir -p "$seeds"/{wkt,xyz,ascii_grid,mesh,shapefile}
+mkdir -p "$seeds"/{wkt,xyz,ascii_grid,mesh,shapefile,geotiff}
 cp tests/data/readers/*.wkt "$seeds"/wkt/
 cp tests/data/readers/*.csv "$seeds"/xyz/
 head -c 4000 samples/katoomba/dem.xyz >"$seeds"/xyz/dem_head.xyz
 cp tests/data/readers/*.asc "$seeds"/ascii_grid/
+cp tests/data/readers/*.tif "$seeds"/geotiff/
 # Mesh seeds: a small mesh in each format, first byte 0/1/2 = obj/ply/wkt (fuzz/harness.hpp).
 printf '\000# crs: none\nv 0 0 1\nv 1 0 2\nv 0 1 3\nf 1 2 3\n' >"$seeds"/mesh/tri.obj
 printf '\001ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\nproperty double z\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n0 0 1\n1 0 2\n0 1 3\n3 0 1 2\n' >"$seeds"/mesh/tri.ply

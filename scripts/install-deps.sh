@@ -11,4 +11,5 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   libgeographiclib-dev libshp-dev libpng-dev libcli11-dev libspdlog-dev nlohmann-json3-dev \
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools \
   libgtest-dev libgmock-dev libbenchmark-dev python3-matplotlib \
-  clang-14 libfuzzer-14-dev libclang-rt-14-dev libxml2-utils >/dev/null
+  clang-14 libfuzzer-14-dev libclang-rt-14-dev libxml2-utils \
+  libtiff-dev libgeotiff-dev libdeflate-dev gdal-bin >/dev/null  # GeoTIFF in/out; gdal-bin: tests only
