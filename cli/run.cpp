@@ -99,6 +99,20 @@ uint64_t point_count(const InputSet& in) {
   return n;
 }
 
+// LAS inputs' points per class, kept and skipped by their filters (io/read_las.hpp).
+void add_point_class_counts(const PointClassCounts& pc, RunStats& stats) {
+  if (!pc.any) return;
+  nlohmann::ordered_json by_class = nlohmann::ordered_json::object();
+  for (const auto& [cls, n] : pc.by_class) by_class[std::to_string(cls)] = {{"kept", n.kept}, {"skipped", n.skipped}};
+  stats.counts["las_points_by_class"] = by_class;
+  stats.counts["las_skipped_withheld"] = pc.withheld;
+  stats.counts["las_skipped_returns"] = pc.other_returns;
+  stats.counts["las_skipped_classes"] = pc.other_classes;
+  if (pc.withheld + pc.other_returns + pc.other_classes)
+    spdlog::info("LAS points skipped: {} withheld, {} of other returns, {} of other classes", pc.withheld,
+                 pc.other_returns, pc.other_classes);
+}
+
 // `merge`: the duplicate merging of prepare (the CPU's by default; the GPU backend passes its own).
 void prepare_all(Loaded& l, RunStats& stats, const PointMerger& merge = merge_points) {
   l.prepared = timed(stats, "prepare", [&] { return prepare(l.in, merge); });
@@ -130,6 +144,7 @@ void prepare_all(Loaded& l, RunStats& stats, const PointMerger& merge = merge_po
   c["degenerate_lines"] = r.degenerate_lines;
   c["null_shapes"] = r.null_shapes;
   c["nodata_cells"] = r.nodata_cells;
+  add_point_class_counts(l.in.point_classes, stats);
   stats.crs = l.crs.name;
   stats.crs_epsg = l.crs.epsg;
 }
