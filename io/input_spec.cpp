@@ -156,15 +156,14 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
     } else if (!shapefile) {
       options.z_field.clear();  // --z-field is a shapefile field
     }
-    if (spec.las) {
-      if (ext != ".las")
-        throw UsageError(spec.path + ": class=, returns= and withheld= select points of LAS inputs (.las)");
-      options.las = *spec.las;
-    }
+    if (spec.las && ext != ".las")
+      throw UsageError(spec.path + ": class=, returns= and withheld= select points of LAS inputs (.las)");
     InputPart part;
     part.points_begin = in.points.size();
     part.lines_begin = in.lines.size();
-    if (spec.z_field || !shapefile)
+    if (ext == ".las")
+      read_las(spec.path, spec.las.value_or(LasFilter{}), in);
+    else if (spec.z_field || !shapefile)
       read_input(spec.path, options, in);  // its own field (required), or not a shapefile
     else
       global.read(spec.path, in);

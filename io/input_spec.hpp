@@ -15,6 +15,7 @@
 
 #include "core/input_parts.hpp"
 #include "core/model.hpp"
+#include "io/read_las.hpp"
 #include "io/readers.hpp"
 
 namespace cdtgpu {

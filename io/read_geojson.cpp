@@ -121,8 +121,20 @@ class Reader {
              " without properties");
       geometry(doc, 0);
     }
-    if (unknown_code_ && points_ > 0 && bounds_[0] >= -180 && bounds_[1] <= 180 && bounds_[2] >= -90 &&
-        bounds_[3] <= 90)
+    const bool looks_lon_lat =
+        points_ > 0 && bounds_[0] >= -180 && bounds_[1] <= 180 && bounds_[2] >= -90 && bounds_[3] <= 90;
+    const std::string extent = "x " + number_text(bounds_[0]) + " to " + number_text(bounds_[1]) + ", y " +
+                               number_text(bounds_[2]) + " to " + number_text(bounds_[3]);
+    if (!has_crs_ && (looks_lon_lat || points_ == 0)) {
+      if (in_.source_crs_wkt.empty()) in_.source_crs_wkt = epsg_wkt(4326);
+    } else if (!has_crs_) {
+      // GDAL writes no crs member for a layer without a CRS, and so does cdtgpu's --contours-out: read as the
+      // coordinates of an unnamed projected CRS, which is what they are, rather than refused.
+      spdlog::warn("{}: coordinates are not longitude/latitude ({}), which GeoJSON without a \"crs\" member is "
+                   "(RFC 7946): kept as read, in an unnamed projected CRS",
+                   name_, extent);
+    }
+    if (unknown_code_ && looks_lon_lat)
       throw InputError(name_, 0,
                        "its \"crs\" member names EPSG:" + std::to_string(code_) +
                            ", which cdtgpu does not know, and its coordinates look like longitude/latitude: the "
@@ -148,14 +160,11 @@ class Reader {
   // RFC 7946 GeoJSON is lon/lat on WGS 84; a legacy crs member may say otherwise.
   void set_crs(const json& doc) {
     const auto crs = doc.find("crs");
-    std::string wkt;
-    if (crs == doc.end() || crs->is_null()) {
-      wkt = epsg_wkt(4326);
-    } else {
-      code_ = crs_member_code(*crs, name_);
-      wkt = epsg_wkt(code_);
-      unknown_code_ = wkt.empty();
-    }
+    has_crs_ = crs != doc.end() && !crs->is_null();
+    if (!has_crs_) return;  // lon/lat unless the coordinates say otherwise (document() decides)
+    code_ = crs_member_code(*crs, name_);
+    const std::string wkt = epsg_wkt(code_);
+    unknown_code_ = wkt.empty();
     lon_lat_ = crs_wkt_is_geographic(wkt);
     if (in_.source_crs_wkt.empty()) in_.source_crs_wkt = wkt;
   }
@@ -226,10 +235,8 @@ class Reader {
     if (std::abs(v[0]) > kMaxCoordinate || std::abs(v[1]) > kMaxCoordinate)
       fail(w, "coordinate beyond ±1e15, far outside any coordinate reference system");
     if (lon_lat_ && !(v[0] >= -180 && v[0] <= 180 && v[1] >= -90 && v[1] <= 90))
-      fail(w, "(" + number_text(v[0]) + " " + number_text(v[1]) +
-                  ") is not a longitude/latitude; GeoJSON is lon/lat (RFC 7946) unless a \"crs\" member names a "
-                  "projected CRS, e.g. \"crs\": {\"type\": \"name\", \"properties\": {\"name\": "
-                  "\"urn:ogc:def:crs:EPSG::7856\"}}");
+      fail(w, "(" + number_text(v[0]) + " " + number_text(v[1]) + ") is not a longitude/latitude, and the \"crs\" "
+                  "member names the geographic EPSG:" + std::to_string(code_));
     bounds_[0] = std::min(bounds_[0], v[0]), bounds_[1] = std::max(bounds_[1], v[0]);
     bounds_[2] = std::min(bounds_[2], v[1]), bounds_[3] = std::max(bounds_[3], v[1]);
     ++points_;
@@ -318,7 +325,8 @@ class Reader {
   InputSet& in_;
   uint64_t feature_ = 0;      // 1-based, 0 outside features
   std::optional<double> z_;   // the current feature's z property
-  bool lon_lat_ = true;       // positions must be lon/lat
+  bool has_crs_ = false;
+  bool lon_lat_ = false;      // the crs member names a geographic CRS: positions must be lon/lat
   bool unknown_code_ = false;
   int code_ = 0;
   double bounds_[4] = {std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),

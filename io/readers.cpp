@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "io/read_geojson.hpp"
+#include "io/read_las.hpp"
 #include "io/text_source.hpp"
 
 namespace cdtgpu {
@@ -72,7 +73,7 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
       read_geojson_text(text, name, options.z_field, set);
     }, in);
   else if (ext == ".las")
-    read_las(path, options.las, in);
+    read_las(path, LasFilter{}, in);
   else if (ext == ".laz")
     throw InputError(path, 0,
                      "LAZ (compressed LAS) is not read: decompress it first, e.g. `laszip -i in.laz -o out.las` "

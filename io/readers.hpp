@@ -7,17 +7,15 @@
 #include <vector>
 
 #include "core/model.hpp"
-#include "io/read_las.hpp"
 
 namespace cdtgpu {
 
 struct ReadOptions {
   std::string z_field;  // DBF attribute giving z (shapefiles), or GeoJSON feature property; empty: from geometry
-  LasFilter las;        // LAS inputs: which points (class=, returns=, withheld=)
 };
 
-// Dispatches on the extension (.shp, .wkt, .xyz/.csv/.txt, .asc, .geojson/.json, .las); "-" reads WKT from
-// stdin.
+// Dispatches on the extension (.shp, .wkt, .xyz/.csv/.txt, .asc, .geojson/.json, .las with every point but
+// the withheld: io/read_las.hpp); "-" reads WKT from stdin.
 // Throws InputError naming the file and record/line for malformed or unknown input.
 void read_input(const std::string& path, const ReadOptions& options, InputSet& in);
 

@@ -163,7 +163,7 @@ TEST(GeoJson, LegacyCrsMember) {
   };
   const std::string mga = "[[334000, 6250000, 1], [334100, 6250100, 2], [334000, 6250200, 3]]";
   const std::string lon_lat = "[[151.2, -33.9, 1], [151.21, -33.9, 2], [151.2, -33.91, 3]]";
-  for (const std::string& name : {"urn:ogc:def:crs:EPSG::7856", "EPSG:7856", "http://www.opengis.net/def/crs/EPSG/0/7856"}) {
+  for (const char* name : {"urn:ogc:def:crs:EPSG::7856", "EPSG:7856", "http://www.opengis.net/def/crs/EPSG/0/7856"}) {
     const InputSet in = geojson(with_crs(name, mga));
     EXPECT_NE(in.source_crs_wkt.find("GDA2020_MGA_Zone_56"), std::string::npos) << name;
     const Crs crs = choose_crs(in, {});
@@ -179,9 +179,14 @@ TEST(GeoJson, LegacyCrsMember) {
   EXPECT_EQ(choose_crs(geojson(R"({"type": "MultiPoint", "coordinates": )" + lon_lat + "}"), {}).epsg, 32756);
   EXPECT_EQ(choose_crs(geojson(with_crs("urn:ogc:def:crs:EPSG::4283", lon_lat)), {}).epsg, 28356);
   EXPECT_EQ(choose_crs(geojson(with_crs("urn:ogc:def:crs:EPSG::7844", lon_lat)), {}).epsg, 7856);
-  // Projected coordinates without a crs member are not GeoJSON's lon/lat: named, with the way out.
-  expect_error(R"({"type": "MultiPoint", "coordinates": )" + mga + "}",
-               "feature 1: MultiPoint point 1: (334000 6250000) is not a longitude/latitude");
+  // Outside lon/lat under a geographic crs member: named by feature and position.
+  expect_error(with_crs("urn:ogc:def:crs:OGC:1.3:CRS84", mga),
+               "feature 1: MultiPoint point 1: (334000 6250000) is not a longitude/latitude, and the \"crs\" member "
+               "names the geographic EPSG:4326");
+  // Projected coordinates without a crs member (GDAL's GeoJSON of a layer without a CRS): kept as read, no CRS.
+  in = geojson(R"({"type": "MultiPoint", "coordinates": )" + mga + "}");
+  EXPECT_EQ(in.source_crs_wkt, "");
+  EXPECT_FALSE(choose_crs(in, {}).from_geographic);
   // A code cdtgpu does not know: kept as read when projected, refused when it could be lon/lat on any datum.
   in = geojson(with_crs("urn:ogc:def:crs:EPSG::2193", mga));
   EXPECT_EQ(in.source_crs_wkt, "");
@@ -215,8 +220,8 @@ TEST(GeoJson, BadInputNamesTheFeature) {
   expect_error(second(R"({"type": "Feature", "properties": {}})"), "feature 2: the Feature has no \"geometry\"");
   expect_error(second(R"({"type": "Feature", "properties": 3, "geometry": null})"),
                "feature 2: \"properties\" is a number");
-  expect_error(second(feature(R"({"type": "Point", "coordinates": [1, 95]})")),
-               "feature 2: Point: (1 95) is not a longitude/latitude");
+  expect_error(R"({"type": "Point", "crs": {"type": "name", "properties": {"name": "EPSG:4283"}}, "coordinates": [1, 95]})",
+               "feature 1: Point: (1 95) is not a longitude/latitude");
   std::string deep = R"({"type": "Point", "coordinates": [1, 2]})";
   for (int i = 0; i < 40; ++i) deep = R"({"type": "GeometryCollection", "geometries": [)" + deep + "]}";
   expect_error(deep, "nested too deeply");
@@ -313,6 +318,30 @@ TEST_F(GeoJsonCli, GeoJsonWrittenByOgr2ogrReadsAsItsWkt) {
   const std::string z = slurp(path("z.wkt"));
   EXPECT_NE(z.find(" 7,"), std::string::npos);
   EXPECT_EQ(z.find(" 110,"), std::string::npos);
+}
+
+// cdtgpu's own --contours-out GeoJSON reads back as the same lines as its WKT, with and without a known CRS.
+TEST_F(GeoJsonCli, ContoursWrittenAsGeoJsonReadBackAsTheirWkt) {
+  write_dem();
+  // The DEM as a GeoJSON MultiPoint naming GDA2020 / MGA zone 56: the contours' GeoJSON names it too.
+  std::string dem = R"({"type": "MultiPoint", "crs": {"type": "name", "properties": {"name": "EPSG:7856"}}, )"
+                    R"("coordinates": [)";
+  std::istringstream xyz(slurp(path("dem.xyz")));
+  double x, y, z;
+  for (int i = 0; xyz >> x >> y >> z; ++i) dem += (i ? ", [" : "[") + number_text(x) + ", " + number_text(y) + ", " + number_text(z) + "]";
+  write("dem.geojson", dem + "]}");
+  for (const std::string crs : {"", "EPSG:7856"}) {
+    SCOPED_TRACE(crs);
+    const std::string contours = cdtgpu() + " triangulate " + path(crs.empty() ? "dem.xyz" : "dem.geojson") +
+                                 " -o " + path("tin.ply") + " --interval 2 --contours-out ";
+    ASSERT_EQ(run(contours + path("c.geojson")), 0) << slurp(path("out.txt"));
+    ASSERT_EQ(run(contours + path("c.wkt")), 0) << slurp(path("out.txt"));
+    EXPECT_EQ(slurp(path("c.geojson")).find("\"crs\"") != std::string::npos, !crs.empty());
+    ASSERT_EQ(run(cdtgpu() + " triangulate " + path("c.geojson") + " -o " + path("g.wkt")), 0) << slurp(path("out.txt"));
+    ASSERT_EQ(run(cdtgpu() + " triangulate " + path("c.wkt") + " -o " + path("w.wkt")), 0) << slurp(path("out.txt"));
+    EXPECT_GT(slurp(path("g.wkt")).size(), 1000u);
+    EXPECT_EQ(slurp(path("g.wkt")), slurp(path("w.wkt")));
+  }
 }
 
 TEST_F(GeoJsonCli, BadGeoJsonExitsTwoNamingTheFeature) {
