@@ -173,14 +173,14 @@ class Reader {
     const auto props = f.find("properties");
     if (props != f.end() && !props->is_null() && !props->is_object())
       fail("\"properties\" is " + kind_of(*props) + ", not an object");
-    z_ = std::nullopt;
-    if (!z_property_.empty()) z_ = z_from(props == f.end() ? json() : *props);
     const auto g = f.find("geometry");
     if (g == f.end()) fail("the Feature has no \"geometry\" member (null for none)");
     if (g->is_null()) {
       ++in_.repairs.null_shapes;
       return;
     }
+    z_ = std::nullopt;
+    if (!z_property_.empty()) z_ = z_from(props == f.end() ? json() : *props);
     geometry(*g, 0);
   }
 

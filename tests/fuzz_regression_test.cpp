@@ -41,5 +41,7 @@ TEST(FuzzRegression, Xyz) { replay("xyz", cdtgpu::fuzz::fuzz_xyz); }
 TEST(FuzzRegression, AsciiGrid) { replay("ascii_grid", cdtgpu::fuzz::fuzz_ascii_grid); }
 TEST(FuzzRegression, Mesh) { replay("mesh", cdtgpu::fuzz::fuzz_mesh); }
 TEST(FuzzRegression, Shapefile) { replay("shapefile", cdtgpu::fuzz::fuzz_shapefile); }
+TEST(FuzzRegression, GeoJson) { replay("geojson", cdtgpu::fuzz::fuzz_geojson); }
+TEST(FuzzRegression, Las) { replay("las", cdtgpu::fuzz::fuzz_las); }
 
 }  // namespace

@@ -134,6 +134,7 @@ TEST(GeoJson, ZFromAFeatureProperty) {
       feature(R"({"type": "LineString", "coordinates": [[151, -33, 99], [151.1, -33]]})", R"({"ELEV": 120.5})"),
       feature(R"({"type": "Polygon", "coordinates": [[[151, -33], [151.1, -33], [151.1, -33.1], [151, -33]]]})",
               R"({"id": 2, "elev": "130"})"),  // another case; a number as text (CSV conversions)
+      feature("null"),                          // no geometry: no z needed
   });
   const InputSet in = geojson(text, "ELEV");
   expect_same_geometry(in, wkt("LINESTRING Z (151 -33 120.5, 151.1 -33 120.5)\n"
@@ -146,6 +147,20 @@ TEST(GeoJson, ZFromAFeatureProperty) {
   expect_error(collection({feature(R"({"type": "Point", "coordinates": [1, 2]})", R"({"ELEV": null})")}),
                "property ELEV is null, not a number", "ELEV");
   expect_error(R"({"type": "Point", "coordinates": [1, 2]})", "bare Point without properties", "ELEV");
+}
+
+// The file the fuzz seeds start from: every type, a crs member, z from the property "z" for every feature.
+TEST(GeoJson, ReadersSampleFile) {
+  InputSet in;
+  read_input(std::string(CDTGPU_SOURCE_DIR) + "/tests/data/readers/features.geojson", {}, in);
+  EXPECT_EQ(in.points.size(), 4u);
+  EXPECT_EQ(in.lines.size(), 6u);
+  EXPECT_EQ(in.repairs.null_shapes, 1u);
+  EXPECT_NE(in.source_crs_wkt.find("GDA2020_MGA_Zone_56"), std::string::npos);
+  InputSet z;
+  read_geojson_text(R"({"type": "Feature", "properties": {"z": 5}, "geometry": {"type": "Point", "coordinates": [151, -33, 1]}})",
+                    "t.geojson", "z", z);
+  EXPECT_EQ(z.points.at(0).z, 5);  // the property wins over the position's z, as a shapefile's field does
 }
 
 // The CLI's per-input z=NAME reaches the reader; --z-field stays a shapefile option.
