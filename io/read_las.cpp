@@ -167,7 +167,13 @@ std::vector<Vlr> records(std::string_view bytes, const LasHeader& h, const std::
   }
   at = h.evlr_offset;
   for (uint32_t k = 0; k < h.evlr_count; ++k) {
-    if (at < h.point_offset || at > bytes.size() || bytes.size() - at < 60)
+    const uint64_t points_end = h.point_offset + h.point_count * h.record_length;  // checked against the size
+    if (at < points_end)
+      throw InputError(name, 0,
+                       "extended VLR " + std::to_string(k + 1) + " of " + std::to_string(h.evlr_count) +
+                           " would start at byte " + std::to_string(at) + ", before the end of the point data (byte " +
+                           std::to_string(points_end) + ")");
+    if (at > bytes.size() || bytes.size() - at < 60)
       throw InputError(name, 0,
                        "truncated: extended VLR " + std::to_string(k + 1) + " of " + std::to_string(h.evlr_count) +
                            " would start at byte " + std::to_string(at) + ", the file has " +

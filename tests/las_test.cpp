@@ -305,6 +305,9 @@ TEST_F(Las, DamagedFilesNameTheFieldOrThePoint) {
   f.evlrs = {test::wkt_vlr(kMga56)};
   b = test::las_bytes(f);
   expect_error(b.substr(0, b.size() - 5), "extended VLR 1 gives");
+  const uint64_t inside = 400;
+  b.replace(235, 8, reinterpret_cast<const char*>(&inside), 8);
+  expect_error(b, "extended VLR 1 of 1 would start at byte 400, before the end of the point data (byte 3775)");
   // A scale that sends a point beyond any CRS: the point's record is named.
   f.evlrs.clear();
   f.scale[0] = 1e12;
