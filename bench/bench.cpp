@@ -6,6 +6,7 @@
 #include "bench/peer.hpp"
 #include "bench/grid.hpp"
 #include "bench/tiles.hpp"
+#include "bench/las.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -329,9 +330,10 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
                   "grid (a terrain TIN's DEM grid and contours, CPU against GPU, and the whole process with "
                   "--grid-out and --contours-out), or peer (GPU stages beside gDel2D's on the same vertices and "
                   "segments, see --peer and --rows), or tiles (the tiled CDT against the single run, CPU and GPU, "
-                  "2M and 16M points + a quarter as many segments, in process)")
+                  "2M and 16M points + a quarter as many segments, in process), or las (LAS files read in process: "
+                  "10M and 50M points, formats 1 and 6)")
       ->default_val("all")
-      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e", "grid", "peer", "tiles"}));
+      ->check(CLI::IsMember({"1", "2", "long", "terrain", "dt", "all", "e2e", "grid", "peer", "tiles", "las"}));
   cmd->add_flag("--quick", o.quick, "small sizes (20K..80K points; e2e: 20K and 200K) that finish in about a minute on 2 cores");
   cmd->add_option("--tile-points", o.tile_points,
                   "tiles: tiles of at most this many points (default: the CPU's auto size; the GPU: a quarter of the "
@@ -563,6 +565,7 @@ int run_bench(const BenchOptions& o) {
   if (o.table == "peer") return run_peer(o);
   if (o.table == "grid") return run_grid(o);
   if (o.table == "tiles") return run_tiles(o);
+  if (o.table == "las") return run_las(o);
   gpu::ContextOptions co;
   co.device = o.device;
   std::string device = "none (--cgal-only)", device_name;

@@ -31,7 +31,7 @@ struct BackendRun {
 using BenchBackend = std::function<BackendRun(const PreparedInput&)>;
 
 struct BenchOptions {
-  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only), e2e, grid, peer or tiles
+  std::string table = "all";        // 1, 2, long, terrain, all (those four), dt (Delaunay only), e2e, grid, peer, tiles or las
   bool quick = false;               // 20K..80K points instead of 1M..4M
   std::vector<std::string> sizes;   // point counts overriding the table's, e.g. 50000 or 1.5M
   int runs = 5;                     // timed runs per backend and workload (median), after one warm-up

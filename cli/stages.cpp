@@ -180,6 +180,20 @@ Crs crs_for(const Job& job, const std::string& path) {
   return c;
 }
 
+// LAS inputs: points kept and skipped per class, and why (--stats; a log line when any was skipped).
+void add_point_class_counts(const PointClassCounts& pc, RunStats& stats) {
+  if (!pc.any) return;
+  nlohmann::ordered_json by_class = nlohmann::ordered_json::object();
+  for (const auto& [cls, n] : pc.by_class) by_class[std::to_string(cls)] = {{"kept", n.kept}, {"skipped", n.skipped}};
+  stats.counts["las_points_by_class"] = by_class;
+  stats.counts["las_skipped_withheld"] = pc.withheld;
+  stats.counts["las_skipped_returns"] = pc.other_returns;
+  stats.counts["las_skipped_classes"] = pc.other_classes;
+  if (pc.withheld + pc.other_returns + pc.other_classes)
+    spdlog::info("LAS points skipped: {} withheld, {} of other returns, {} of other classes", pc.withheld,
+                 pc.other_returns, pc.other_classes);
+}
+
 }  // namespace
 
 void check_job(Job& job) {
@@ -287,6 +301,7 @@ void prepare_job(Job& job) {
   c["degenerate_lines"] = r.degenerate_lines;
   c["null_shapes"] = r.null_shapes;
   c["nodata_cells"] = r.nodata_cells;
+  add_point_class_counts(job.in.point_classes, job.stats);
   job.stats.crs = job.crs.name;
   job.stats.crs_epsg = job.crs.epsg;
 }

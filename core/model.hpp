@@ -3,6 +3,7 @@
 #include <array>
 #include <bit>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -31,11 +32,23 @@ struct Repairs {
   uint64_t nodata_cells = 0;         // grid cells equal to NODATA_value
 };
 
+// Points of LAS inputs (io/read_las) per ASPRS class, kept and skipped by the class=, returns= and withheld
+// filters; and the skipped ones by the first filter that skipped them.
+struct PointClassCounts {
+  struct Count {
+    uint64_t kept = 0, skipped = 0;
+  };
+  std::map<int, Count> by_class;
+  uint64_t withheld = 0, other_returns = 0, other_classes = 0;
+  bool any = false;  // some LAS input was read
+};
+
 struct InputSet {
   std::vector<std::string> sources;  // file names in the order they were read
   std::vector<Point3> points;        // loose vertices: DEM points, grid cells, point features
   std::vector<Polyline> lines;       // constraints
   Repairs repairs;
+  PointClassCounts point_classes;
   std::string source_crs_wkt;        // WKT1 of the first .prj seen, if any
   // Set by io/input_spec's read_inputs: readers give vertices without z (2D geometry, no z field) the z
   // missing_z() instead of 0, and core/drape's apply_z_rules resolves every one before prepare. Off: z = 0.

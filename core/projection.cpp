@@ -78,32 +78,31 @@ std::string crs_name(Datum datum, int zone, bool north) {
   return "WGS 84 / UTM zone " + z + (north ? "N" : "S");
 }
 
+// ESRI-style WKT1 of a datum's geographic CRS, as ArcGIS writes it in .prj files (alone or inside a PROJCS).
+std::string geogcs_wkt(Datum datum) {
+  switch (datum) {
+    case Datum::Gda94:
+      return "GEOGCS[\"GCS_GDA_1994\",DATUM[\"D_GDA_1994\",SPHEROID[\"GRS_1980\",6378137.0," +
+             fmt_number(kGrs80InverseFlattening) + "]],PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]]";
+    case Datum::Gda2020:
+      return "GEOGCS[\"GCS_GDA2020\",DATUM[\"D_GDA2020\",SPHEROID[\"GRS_1980\",6378137.0," +
+             fmt_number(kGrs80InverseFlattening) + "]],PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]]";
+    case Datum::Wgs84: break;
+  }
+  return "GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\",SPHEROID[\"WGS_1984\",6378137.0," +
+         fmt_number(kWgs84InverseFlattening) + "]],PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]]";
+}
+
 // ESRI-style WKT1 as ArcGIS writes it in .prj files.
 std::string crs_wkt(Datum datum, int zone, bool north) {
-  std::string projcs, geogcs, datum_name, spheroid;
   const std::string z = std::to_string(zone);
+  std::string projcs;
   switch (datum) {
-    case Datum::Wgs84:
-      projcs = "WGS_1984_UTM_Zone_" + z + (north ? "N" : "S");
-      geogcs = "GCS_WGS_1984";
-      datum_name = "D_WGS_1984";
-      spheroid = "SPHEROID[\"WGS_1984\",6378137.0," + fmt_number(kWgs84InverseFlattening) + "]";
-      break;
-    case Datum::Gda94:
-      projcs = "GDA_1994_MGA_Zone_" + z;
-      geogcs = "GCS_GDA_1994";
-      datum_name = "D_GDA_1994";
-      spheroid = "SPHEROID[\"GRS_1980\",6378137.0," + fmt_number(kGrs80InverseFlattening) + "]";
-      break;
-    case Datum::Gda2020:
-      projcs = "GDA2020_MGA_Zone_" + z;
-      geogcs = "GCS_GDA2020";
-      datum_name = "D_GDA2020";
-      spheroid = "SPHEROID[\"GRS_1980\",6378137.0," + fmt_number(kGrs80InverseFlattening) + "]";
-      break;
+    case Datum::Wgs84: projcs = "WGS_1984_UTM_Zone_" + z + (north ? "N" : "S"); break;
+    case Datum::Gda94: projcs = "GDA_1994_MGA_Zone_" + z; break;
+    case Datum::Gda2020: projcs = "GDA2020_MGA_Zone_" + z; break;
   }
-  std::string w = "PROJCS[\"" + projcs + "\",GEOGCS[\"" + geogcs + "\",DATUM[\"" + datum_name + "\"," + spheroid +
-                  "],PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]],"
+  std::string w = "PROJCS[\"" + projcs + "\"," + geogcs_wkt(datum) + ","
                   "PROJECTION[\"Transverse_Mercator\"],"
                   "PARAMETER[\"False_Easting\",500000.0],"
                   "PARAMETER[\"False_Northing\"," +
@@ -357,21 +356,6 @@ Crs choose_crs(const InputSet& in, const CrsRequest& request) {
   return make_crs(info.datum, info.zone, info.north);
 }
 
-std::string epsg_wkt(int code) {
-  EpsgInfo info{};
-  if (epsg_info(code, info)) return crs_wkt(info.datum, info.zone, info.north);
-  const std::string degree = "PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]]";
-  const std::string grs80 = "SPHEROID[\"GRS_1980\",6378137.0," + fmt_number(kGrs80InverseFlattening) + "]],";
-  switch (code) {
-    case 4326:
-      return "GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\",SPHEROID[\"WGS_1984\",6378137.0," +
-             fmt_number(kWgs84InverseFlattening) + "]]," + degree;
-    case 4283: return "GEOGCS[\"GCS_GDA_1994\",DATUM[\"D_GDA_1994\"," + grs80 + degree;
-    case 7844: return "GEOGCS[\"GCS_GDA2020\",DATUM[\"D_GDA2020\"," + grs80 + degree;
-    default: return {};
-  }
-}
-
 void project(InputSet& in, const Crs& crs) {
   if (!crs.from_geographic) return;
   const double a = GeographicLib::Constants::WGS84_a();  // GRS80 has the same equatorial radius
@@ -388,6 +372,17 @@ void project(InputSet& in, const Crs& crs) {
   for (Point3& p : in.points) forward(p);
   for (Polyline& l : in.lines)
     for (Point3& p : l.points) forward(p);
+}
+
+bool crs_wkt_is_geographic(const std::string& wkt) { return prj_is_geographic(wkt); }
+
+std::string epsg_wkt(int code) {
+  EpsgInfo info{};
+  if (epsg_info(code, info)) return crs_wkt(info.datum, info.zone, info.north);
+  if (code == 4326) return geogcs_wkt(Datum::Wgs84);
+  if (code == 4283) return geogcs_wkt(Datum::Gda94);
+  if (code == 7844) return geogcs_wkt(Datum::Gda2020);
+  return {};
 }
 
 }  // namespace cdtgpu

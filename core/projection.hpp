@@ -31,10 +31,13 @@ struct Crs {
 // projection is requested for input that is not lon/lat.
 Crs choose_crs(const InputSet& in, const CrsRequest& request);
 
-// The ESRI .prj WKT1 cdtgpu writes for an EPSG code it knows: the projected codes parse_crs takes and the
-// geographic 4326 (WGS 84), 4283 (GDA94), 7844 (GDA2020); empty for any other. Readers of formats that name
-// their CRS by code (GeoTIFF keys) hand it on as if a .prj had said it.
+// The ESRI .prj WKT1 of an EPSG code cdtgpu knows: the projected codes --epsg takes and the geographic 4326
+// (WGS 84), 4283 (GDA94) and 7844 (GDA2020); empty for any other. For files that name their CRS by a code (a
+// GeoJSON crs member, LAS and GeoTIFF GeoKeys), recorded in InputSet::source_crs_wkt as a .prj would be.
 std::string epsg_wkt(int code);
+
+// A .prj's WKT (WKT1 GEOGCS, WKT2 GEOGCRS) says the coordinates are longitude and latitude in degrees.
+bool crs_wkt_is_geographic(const std::string& wkt);
 
 // Projects every point and polyline vertex in place when crs.from_geographic.
 void project(InputSet& in, const Crs& crs);

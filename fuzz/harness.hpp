@@ -5,6 +5,7 @@
 //   fuzz_wkt(data, size);        // read_wkt on the bytes
 //   fuzz_shapefile(data, size);  // [flags][shp length u32][shx length u32] shp shx dbf, from memory
 //   fuzz_geotiff(data, size);    // read_geotiff_bytes on the bytes
+//   fuzz_geojson(data, size);    // [flags] text;  fuzz_las(data, size): [flags] file, from memory
 #pragma once
 #include <unistd.h>
 
@@ -19,6 +20,8 @@
 #include "core/error.hpp"
 #include "io/geotiff.hpp"
 #include "io/mapped_files.hpp"
+#include "io/read_geojson.hpp"
+#include "io/read_las.hpp"
 #include "io/readers.hpp"
 #include "io/writers.hpp"
 
@@ -140,6 +143,36 @@ inline void fuzz_shapefile(const uint8_t* data, size_t size) {
     ReadOptions o;
     if (flags & 1) o.z_field = "ELEV";
     read_shapefile(base + ".shp", o, in);
+  });
+}
+
+// [flags] text. Flags: bit 0 takes z from the feature property "z".
+inline void fuzz_geojson(const uint8_t* data, size_t size) {
+  if (size < 1) return;
+  expect_only_input_errors([&] {
+    InputSet in;
+    in.nan_for_missing_z = data[0] & 2;
+    read_geojson_text(std::string_view(reinterpret_cast<const char*>(data + 1), size - 1), "fuzz.geojson",
+                      data[0] & 1 ? "z" : "", in);
+  });
+}
+
+// [flags] file, held in memory. Flags: bit 0 keeps withheld points, bits 1-2 pick returns (all, first, last),
+// bit 3 keeps class 2 only.
+inline void fuzz_las(const uint8_t* data, size_t size) {
+  if (size < 1) return;
+  const std::string path = "/cdtgpu-fuzz-memory-" + std::to_string(::getpid()) + "/f.las";
+  files::put_memory_file(path, std::string(reinterpret_cast<const char*>(data + 1), size - 1));
+  LasFilter filter;
+  filter.keep_withheld = data[0] & 1;
+  filter.returns = LasFilter::Returns((data[0] >> 1) % 3);
+  if (data[0] & 8) {
+    filter.classes.reset();
+    filter.classes.set(2);
+  }
+  expect_only_input_errors([&] {
+    InputSet in;
+    read_las(path, filter, in);
   });
 }
 

@@ -31,6 +31,19 @@ std::vector<std::string_view> split(std::string_view s, char c) {
   }
 }
 
+// An ASPRS class in a class= list: 0 to 255.
+bool is_class_number(std::string_view s) {
+  int v = 0;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  return !s.empty() && ec == std::errc() && end == s.data() + s.size() && v >= 0 && v <= 255;
+}
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
 }  // namespace
 
 InputSpec parse_input_spec(const std::string& arg) {
@@ -41,15 +54,54 @@ InputSpec parse_input_spec(const std::string& arg) {
   if (colon == std::string::npos || colon == 0 || std::filesystem::exists(arg, ec)) return spec;
   const std::string_view suffix = std::string_view(arg).substr(colon + 1);
   const std::vector<std::string_view> items = split(suffix, ',');
-  for (std::string_view item : items)
-    if (item.find('=') == std::string_view::npos) return spec;  // not options: a path with a ':'
-  spec.path = arg.substr(0, colon);
-  bool seen_role = false, seen_z = false;
+  bool in_class = false;  // class=2,8,9: the numbers after the first are items of their own
   for (std::string_view item : items) {
+    if (item.find('=') != std::string_view::npos)
+      in_class = item.substr(0, item.find('=')) == "class";
+    else if (!in_class || !is_class_number(item))
+      return spec;  // not options: a path with a ':'
+  }
+  spec.path = arg.substr(0, colon);
+  bool seen_role = false, seen_z = false, seen_class = false, seen_returns = false, seen_withheld = false;
+  for (size_t i = 0; i < items.size(); ++i) {
+    const std::string_view item = items[i];
     const size_t eq = item.find('=');
-    const std::string key(item.substr(0, eq)), value(item.substr(eq + 1));
     const std::string where = " in '" + arg + "'";
-    if (key == "role") {
+    const std::string key(item.substr(0, eq)), value(item.substr(eq + 1));
+    if (key == "class") {
+      if (seen_class) throw UsageError("class given twice" + where);
+      seen_class = true;
+      LasFilter& las = spec.las ? *spec.las : spec.las.emplace();
+      las.classes.reset();
+      for (std::string_view c = value;; c = items[++i]) {
+        if (!is_class_number(c))
+          throw UsageError("class '" + std::string(c) + "'" + where + " is not an ASPRS class number 0 to 255");
+        las.classes.set(size_t(std::stoi(std::string(c))));
+        if (i + 1 == items.size() || !is_class_number(items[i + 1])) break;
+      }
+    } else if (key == "returns") {
+      if (seen_returns) throw UsageError("returns given twice" + where);
+      seen_returns = true;
+      LasFilter& las = spec.las ? *spec.las : spec.las.emplace();
+      if (value == "all")
+        las.returns = LasFilter::Returns::all;
+      else if (value == "first")
+        las.returns = LasFilter::Returns::first;
+      else if (value == "last")
+        las.returns = LasFilter::Returns::last;
+      else
+        throw UsageError("unknown returns '" + value + "'" + where + " (use all, first or last)");
+    } else if (key == "withheld") {
+      if (seen_withheld) throw UsageError("withheld given twice" + where);
+      seen_withheld = true;
+      LasFilter& las = spec.las ? *spec.las : spec.las.emplace();
+      if (value == "skip")
+        las.keep_withheld = false;
+      else if (value == "keep")
+        las.keep_withheld = true;
+      else
+        throw UsageError("unknown withheld '" + value + "'" + where + " (use skip or keep)");
+    } else if (key == "role") {
       if (seen_role) throw UsageError("role given twice" + where);
       seen_role = true;
       if (value == "breakline")
@@ -81,7 +133,7 @@ InputSpec parse_input_spec(const std::string& arg) {
       else
         spec.z_field = value;
     } else {
-      throw UsageError("unknown input option '" + key + "'" + where + " (known: role, z)");
+      throw UsageError("unknown input option '" + key + "'" + where + " (known: role, z; class, returns, withheld for LAS)");
     }
   }
   return spec;
@@ -94,19 +146,25 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
   GlobalZField global(defaults);  // inputs without their own z=FIELD: --z-field must be in some shapefile
   for (const InputSpec& spec : specs) {
     ReadOptions options = defaults;
+    const std::string ext = lower_extension(spec.path);
+    const bool shapefile = ext == ".shp", geojson = ext == ".geojson" || ext == ".json";
     if (spec.z_field) {
-      std::string ext = std::filesystem::path(spec.path).extension().string();
-      for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-      if (ext != ".shp")
-        throw UsageError("z=" + *spec.z_field + " names an attribute field, which only shapefiles have (" +
+      if (!shapefile && !geojson)
+        throw UsageError("z=" + *spec.z_field + " names an attribute field, which only shapefiles and GeoJSON have (" +
                          spec.path + "); z takes a number, drape, min, mean or max");
       options.z_field = *spec.z_field;
+    } else if (!shapefile) {
+      options.z_field.clear();  // --z-field is a shapefile field
     }
+    if (spec.las && ext != ".las")
+      throw UsageError(spec.path + ": class=, returns= and withheld= select points of LAS inputs (.las)");
     InputPart part;
     part.points_begin = in.points.size();
     part.lines_begin = in.lines.size();
-    if (spec.z_field)
-      read_input(spec.path, options, in);  // its own field: required
+    if (ext == ".las")
+      read_las(spec.path, spec.las.value_or(LasFilter{}), in);
+    else if (spec.z_field || !shapefile)
+      read_input(spec.path, options, in);  // its own field (required), or not a shapefile
     else
       global.read(spec.path, in);
     if (spec.role == Role::vertices) {

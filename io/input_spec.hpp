@@ -1,6 +1,8 @@
 // Per-input options on the command line: PATH[:key=value,...], e.g. contours.shp:z=ELEV, lakes.shp:role=hole,
 // footprints.shp:role=breakline,z=drape. Keys: role (breakline, vertices, boundary, hole) and z (a shapefile
-// field name, a number, drape, min, mean or max). Global options (--z-field) are the defaults.
+// field or GeoJSON property name, a number, drape, min, mean or max); for LAS inputs class (class=2 or
+// class=2,8,9), returns (all, first, last) and withheld (skip, keep). Global options (--z-field) are the
+// defaults.
 //
 //   std::vector<InputSpec> specs;
 //   for (const std::string& arg : args) specs.push_back(parse_input_spec(arg));
@@ -13,6 +15,7 @@
 
 #include "core/input_parts.hpp"
 #include "core/model.hpp"
+#include "io/read_las.hpp"
 #include "io/readers.hpp"
 
 namespace cdtgpu {
@@ -21,7 +24,8 @@ struct InputSpec {
   std::string path;
   Role role = Role::breakline;
   ZRule z;                             // keep unless z= gave a number, drape, min, mean or max
-  std::optional<std::string> z_field;  // z=NAME: the shapefile field (overrides --z-field)
+  std::optional<std::string> z_field;  // z=NAME: the shapefile field (overrides --z-field) or GeoJSON property
+  std::optional<LasFilter> las;        // class=, returns=, withheld= given (LAS inputs only)
 };
 
 // A path that exists is taken whole. Otherwise the text after the last ':' is options when every

@@ -14,6 +14,8 @@
 
 #include "core/error.hpp"
 #include "io/geotiff.hpp"
+#include "io/read_geojson.hpp"
+#include "io/read_las.hpp"
 #include "io/text_source.hpp"
 
 namespace cdtgpu {
@@ -69,17 +71,30 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
     read_text_file(path, read_ascii_grid, in);
   else if (ext == ".tif" || ext == ".tiff")
     read_geotiff(path, in);
+  else if (ext == ".geojson" || ext == ".json")
+    read_mapped(path, [&](std::string_view text, const std::string& name, InputSet& set) {
+      read_geojson_text(text, name, options.z_field, set);
+    }, in);
+  else if (ext == ".las")
+    read_las(path, LasFilter{}, in);
+  else if (ext == ".laz")
+    throw InputError(path, 0,
+                     "LAZ (compressed LAS) is not read: decompress it first, e.g. `laszip -i in.laz -o out.las` "
+                     "(LAStools) or `pdal translate in.laz out.las`, and give the .las");
   else
     throw InputError(path, 0,
                      "unknown input format '" + (ext.empty() ? std::string("(no extension)") : ext) +
-                         "' (expected .shp, .wkt, .xyz, .csv, .txt, .asc or .tif, or - for WKT on stdin)");
+                         "' (expected .shp, .wkt, .xyz, .csv, .txt, .asc, .tif, .geojson, .json or .las, or - for "
+                         "WKT on stdin)");
 }
 
 GlobalZField::GlobalZField(const ReadOptions& options) : options_(options) {}
 
 void GlobalZField::read(const std::string& path, InputSet& in) {
   if (options_.z_field.empty() || path == "-" || lower(std::filesystem::path(path).extension().string()) != ".shp") {
-    read_input(path, options_, in);
+    ReadOptions options = options_;
+    options.z_field.clear();  // --z-field is a shapefile field; a GeoJSON property is named per input (z=NAME)
+    read_input(path, options, in);
     return;
   }
   any_shapefile_ = true;

@@ -11,10 +11,11 @@
 namespace cdtgpu {
 
 struct ReadOptions {
-  std::string z_field;  // DBF attribute giving z (shapefiles); empty: z from the geometry, else 0
+  std::string z_field;  // DBF attribute giving z (shapefiles), or GeoJSON feature property; empty: from geometry
 };
 
-// Dispatches on the extension (.shp, .wkt, .xyz/.csv/.txt, .asc, .tif/.tiff: io/geotiff.hpp); "-" reads WKT from stdin.
+// Dispatches on the extension (.shp, .wkt, .xyz/.csv/.txt, .asc, .tif/.tiff: io/geotiff.hpp, .geojson/.json,
+// .las with every point but the withheld: io/read_las.hpp); "-" reads WKT from stdin.
 // Throws InputError naming the file and record/line for malformed or unknown input.
 void read_input(const std::string& path, const ReadOptions& options, InputSet& in);
 

@@ -42,5 +42,7 @@ TEST(FuzzRegression, AsciiGrid) { replay("ascii_grid", cdtgpu::fuzz::fuzz_ascii_
 TEST(FuzzRegression, Mesh) { replay("mesh", cdtgpu::fuzz::fuzz_mesh); }
 TEST(FuzzRegression, Shapefile) { replay("shapefile", cdtgpu::fuzz::fuzz_shapefile); }
 TEST(FuzzRegression, GeoTiff) { replay("geotiff", cdtgpu::fuzz::fuzz_geotiff); }
+TEST(FuzzRegression, GeoJson) { replay("geojson", cdtgpu::fuzz::fuzz_geojson); }
+TEST(FuzzRegression, Las) { replay("las", cdtgpu::fuzz::fuzz_las); }
 
 }  // namespace

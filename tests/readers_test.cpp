@@ -329,9 +329,9 @@ TEST_F(Inputs, ExtensionIsCaseInsensitive) {
 }
 
 TEST_F(Inputs, UnknownExtensionMissingFileAndEmptyInput) {
-  write("x.las", "1 2 3\n");
+  write("x.e57", "1 2 3\n");
   InputSet in;
-  expect_input_error([&] { read_input(path("x.las"), {}, in); }, "x.las: unknown input format '.las'", 0);
+  expect_input_error([&] { read_input(path("x.e57"), {}, in); }, "x.e57: unknown input format '.e57'", 0);
   expect_input_error([&] { read_input(path("nothing.wkt"), {}, in); }, "nothing.wkt: no such file", 0);
   expect_input_error([&] { read_input(path("nothing.shp"), {}, in); }, "nothing.shp: no such file", 0);
   for (const char* f : {"e.wkt", "e.csv", "e.asc"}) {
