@@ -42,6 +42,7 @@ struct TriangulateOptions {
   double max_edge = 0;       // > 0: concave-hull trimming (core/regions.hpp)
   int64_t max_tile_points = -1;  // tiles of at most this many points (core/tiles.hpp); 0: never; -1: auto
   std::string tiles_out;         // the mesh as one file per tile plus index.geojson (io/tiles_dir.hpp); empty: none
+  std::string devices;           // GPUs for tiled runs (gpu/devices.hpp); empty: all hardware GPUs when tiled
 };
 
 class GpuStart;

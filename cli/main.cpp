@@ -14,6 +14,7 @@
 #include "cli/run.hpp"
 #include "gpu/check.hpp"
 #include "gpu/context.hpp"
+#include "gpu/devices.hpp"
 #include "core/error.hpp"
 
 using namespace cdtgpu;
@@ -94,6 +95,10 @@ int main(int argc, char** argv) {
     }
     if (*d) {
       std::cout << gpu::describe_devices(device);
+      // What a tiled GPU run spreads over without --devices (cli/stages.cpp, tile_devices).
+      std::string tiled;
+      for (size_t i : gpu::select_devices(gpu::list_devices(), "all")) tiled += (tiled.empty() ? "" : ", ") + std::to_string(i);
+      std::cout << "Tiled GPU runs use device(s) " << tiled << " (--devices all, the default; --devices 0,2 picks)\n";
       return 0;
     }
   } catch (const InputError& e) {

@@ -81,6 +81,17 @@ void add_triangulate_options(CLI::App* t, TriangulateArgs& args) {
                 "Default: tiles on every core for the CPU backend at 100K points or more, and for the GPU when "
                 "the input exceeds what the device holds")
       ->check(non_negative);
+  t->add_option("--devices", tri.devices,
+                "GPUs for tiled runs: all, or indices 0,2,3 as `cdtgpu devices` lists them; default: all hardware "
+                "GPUs when the run is tiled on a host with several, else the one device")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            bool ok = text == "all" || (!text.empty() && text.front() != ',' && text.back() != ',' &&
+                                        text.find(",,") == std::string::npos);
+            for (char c : text) ok = ok && (text == "all" || (c >= '0' && c <= '9') || c == ',');
+            return ok ? std::string() : "must be all or device indices separated by commas (e.g. 0,2), not " + text;
+          },
+          "all|INDEX,..."));
   add_input_options(t, tri.input, args.crs);
 }
 

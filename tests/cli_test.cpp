@@ -313,6 +313,26 @@ TEST_F(Cli, VerifyChecksMaxEdgeTrimming) {
   EXPECT_EQ(run("verify " + path("whole.ply") + " " + coast + " --max-edge -1").code, 2);
 }
 
+// --devices: tiles spread over the devices it names give the same bytes; a list that is not one is a usage error.
+TEST_F(Cli, TilesOnTheDevicesListed) {
+  write_terrain();
+  const std::string in = path("dem.csv") + " " + path("lines.wkt") + " -q";
+  ASSERT_EQ(run("triangulate " + in + " --backend cgal -o " + path("one.ply")).code, 0);
+  Result r = run("triangulate " + in + " --backend gpu --max-tile-points 100 --devices all -o " + path("all.ply") +
+                 " --stats " + path("all.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(path("all.ply")), slurp(path("one.ply")));
+  auto stats = nlohmann::json::parse(slurp(path("all.json")));
+  EXPECT_GE(stats["counts"]["tile_devices"].get<int>(), 1);
+  EXPECT_GT(stats["counts"]["tiles"].get<int>(), 2);
+  r = run("triangulate " + in + " --devices 0,,1 -o " + path("x.ply"));
+  EXPECT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.err.find("device indices separated by commas"), std::string::npos) << r.err;
+  r = run("triangulate " + in + " --backend gpu --max-tile-points 100 --devices 99 -o " + path("x.ply"));
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("out of range"), std::string::npos) << r.err;
+}
+
 TEST_F(Cli, UnknownInputOptionIsAUsageError) {
   write_terrain();
   Result r = run("triangulate " + path("dem.csv") + ":colour=red -o " + path("out.ply"));
@@ -500,7 +520,7 @@ TEST_F(Cli, TiledRunsWriteTheUntiledBytes) {
       auto stats = nlohmann::json::parse(slurp(path(name + ".json")));
       EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2) << name;
       EXPECT_GT(stats["counts"]["merge_vertices"].get<int>(), 0) << name;
-      for (const char* key : {"tile_points", "tiles", "tile_levels", "tile_final_triangles", "merge_vertices",
+      for (const char* key : {"tile_points", "tiles", "tile_levels", "tile_final_triangles", "tile_devices", "merge_vertices",
                               "merge_segments", "merge_triangles", "constraint_splits_at_vertices",
                               "gpu_delaunay_rounds", "gpu_delaunay_built_twice", "gpu_constraint_flip_rounds",
                               "gpu_legalise_rounds", "gpu_peak_device_bytes"})
