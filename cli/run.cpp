@@ -24,8 +24,7 @@ int run_triangulate(const TriangulateOptions& options) {
   prepare_job(job);
   triangulate_job(job);
   apply_job_regions(job);
-  derive_outputs(job);
-  write_outputs(job);
+  derive_and_write_outputs(job);
   count_results(job);
   release_job(job, &gpus);
   write_job_stats(job);

@@ -460,27 +460,73 @@ void derive_outputs(Job& job) {
   job.gpu_contours.reset();
 }
 
-void write_outputs(Job& job) {
+namespace {
+
+// The mesh file and the --tiles-out folder; returns how many tile files. Touches no stats: it may run on a
+// thread of its own beside derive_outputs.
+uint64_t write_mesh_files(const Job& job) {
   const TriangulateOptions& options = job.options;
+  if (!options.output.empty())
+    write_mesh_file(job.result.mesh, crs_for(job, options.output), job.write, options.output);
+  if (options.tiles_out.empty()) return 0;
+  // Pieces as large as the run's tiles, else a million points a file.
+  const uint64_t piece = options.max_tile_points > 0 ? uint64_t(options.max_tile_points) : 1'000'000;
+  const std::vector<MeshPiece> pieces = split_mesh(job.result.mesh, piece);
+  write_tiles_dir(pieces, job.crs, job.write, options.tiles_out);
+  return pieces.size();
+}
+
+void write_derived_files(Job& job) {
+  const TriangulateOptions& options = job.options;
+  if (job.grid) write_grid_file(*job.grid, crs_for(job, options.grid_out), options.grid_out);
+  if (!options.contours_out.empty())
+    write_contours_wkt_file(job.contours, crs_for(job, options.contours_out), options.contours_out);
+  if (job.preview) {
+    std::vector<uint8_t> rgba = hillshade_rgba(*job.preview);
+    draw_edges(rgba, job.preview->spec, job.prepared.vertices, job.prepared.constraints);
+    write_png_file(options.preview, job.preview->spec.ncols, job.preview->spec.nrows, rgba);
+  }
+}
+
+}  // namespace
+
+void write_outputs(Job& job) {
   timed(job, "write", [&] {
-    if (!options.output.empty())
-      write_mesh_file(job.result.mesh, crs_for(job, options.output), job.write, options.output);
-    if (!options.tiles_out.empty()) {
-      // Pieces as large as the run's tiles, else a million points a file.
-      const uint64_t piece = options.max_tile_points > 0 ? uint64_t(options.max_tile_points) : 1'000'000;
-      const std::vector<MeshPiece> pieces = split_mesh(job.result.mesh, piece);
-      write_tiles_dir(pieces, job.crs, job.write, options.tiles_out);
-      job.stats.counts["tile_files"] = pieces.size();
-    }
-    if (job.grid) write_grid_file(*job.grid, crs_for(job, options.grid_out), options.grid_out);
-    if (!options.contours_out.empty())
-      write_contours_wkt_file(job.contours, crs_for(job, options.contours_out), options.contours_out);
-    if (job.preview) {
-      std::vector<uint8_t> rgba = hillshade_rgba(*job.preview);
-      draw_edges(rgba, job.preview->spec, job.prepared.vertices, job.prepared.constraints);
-      write_png_file(options.preview, job.preview->spec.ncols, job.preview->spec.nrows, rgba);
-    }
+    const uint64_t tile_files = write_mesh_files(job);
+    if (!job.options.tiles_out.empty()) job.stats.counts["tile_files"] = tile_files;
+    write_derived_files(job);
   });
+}
+
+void derive_and_write_outputs(Job& job) {
+  const TriangulateOptions& options = job.options;
+  if (options.grid_out.empty() && options.contours_out.empty() && options.preview.empty()) {
+    write_outputs(job);
+    return;
+  }
+  // The mesh is final: it is written while the grid, contours and preview are made from it. A grid the
+  // options cannot make is a usage error before anything is written; a later failure of either side leaves
+  // the other's files whole (each is written atomically), as a failing grid write always did.
+  if (!options.grid_out.empty()) grid_for(job.result.mesh, options.cell);
+  double mesh_ms = 0;
+  std::future<uint64_t> mesh = std::async(std::launch::async, [&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    const uint64_t files = write_mesh_files(job);
+    mesh_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return files;
+  });
+  try {
+    derive_outputs(job);
+  } catch (...) {
+    mesh.wait();
+    throw;
+  }
+  timed(job, "write", [&] {
+    const uint64_t tile_files = mesh.get();
+    if (!options.tiles_out.empty()) job.stats.counts["tile_files"] = tile_files;
+    write_derived_files(job);
+  });
+  job.stats.stage_ms.emplace_back("write: mesh (own thread, beside the derived outputs)", mesh_ms);
 }
 
 void count_results(Job& job) {

@@ -12,7 +12,8 @@
 //   triangulate_job(job);           // CGAL, the GPU, or tiles of either        } the device's stages: one
 //   apply_job_regions(job);         // boundaries, holes, --max-edge            } job at a time in a batch
 //   derive_outputs(job);            // grid, contours, preview's raster         }
-//   write_outputs(job);             // mesh, tiles, grid, contours, preview
+//   write_outputs(job);             // mesh, tiles, grid, contours, preview (a single run: the mesh while
+//                                   // the derived outputs are made, derive_and_write_outputs)
 //   count_results(job);             // the last counts into job.stats
 //   release_job(job);
 //   write_job_stats(job);           // --stats
@@ -35,6 +36,8 @@ void triangulate_job(Job& job);
 void apply_job_regions(Job& job);
 void derive_outputs(Job& job);
 void write_outputs(Job& job);
+// A single run's derive_outputs + write_outputs, the mesh written on a thread of its own meanwhile.
+void derive_and_write_outputs(Job& job);
 void count_results(Job& job);
 // Frees the job's data (timed as "release"); `exiting`: the process ends after this job, so the GPU's
 // pipelines are saved and the device is left to the operating system (GpuStart::leave_for_exit).
