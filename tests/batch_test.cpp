@@ -11,32 +11,21 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include "tests/binary_test.hpp"
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string err;
-};
+using cdtgpu::test::Result;
 
-class Batch : public ::testing::Test {
+class Batch : public cdtgpu::test::BinaryTest {
  public:
-  fs::path dir;
-
   // A folder name with a space, so that every job line needs its quoting.
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("cdtgpu_batch_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name()) /
-          "with space";
-    fs::remove_all(dir.parent_path());
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir.parent_path()); }
+  Batch() : BinaryTest("cdtgpu_batch_", "with space") {}
 
-  std::string path(const std::string& name) const { return (dir / name).string(); }
   // The path with a backslash before each space, the third way a job line (and a shell) can keep it one word.
   std::string backslashed(const std::string& name) const {
     std::string p;
@@ -45,17 +34,6 @@ class Batch : public ::testing::Test {
   }
   // The path in single quotes, as a shell and a job line both read it.
   std::string q(const std::string& name) const { return "'" + path(name) + "'"; }
-
-  void write(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name), std::ios::binary) << text;
-  }
-
-  static std::string slurp(const std::string& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-  }
 
   // In `dir`. `args` go through /bin/sh, so a job line's quoting means the same here as in a job file.
   Result run(const std::string& args, const std::string& stdin_from = "/dev/null") const {
@@ -71,14 +49,7 @@ class Batch : public ::testing::Test {
   // 400 jittered DEM points, two lines and a building ring in projected metres; a boundary, a lake and a house
   // for the regions; a small ESRI ASCII grid.
   void write_inputs() const {
-    std::mt19937_64 rng(11);
-    std::uniform_real_distribution<double> u(0, 1);
-    std::ostringstream xyz;
-    xyz << "x,y,z\n";
-    for (int i = 0; i < 20; ++i)
-      for (int j = 0; j < 20; ++j)
-        xyz << 500000 + i * 10 + u(rng) << ',' << 6000000 + j * 10 + u(rng) << ',' << 100 + i + j * 0.5 << '\n';
-    write("dem.csv", xyz.str());
+    write("dem.csv", cdtgpu::test::jittered_dem_csv(11));
     write("lines.wkt",
           "LINESTRING Z (500005 6000005 110, 500100 6000050 111, 500185 6000180 112)\n"
           "POLYGON Z ((500120 6000020 130, 500140 6000020 130, 500140 6000040 130, 500120 6000040 130, "

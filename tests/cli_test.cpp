@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include "gpu/context.hpp"
+#include "tests/binary_test.hpp"
 #include "io/tiles_dir.hpp"
 #include "io/writers.hpp"
 
@@ -20,10 +21,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string err;
-};
+using cdtgpu::test::Result;
 
 // The name of the first Vulkan device the GPU backend can use (lavapipe in CI); empty if none.
 std::string first_usable_device() {
@@ -32,35 +30,9 @@ std::string first_usable_device() {
   return "";
 }
 
-class Cli : public ::testing::Test {
+class Cli : public cdtgpu::test::BinaryTest {
  public:
-  fs::path dir;
-
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("cdtgpu_cli_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
-
-  std::string path(const std::string& name) const { return (dir / name).string(); }
-
-  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
-
-  static std::string slurp(const std::string& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-  }
-
-  Result run(const std::string& args, const std::string& stdout_to = "/dev/null") const {
-    std::string err = path("stderr.txt");
-    std::string cmd = std::string(CDTGPU_BINARY) + " " + args + " >" + stdout_to + " 2>" + err;
-    int status = std::system(cmd.c_str());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err)};
-  }
+  Cli() : BinaryTest("cdtgpu_cli_") {}
 
   // Files in dir other than the inputs we wrote: a failed run must leave none (no half file, no tmp file).
   size_t files_matching(const std::string& stem) const {
@@ -72,14 +44,7 @@ class Cli : public ::testing::Test {
 
   // A small terrain: 400 jittered DEM points, two contour lines, one building ring, in projected metres.
   void write_terrain() const {
-    std::mt19937_64 rng(7);
-    std::uniform_real_distribution<double> u(0, 1);
-    std::ostringstream xyz;
-    xyz << "x,y,z\n";
-    for (int i = 0; i < 20; ++i)
-      for (int j = 0; j < 20; ++j)
-        xyz << 500000 + i * 10 + u(rng) << ',' << 6000000 + j * 10 + u(rng) << ',' << 100 + i + j * 0.5 << '\n';
-    write("dem.csv", xyz.str());
+    write("dem.csv", cdtgpu::test::jittered_dem_csv(7));
     write("lines.wkt",
           "LINESTRING Z (500005 6000005 110, 500100 6000050 111, 500185 6000180 112)\n"
           "LINESTRING (500020 6000150, 500060 6000120)\n"

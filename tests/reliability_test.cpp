@@ -24,6 +24,7 @@
 #include "core/error.hpp"
 #include "core/projection.hpp"
 #include "io/readers.hpp"
+#include "tests/binary_test.hpp"
 
 namespace fs = std::filesystem;
 using namespace cdtgpu;
@@ -32,39 +33,12 @@ namespace {
 
 const std::string kSample = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
 
-struct Result {
-  int code;
-  std::string err;
-};
+using cdtgpu::test::Result;
 
-class Reliability : public ::testing::Test {
+class Reliability : public cdtgpu::test::BinaryTest {
  public:
-  fs::path dir;
+  Reliability() : BinaryTest("cdtgpu_rel_") {}
 
-  void SetUp() override {
-    dir = fs::temp_directory_path() / ("cdtgpu_rel_" + std::to_string(::getpid()) + "_" +
-                                       ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
-
-  std::string path(const std::string& name) const { return (dir / name).string(); }
-  void write(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name), std::ios::binary) << text;
-  }
-  static std::string slurp(const std::string& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-  }
-  Result run(const std::string& args, const std::string& stdout_to = "/dev/null") const {
-    const std::string err = path("stderr.txt");
-    const std::string cmd = std::string(CDTGPU_BINARY) + " " + args + " >" + stdout_to + " 2>" + err;
-    const int status = std::system(cmd.c_str());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err)};
-  }
   // Files in dir whose name contains part.
   size_t files_containing(const std::string& part) const {
     size_t n = 0;
