@@ -1,8 +1,10 @@
 // SMS 2DM mesh writer (Aquaveo SMS; QGIS opens it as a mesh layer through MDAL): MESH2D, one ND card per
-// vertex and one E3T card per triangle, 1-based ids, material 1. The CRS goes in the .prj beside the file.
+// vertex and one E3T card per triangle, 1-based ids, material 1, formatted on all cores. The CRS goes in the
+// .prj beside the file.
 #include <string>
 
 #include "io/mesh_formats.hpp"
+#include "io/parallel_text.hpp"
 #include "io/text_out.hpp"
 
 namespace cdtgpu {
@@ -18,25 +20,21 @@ void write_2dm(const Mesh& mesh, const Crs& crs, std::ostream& out) {
     o.text("MESHNAME \"").text(name).text("\"\n");
   }
   o.text("NUM_MATERIALS_PER_ELEM 1\n");
-  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const Point3& p = mesh.vertices[v];
-    o.text("ND ")
-        .number(uint64_t(v) + 1)
-        .ch(' ')
-        .number(p.x)
-        .ch(' ')
-        .number(p.y)
-        .ch(' ')
-        .number(p.z)
-        .ch('\n');
-  }
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle& tri = checked_triangle(mesh, t);
-    o.text("E3T ").number(uint64_t(t) + 1);
-    for (uint32_t v : tri) o.ch(' ').number(uint64_t(v) + 1);
-    o.text(" 1\n");
-  }
   o.flush();
+  check_triangles(mesh);
+  write_items(out, mesh.vertices.size(), 3 + 21 + 3 * (TextOut::kMaxNumberChars + 1) + 1, [&](uint64_t v, char* p) {
+    const Point3& q = mesh.vertices[v];
+    p = put_uint(put(p, "ND "), v + 1);
+    p = TextOut::put_number(put(p, " "), q.x);
+    p = TextOut::put_number(put(p, " "), q.y);
+    p = TextOut::put_number(put(p, " "), q.z);
+    return put(p, "\n");
+  });
+  write_items(out, mesh.triangles.size(), 4 + 4 * 21 + 3, [&](uint64_t t, char* p) {
+    p = put_uint(put(p, "E3T "), t + 1);
+    for (uint32_t v : mesh.triangles[t]) p = put_uint(put(p, " "), uint64_t(v) + 1);
+    return put(p, " 1\n");
+  });
 }
 
 }  // namespace cdtgpu

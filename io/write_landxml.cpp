@@ -7,6 +7,7 @@
 #include <string>
 
 #include "io/mesh_formats.hpp"
+#include "io/parallel_text.hpp"
 #include "io/text_out.hpp"
 
 namespace cdtgpu {
@@ -88,17 +89,25 @@ void write_landxml(const Mesh& mesh, const Crs& crs, std::time_t stamp, std::ost
   }
   o.text("  <Application name=\"cdtgpu\" version=\"0.1.0\"/>\n");
   o.text("  <Surfaces>\n    <Surface name=\"TIN\">\n      <Definition surfType=\"TIN\">\n        <Pnts>\n");
-  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const Point3& p = mesh.vertices[v];
-    o.text("          <P id=\"").number(uint64_t(v) + 1).text("\">");
-    o.number(p.y).ch(' ').number(p.x).ch(' ').number(p.z).text("</P>\n");
-  }
+  o.flush();
+  check_triangles(mesh);
+  write_items(out, mesh.vertices.size(), 20 + 21 + 2 + 3 * (TextOut::kMaxNumberChars + 1) + 6, [&](uint64_t v, char* p) {
+    const Point3& q = mesh.vertices[v];
+    p = put(put_uint(put(p, "          <P id=\""), v + 1), "\">");
+    p = TextOut::put_number(p, q.y);  // LandXML points are northing, easting, elevation
+    p = TextOut::put_number(put(p, " "), q.x);
+    p = TextOut::put_number(put(p, " "), q.z);
+    return put(p, "</P>\n");
+  });
   o.text("        </Pnts>\n        <Faces>\n");
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle& tri = checked_triangle(mesh, t);
-    o.text("          <F>").number(uint64_t(tri[0]) + 1).ch(' ').number(uint64_t(tri[1]) + 1).ch(' ');
-    o.number(uint64_t(tri[2]) + 1).text("</F>\n");
-  }
+  o.flush();
+  write_items(out, mesh.triangles.size(), 13 + 3 * 21 + 6, [&](uint64_t t, char* p) {
+    const Triangle& tri = mesh.triangles[t];
+    p = put_uint(put(p, "          <F>"), uint64_t(tri[0]) + 1);
+    p = put_uint(put(p, " "), uint64_t(tri[1]) + 1);
+    p = put_uint(put(p, " "), uint64_t(tri[2]) + 1);
+    return put(p, "</F>\n");
+  });
   o.text("        </Faces>\n      </Definition>\n    </Surface>\n  </Surfaces>\n</LandXML>\n");
   o.flush();
 }

@@ -21,6 +21,7 @@
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 #include "io/mesh_formats.hpp"
+#include "io/parallel_text.hpp"
 
 namespace cdtgpu {
 
@@ -88,29 +89,33 @@ std::string one_line(const std::string& s) {
   return r;
 }
 
-void write_obj(const Mesh& mesh, const Crs& crs, Sink& out) {
+void write_obj(const Mesh& mesh, const Crs& crs, Sink& out, std::ostream& stream) {
   if (!crs.name.empty()) out.text("# crs: " + one_line(crs.name) + "\n");
-  for (const Point3& p : mesh.vertices) {
-    out.text("v ", 2);
-    out.number(p.x);
-    out.ch(' ');
-    out.number(p.y);
-    out.ch(' ');
-    out.number(p.z);
-    out.ch('\n');
-  }
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle& tri = checked_triangle(mesh, t);
-    out.ch('f');
-    for (uint32_t v : tri) {
-      out.ch(' ');
-      out.number(uint64_t(v) + 1);
+  out.flush();
+  check_triangles(mesh);
+  write_items(stream, mesh.vertices.size(), 3 * 25 + 3, [&](uint64_t v, char* p) {
+    const Point3& q = mesh.vertices[v];
+    p = put(p, "v ");
+    p = put_shortest(p, q.x);
+    *p++ = ' ';
+    p = put_shortest(p, q.y);
+    *p++ = ' ';
+    p = put_shortest(p, q.z);
+    *p++ = '\n';
+    return p;
+  });
+  write_items(stream, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
+    *p++ = 'f';
+    for (uint32_t v : mesh.triangles[t]) {
+      *p++ = ' ';
+      p = put_uint(p, uint64_t(v) + 1);
     }
-    out.ch('\n');
-  }
+    *p++ = '\n';
+    return p;
+  });
 }
 
-void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out) {
+void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out, std::ostream& stream) {
   std::string h = "ply\nformat ";
   h += ascii ? "ascii" : "binary_little_endian";
   h += " 1.0\n";
@@ -121,23 +126,27 @@ void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out) {
        std::to_string(mesh.triangles.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
   out.text(h);
   if (ascii) {
-    for (const Point3& p : mesh.vertices) {
-      out.number(p.x);
-      out.ch(' ');
-      out.number(p.y);
-      out.ch(' ');
-      out.number(p.z);
-      out.ch('\n');
-    }
-    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-      const Triangle& tri = checked_triangle(mesh, t);
-      out.ch('3');
-      for (uint32_t v : tri) {
-        out.ch(' ');
-        out.number(uint64_t(v));
+    out.flush();
+    check_triangles(mesh);
+    write_items(stream, mesh.vertices.size(), 3 * 25 + 3, [&](uint64_t v, char* p) {
+      const Point3& q = mesh.vertices[v];
+      p = put_shortest(p, q.x);
+      *p++ = ' ';
+      p = put_shortest(p, q.y);
+      *p++ = ' ';
+      p = put_shortest(p, q.z);
+      *p++ = '\n';
+      return p;
+    });
+    write_items(stream, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
+      *p++ = '3';
+      for (uint32_t v : mesh.triangles[t]) {
+        *p++ = ' ';
+        p = put_uint(p, uint64_t(v));
       }
-      out.ch('\n');
-    }
+      *p++ = '\n';
+      return p;
+    });
     return;
   }
   // Point3 is three packed doubles, the vertex element's layout: the array goes out as it is.
@@ -145,16 +154,7 @@ void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out) {
   out.text(reinterpret_cast<const char*>(mesh.vertices.data()), mesh.vertices.size() * sizeof(Point3));
   // Faces are 13 bytes each (a count byte and three indices), packed on all cores into one block.
   const size_t n = mesh.triangles.size();
-  const bool valid = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, n), true,
-      [&](const tbb::blocked_range<size_t>& r, bool ok) {
-        for (size_t t = r.begin(); ok && t < r.end(); ++t)
-          for (uint32_t v : mesh.triangles[t]) ok = ok && v < mesh.vertices.size();
-        return ok;
-      },
-      [](bool a, bool b) { return a && b; });
-  if (!valid)
-    for (size_t t = 0; t < n; ++t) checked_triangle(mesh, t);  // throws for the first bad triangle
+  check_triangles(mesh);
   // In blocks of 4 MiB reused: a 65 MB array for 5M faces cost more in page faults than its packing.
   constexpr size_t kFacesPerBlock = (size_t(4) << 20) / 13;
   std::vector<char> faces(std::min(n, kFacesPerBlock) * 13);
@@ -171,41 +171,54 @@ void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out) {
   }
 }
 
-void write_wkt(const Mesh& mesh, bool multipolygon, Sink& out) {
+void write_wkt(const Mesh& mesh, bool multipolygon, Sink& out, std::ostream& stream) {
   out.text(multipolygon ? "MULTIPOLYGON Z " : "TIN Z ");
   if (mesh.triangles.empty()) {
     out.text("EMPTY\n", 6);
     return;
   }
-  // Each vertex appears in about six triangles, four times in each ring list: format it once.
-  std::vector<char> pool;
-  std::vector<size_t> start(mesh.vertices.size() + 1, 0);
-  pool.reserve(mesh.vertices.size() * 40);
-  char buf[80];
-  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
-    const Point3& p = mesh.vertices[v];
-    char* e = std::to_chars(buf, buf + sizeof buf, p.x).ptr;
-    *e++ = ' ';
-    e = std::to_chars(e, buf + sizeof buf, p.y).ptr;
-    *e++ = ' ';
-    e = std::to_chars(e, buf + sizeof buf, p.z).ptr;
-    pool.insert(pool.end(), buf, e);
-    start[v + 1] = pool.size();
-  }
-  auto point = [&](uint32_t v) { out.text(pool.data() + start[v], start[v + 1] - start[v]); };
+  check_triangles(mesh);
+  // Each vertex appears in about six triangles, four times in each ring list: formatted once, on all cores
+  // (blocks of vertices into texts of their own, then one pool).
+  const size_t V = mesh.vertices.size();
+  constexpr size_t kBlock = 1 << 14;
+  const size_t blocks = (V + kBlock - 1) / kBlock;
+  std::vector<std::string> block_text(blocks);
+  std::vector<uint8_t> length(V);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t k) {
+    char buf[80];
+    for (size_t v = k * kBlock; v < std::min(V, (k + 1) * kBlock); ++v) {
+      const Point3& q = mesh.vertices[v];
+      char* e = put_shortest(buf, q.x);
+      *e++ = ' ';
+      e = put_shortest(e, q.y);
+      *e++ = ' ';
+      e = put_shortest(e, q.z);
+      length[v] = uint8_t(e - buf);
+      block_text[k].append(buf, e);
+    }
+  });
+  std::vector<size_t> start(V + 1, 0);
+  for (size_t v = 0; v < V; ++v) start[v + 1] = start[v] + length[v];
+  std::string pool;
+  pool.reserve(start[V]);
+  for (const std::string& b : block_text) pool += b;
+  block_text = {};
+  auto point = [&](char* p, uint32_t v) { return put(p, std::string_view(pool).substr(start[v], length[v])); };
   out.ch('(');
-  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const Triangle& tri = checked_triangle(mesh, t);
-    out.text(t ? ", ((" : "((", t ? 4 : 2);
-    point(tri[0]);
-    out.text(", ", 2);
-    point(tri[1]);
-    out.text(", ", 2);
-    point(tri[2]);
-    out.text(", ", 2);
-    point(tri[0]);  // rings repeat their first point
-    out.text("))", 2);
-  }
+  out.flush();
+  write_items(stream, mesh.triangles.size(), 4 * 80 + 12, [&](uint64_t t, char* p) {
+    const Triangle& tri = mesh.triangles[t];
+    p = put(p, t ? ", ((" : "((");
+    p = point(p, tri[0]);
+    p = put(p, ", ");
+    p = point(p, tri[1]);
+    p = put(p, ", ");
+    p = point(p, tri[2]);
+    p = put(p, ", ");
+    p = point(p, tri[0]);  // rings repeat their first point
+    return put(p, "))");
+  });
   out.text(")\n", 2);
 }
 
@@ -250,9 +263,9 @@ MeshFormat parse_format(const std::string& name) {
 void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, std::ostream& out) {
   Sink sink(out);
   switch (options.format) {
-    case MeshFormat::Obj: write_obj(mesh, crs, sink); break;
-    case MeshFormat::Ply: write_ply(mesh, crs, options.ascii, sink); break;
-    case MeshFormat::Wkt: write_wkt(mesh, options.wkt_multipolygon, sink); break;
+    case MeshFormat::Obj: write_obj(mesh, crs, sink, out); break;
+    case MeshFormat::Ply: write_ply(mesh, crs, options.ascii, sink, out); break;
+    case MeshFormat::Wkt: write_wkt(mesh, options.wkt_multipolygon, sink, out); break;
     case MeshFormat::LandXml: write_landxml(mesh, crs, output_timestamp(), out); return;
     case MeshFormat::Sms2dm: write_2dm(mesh, crs, out); return;
   }

@@ -1,6 +1,7 @@
 // Writers and the mesh reader: exact round trips in every format, the exact text of a small mesh, empty
 // meshes, whole-or-nothing files, the .prj beside the output, and readable errors from bad mesh files.
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <bit>
@@ -141,6 +142,37 @@ TEST_F(WritersTest, EveryFormatRoundTripsALargeMeshExactly) {
   for (const Case& c : all_formats()) {
     write_mesh_file(mesh, Crs{}, c.options, path(c.file));
     expect_identical(mesh, read_mesh_file(path(c.file)), c.file);
+  }
+}
+
+// Text formats are formatted on all cores in blocks: the bytes equal one thread's, and a bad index deep in the
+// faces is still reported as the first bad triangle, with nothing written.
+TEST_F(WritersTest, EveryFormatTheSameBytesOnOneThreadAndOnAll) {
+  const Mesh mesh = random_mesh(120000, 9);
+  std::vector<Case> cases = all_formats();
+  cases.push_back({"mesh.xml", {MeshFormat::LandXml, false, false}});
+  cases.push_back({"mesh.2dm", {MeshFormat::Sms2dm, false, false}});
+  setenv("SOURCE_DATE_EPOCH", "1700000000", 1);  // the LandXML date and time
+  for (const Case& c : cases) {
+    std::ostringstream all, one;
+    write_mesh(mesh, named_crs("GDA2020 / MGA zone 56"), c.options, all);
+    tbb::task_arena(1).execute([&] { write_mesh(mesh, named_crs("GDA2020 / MGA zone 56"), c.options, one); });
+    EXPECT_GT(all.str().size(), size_t(2) << 20) << c.file << ": more than one block";
+    EXPECT_TRUE(all.str() == one.str()) << c.file;
+  }
+  unsetenv("SOURCE_DATE_EPOCH");
+  Mesh bad = mesh;
+  bad.triangles[100000][1] = 9999999;
+  bad.triangles[110000][2] = 8888888;
+  for (const Case& c : cases) {
+    try {
+      write_mesh_file(bad, Crs{}, c.options, path(c.file));
+      ADD_FAILURE() << c.file << ": a bad index was written";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("triangle 100000 has vertex index 9999999"), std::string::npos)
+          << c.file << ": " << e.what();
+    }
+    EXPECT_FALSE(fs::exists(path(c.file))) << c.file;
   }
 }
 
