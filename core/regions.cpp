@@ -1,6 +1,6 @@
 // apply_regions: boundaries, holes and max-edge trimming over a finished CDT, on all cores. Cost: O(T) work
-// in parallel passes: the twins of the 3T half-edges, one walk per constraint along mesh edges, union-find over triangle adjacency, a breadth-first search over its few components, one
-// compaction. Every pass gives the same result whatever the thread count or schedule: flags are combined by
+// in parallel passes: the twins of the 3T half-edges, one walk per constraint along mesh edges, union-find
+// over triangle adjacency, a breadth-first search over its few components, one compaction. Every pass gives the same result whatever the thread count or schedule: flags are combined by
 // OR and XOR, the walk breaks ties by vertex id, a set's root is its smallest triangle.
 //
 // The constrained mesh edges are found the way verify.cpp finds them: from one end of a constraint, step to
@@ -29,6 +29,7 @@
 #include <string>
 
 #include "core/big_array.hpp"
+#include "core/error.hpp"
 
 namespace cdtgpu {
 
@@ -430,6 +431,11 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
   const bool regions =
       std::find(rules.region_edge.begin(), rules.region_edge.end(), 1) != rules.region_edge.end();
   if (T == 0 || (!regions && rules.max_edge <= 0)) return stats;
+  // Half-edges are numbered in 32 bits.
+  if (3 * uint64_t(T) >= kNone)
+    throw UsageError("boundaries, holes and --max-edge take meshes of at most " + std::to_string(kNone / 3 - 1) +
+                     " triangles; this one has " + std::to_string(T) +
+                     ": leave them out, or split the input into parts");
   // Pass times for -v: what to look at when the stage grows.
   auto t0 = std::chrono::steady_clock::now();
   std::string passes;

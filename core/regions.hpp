@@ -51,7 +51,8 @@ RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts
 std::vector<uint8_t> region_constraints(const PreparedInput& prepared, const std::vector<Polyline>& rings);
 
 // Drops the triangles outside the domain and those trimmed, then the vertices left in no triangle. `mesh` is
-// the CDT of `prepared` in canonical order; it stays canonical. A mesh without triangles is left as it is.
+// the CDT of `prepared` in canonical order; it stays canonical. A mesh without triangles is left as it is; one
+// of 1,431,655,765 triangles or more (half-edges numbered in 32 bits) is a UsageError.
 RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules);
 
 }  // namespace cdtgpu
