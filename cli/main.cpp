@@ -10,6 +10,7 @@
 #include "bench/bench.hpp"
 #include "cli/batch.hpp"
 #include "cli/job_log.hpp"
+#include "cli/mpi.hpp"
 #include "cli/options.hpp"
 #include "cli/run.hpp"
 #include "gpu/check.hpp"
@@ -19,11 +20,20 @@
 
 using namespace cdtgpu;
 
-int main(int argc, char** argv) {
+namespace {
+
+int run_cli(int argc, char** argv, const MpiSession& mpi) {
   auto logger = spdlog::stderr_color_mt("cdtgpu");
   use_job_log(*logger);  // "cdtgpu: LEVEL: MESSAGE", a batch's job named before the message
   spdlog::set_default_logger(logger);
   spdlog::set_level(spdlog::level::info);
+  if (mpi.ranks() > 1)  // every line names its rank and host
+    logger->set_pattern("cdtgpu rank " + std::to_string(mpi.rank()) + " of " + std::to_string(mpi.ranks()) +
+                        " on " + mpi.host() + ": %l: %v");
+  if (!mpi.refusal().empty()) {
+    spdlog::error("{}", mpi.refusal());
+    return 2;
+  }
 
   CLI::App app{"cdtgpu: constrained Delaunay triangulation (TIN) of GIS contours, DEM points and footprints"};
   app.require_subcommand(1);
@@ -73,12 +83,22 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : 2;
   }
   if (verbose) spdlog::set_level(spdlog::level::debug);
-  if (quiet) spdlog::set_level(spdlog::level::warn);
+  if (quiet || mpi.rank() != 0) spdlog::set_level(spdlog::level::warn);  // rank 0 tells the story
+  if (mpi.ranks() > 1 && !*t) {
+    spdlog::error("only `cdtgpu triangulate` runs as several MPI processes");
+    return 2;
+  }
 
   try {
     if (*t) {
       TriangulateOptions options = triangulate_options(tri);
       options.device = device;
+      options.sharing = mpi.sharing();
+      // Ranks of one host take a GPU each (their local rank's), unless --device or --devices says otherwise.
+      if (mpi.ranks() > 1 && options.backend != "cgal" && options.device.empty() && options.devices.empty()) {
+        const std::vector<size_t> gpus = gpu::select_devices(gpu::list_devices(), "all");
+        options.device = options.devices = std::to_string(gpus[size_t(mpi.local_rank()) % gpus.size()]);
+      }
       return run_triangulate(options);
     }
     if (*v) {
@@ -120,4 +140,13 @@ int main(int argc, char** argv) {
     return 3;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MpiSession mpi(&argc, &argv);
+  const int code = run_cli(argc, argv, mpi);
+  if (code != 0 && mpi.ranks() > 1) mpi.abort(code);  // the other ranks may be waiting for this one
+  return code;
 }

@@ -23,6 +23,11 @@ int run_triangulate(const TriangulateOptions& options) {
   choose_backend(job, gpus);
   prepare_job(job);
   triangulate_job(job);
+  // Under MPI the other ranks have handed their tiles to rank 0, which finishes and writes alone.
+  if (options.sharing && options.sharing->rank != 0) {
+    release_job(job, &gpus);
+    return 0;
+  }
   apply_job_regions(job);
   derive_and_write_outputs(job);
   count_results(job);

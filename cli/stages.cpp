@@ -73,6 +73,7 @@ CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_point
   TileOptions opt;
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
+  opt.sharing = job.options.sharing;
   TileStats ts;
   CdtResult r = timed(job, "triangulate: tiles and merge", [&] {
     return triangulate_tiled(std::move(in), opt, triangulate, &ts);

@@ -669,17 +669,52 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
       results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
     });
   };
-  if (options.tiles_in_flight == 0 || options.tiles_in_flight >= tiles) {
-    tbb::parallel_for(size_t(0), tiles, size_t(1), one_tile);
+  // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's).
+  const TileSharing* sharing = level == 1 && options.sharing && options.sharing->ranks > 1 ? options.sharing : nullptr;
+  std::vector<size_t> mine;
+  for (size_t t = 0; t < tiles; ++t)
+    if (!sharing || int(t % size_t(sharing->ranks)) == sharing->rank) mine.push_back(t);
+  auto my_tile = [&](size_t k) { one_tile(mine[k]); };
+  if (options.tiles_in_flight == 0 || options.tiles_in_flight >= mine.size()) {
+    tbb::parallel_for(size_t(0), mine.size(), size_t(1), my_tile);
   } else {
     size_t next = 0;
     tbb::parallel_pipeline(options.tiles_in_flight,
                            tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
                                                           [&](tbb::flow_control& fc) -> size_t {
-                                                            if (next == tiles) fc.stop();
-                                                            return next < tiles ? next++ : 0;
+                                                            if (next == mine.size()) fc.stop();
+                                                            return next < mine.size() ? next++ : 0;
                                                           }) &
-                               tbb::make_filter<size_t, void>(tbb::filter_mode::parallel, one_tile));
+                               tbb::make_filter<size_t, void>(tbb::filter_mode::parallel, my_tile));
+  }
+  if (sharing) {
+    // Packed per tile: t, the final triangles' count and ids, the border's count and ids.
+    std::vector<uint32_t> pack;
+    for (size_t t : mine) {
+      const TileResult& r = results[t];
+      pack.push_back(uint32_t(t));
+      pack.push_back(uint32_t(r.final_triangles.size()));
+      for (const Triangle& tri : r.final_triangles) pack.insert(pack.end(), tri.begin(), tri.end());
+      pack.push_back(uint32_t(r.border.size()));
+      for (const Edge& e : r.border) pack.insert(pack.end(), e.begin(), e.end());
+    }
+    std::vector<std::vector<uint32_t>> all = sharing->gather(std::move(pack));
+    if (sharing->rank != 0) return {};
+    for (const std::vector<uint32_t>& from : all)
+      for (size_t at = 0; at < from.size();) {
+        TileResult& r = results[from[at++]];
+        r.final_triangles.resize(from[at++]);
+        for (Triangle& tri : r.final_triangles)
+          for (uint32_t& id : tri) id = from[at++];
+        r.border.resize(from[at++]);
+        for (Edge& e : r.border)
+          for (uint32_t& id : e) id = from[at++];
+      }
+    // The final region's vertices, as run_tile marks them, for the other ranks' tiles too.
+    for (const TileResult& r : results)
+      tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
+        for (uint32_t id : r.final_triangles[i]) std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
+      });
   }
 
   // The merge: the vertices not inside the final region, the segments between them (a segment with an end

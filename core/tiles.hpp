@@ -45,6 +45,15 @@ using TileTriangulator = std::function<TileMesh(const std::vector<Point3>& verti
 // CGAL's constrained Delaunay triangulation (core/cdt_cgal.hpp, cdt_of_graph).
 TileTriangulator cgal_tile_triangulator();
 
+// The first level's tiles shared among processes (issue 29: MPI ranks, cli/mpi.cpp): rank r triangulates the
+// tiles t with t % ranks == r and hands their results, packed, to `gather`, which returns every rank's packs
+// (ranks 0, 1, ...) at rank 0 and nothing elsewhere. Rank 0 merges them as if it had made them all; the other
+// ranks' triangulate_tiled returns no triangles. Every rank must hold the same input (the plan is the same).
+struct TileSharing {
+  int rank = 0, ranks = 1;
+  std::function<std::vector<std::vector<uint32_t>>(std::vector<uint32_t> mine)> gather;
+};
+
 struct TileOptions {
   uint64_t max_tile_points =
       0;  // at most this many of a tile's own vertices; below 3 or >= the input: no tiles
@@ -53,6 +62,7 @@ struct TileOptions {
   // Tiles worked on at once, a sliding window (0: as many as the cores take). A device's tiles are large: two at
   // once (one on the device, the next gathered meanwhile) bound host memory by the tile size.
   unsigned tiles_in_flight = 0;
+  const TileSharing* sharing = nullptr;  // null: every tile here
 };
 
 struct TileStats {

@@ -12,4 +12,5 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools glslang-tools \
   libgtest-dev libgmock-dev libbenchmark-dev python3-matplotlib \
   clang-14 libfuzzer-14-dev libclang-rt-14-dev libxml2-utils \
-  libtiff-dev libgeotiff-dev libdeflate-dev gdal-bin >/dev/null  # GeoTIFF in/out; gdal-bin: tests only
+  libtiff-dev libgeotiff-dev libdeflate-dev gdal-bin \
+  libopenmpi-dev openmpi-bin >/dev/null  # GeoTIFF in/out (gdal-bin: tests only); MPI: tiles over processes

@@ -209,6 +209,41 @@ TEST(Tiles, SameTrianglesWhateverTheTilesInFlight) {
 
 // The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at
 // UTM offsets, against rectangles whose sides sit at the exact circle's extremes and a hair beside them.
+// Tiles shared among processes (TileSharing, as MPI ranks run them): ranks 1 and 2 triangulate their tiles and
+// hand them over, rank 0 merges everything; the same triangles as the single run, none on the other ranks.
+TEST(Tiles, SharedAmongRanksGiveTheSingleRun) {
+  InputSet in = random_points(3000, 41);
+  in.lines.push_back(line({{-10, 500, 0}, {1010, 480, 0}}));  // crosses every rank's tiles
+  in.lines.push_back(line({{500, -10, 0}, {520, 1010, 0}}));
+  const PreparedInput p = prepare(in);
+  const CdtResult single = triangulate_cgal(p);
+  for (int ranks : {2, 3}) {
+    auto packs = std::vector<std::vector<uint32_t>>(size_t(ranks));
+    for (int rank = ranks - 1; rank >= 0; --rank) {
+      TileSharing sharing;
+      sharing.rank = rank;
+      sharing.ranks = ranks;
+      sharing.gather = [&](std::vector<uint32_t> mine) {
+        packs[size_t(rank)] = std::move(mine);
+        return rank == 0 ? packs : std::vector<std::vector<uint32_t>>{};
+      };
+      TileOptions opt;
+      opt.max_tile_points = 100;
+      opt.sharing = &sharing;
+      TileStats ts;
+      const CdtResult r = triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
+      if (rank != 0) {
+        EXPECT_TRUE(r.mesh.triangles.empty()) << rank << " of " << ranks;
+        EXPECT_FALSE(packs[size_t(rank)].empty()) << rank << " of " << ranks;
+        continue;
+      }
+      EXPECT_GE(ts.tiles, 16u);
+      EXPECT_EQ(r.mesh.vertices, single.mesh.vertices) << ranks << " ranks";
+      EXPECT_TRUE(r.mesh.triangles == single.mesh.triangles) << ranks << " ranks";
+    }
+  }
+}
+
 TEST(Tiles, CircumdiskTestIsNeverWrongAboutInside) {
   using Q = CGAL::Exact_rational;
   std::mt19937_64 rng(17);

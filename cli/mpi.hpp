@@ -1,0 +1,45 @@
+// Several processes through MPI (issue 29): under `mpirun -n R cdtgpu triangulate ...` (or srun) every rank
+// reads and prepares the whole input, the ranks share the first level's tiles (core/tiles.hpp, TileSharing:
+// rank r takes tiles r, r + R, ...), rank 0 gathers their results, merges, and alone writes the outputs.
+// Built with MPI when CMake finds it (CDTGPU_MPI); a build without it refuses to run under mpirun instead of
+// running R copies of the whole job. A rank that fails ends every rank (MPI_Abort), so no output is written.
+//
+//   int main(int argc, char** argv) {
+//     MpiSession mpi(&argc, &argv);          // MPI_Init only when mpirun / srun started us
+//     options.sharing = mpi.sharing();        // null for one process
+//     ...; if (code && mpi.ranks() > 1) mpi.abort(code);
+//   }
+#pragma once
+#include <string>
+
+#include "core/tiles.hpp"
+
+namespace cdtgpu {
+
+class MpiSession {
+ public:
+  MpiSession(int* argc, char*** argv);
+  ~MpiSession();
+  MpiSession(const MpiSession&) = delete;
+  MpiSession& operator=(const MpiSession&) = delete;
+
+  int rank() const { return sharing_.rank; }
+  int ranks() const { return sharing_.ranks; }
+  std::string host() const { return host_; }
+  // This rank's place among the ranks of its host (the launcher's word), for picking a GPU of its own.
+  int local_rank() const { return local_rank_; }
+  // The tiles' sharing among the ranks; null for one process.
+  const TileSharing* sharing() const { return sharing_.ranks > 1 ? &sharing_ : nullptr; }
+  // Ends every rank with `code` (MPI_Abort): the others may be waiting for this one.
+  [[noreturn]] void abort(int code) const;
+  // Why this process cannot run (started by mpirun without MPI in the build); empty when it can.
+  std::string refusal() const { return refusal_; }
+
+ private:
+  TileSharing sharing_;
+  std::string host_, refusal_;
+  int local_rank_ = 0;
+  bool initialised_ = false;
+};
+
+}  // namespace cdtgpu

@@ -1,0 +1,91 @@
+// cdtgpu triangulate under mpirun (cli/mpi.hpp, issue 29): 2 and 3 ranks on this machine, the CPU backend in tiny
+// tiles, give the single process's bytes, with constraints through every rank's tiles, regions and --max-edge;
+// a rank killed before it hands over its tiles ends the run with a non-zero exit and the old output intact.
+// Skips when the build has no MPI.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+
+#include "tests/binary_test.hpp"
+
+namespace {
+
+using cdtgpu::test::Result;
+
+class Mpi : public cdtgpu::test::BinaryTest {
+ public:
+  Mpi() : BinaryTest("cdtgpu_mpi_") {}
+
+  void SetUp() override {
+#ifndef CDTGPU_TEST_MPI
+    GTEST_SKIP() << "built without MPI (scripts/install-deps.sh installs Open MPI: libopenmpi-dev, openmpi-bin)";
+#else
+    BinaryTest::SetUp();
+    setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);  // CI runs as root
+    setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+    write("dem.csv", cdtgpu::test::jittered_dem_csv(5));
+    write("lines.wkt",
+          "LINESTRING Z (499990 6000003 110, 500100 6000190 111, 500210 6000020 112)\n"
+          "LINESTRING (499995 6000100, 500205 6000101)\n");
+    write("area.wkt", "POLYGON ((500012 6000012, 500180 6000015, 500170 6000185, 500015 6000170, 500012 6000012))\n");
+    write("lake.wkt", "POLYGON ((500060 6000060, 500090 6000062, 500088 6000091, 500061 6000088, 500060 6000060))\n");
+#endif
+  }
+
+  std::string inputs() const {
+    return path("dem.csv") + " " + path("lines.wkt") + " " + path("area.wkt") + ":role=boundary " + path("lake.wkt") +
+           ":role=hole --max-edge 14";
+  }
+  Result mpirun(int ranks, const std::string& args, const std::string& env = "") const {
+#ifdef CDTGPU_TEST_MPI
+    const std::string pass = env.empty() ? "" : " -x CDTGPU_MPI_TEST_KILL_RANK";
+    return run_shell(env + std::string(MPIEXEC) + " --oversubscribe" + pass + " -n " + std::to_string(ranks) + " " +
+                     std::string(CDTGPU_BINARY) + " " + args);
+#else
+    (void)ranks, (void)args, (void)env;
+    return {-1, ""};
+#endif
+  }
+  Result run_shell(const std::string& cmd) const {
+    const std::string err = path("stderr.txt");
+    const int status = std::system((cmd + " >/dev/null 2>" + err).c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(err)};
+  }
+};
+
+TEST_F(Mpi, RanksGiveTheSingleProcessBytes) {
+  ASSERT_EQ(run("triangulate " + inputs() + " --backend cgal -o " + path("one.ply") + " -q").code, 0);
+  for (int ranks : {2, 3}) {
+    const std::string out = path("ranks" + std::to_string(ranks) + ".ply");
+    const Result r = mpirun(ranks, "triangulate " + inputs() + " --backend cgal --max-tile-points 40 -o " + out + " --stats " +
+                                       path("s.json"));
+    ASSERT_EQ(r.code, 0) << ranks << " ranks: " << r.err;
+    EXPECT_TRUE(slurp(out) == slurp(path("one.ply"))) << ranks << " ranks";
+    EXPECT_NE(r.err.find("rank 0 of " + std::to_string(ranks)), std::string::npos) << r.err;
+    EXPECT_NE(slurp(path("s.json")).find("\"tiles\""), std::string::npos);
+  }
+}
+
+TEST_F(Mpi, GpuRanksGiveTheSingleProcessBytes) {
+  ASSERT_EQ(run("triangulate " + inputs() + " --backend cgal -o " + path("one.ply") + " -q").code, 0);
+  const Result r = mpirun(2, "triangulate " + inputs() + " --backend gpu --max-tile-points 60 -o " + path("gpu.ply"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(slurp(path("gpu.ply")) == slurp(path("one.ply")));
+}
+
+TEST_F(Mpi, AKilledRankEndsTheRunAndKeepsTheOldOutput) {
+  write("old.ply", "the old output\n");
+  const Result r = mpirun(3, "triangulate " + inputs() + " --backend cgal --max-tile-points 40 -o " + path("old.ply"),
+                          "CDTGPU_MPI_TEST_KILL_RANK=1 ");
+  EXPECT_NE(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(path("old.ply")), "the old output\n");
+}
+
+TEST_F(Mpi, OnlyTriangulateRunsAsSeveralRanks) {
+  const Result r = mpirun(2, "devices");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("only `cdtgpu triangulate`"), std::string::npos) << r.err;
+}
+
+}  // namespace
