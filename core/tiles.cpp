@@ -688,8 +688,10 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
                                tbb::make_filter<size_t, void>(tbb::filter_mode::parallel, my_tile));
   }
   if (sharing) {
-    // Packed per tile: t, the final triangles' count and ids, the border's count and ids.
-    std::vector<uint32_t> pack;
+    // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
+    // triangles' count and ids, the border's count and ids.
+    const uint64_t tile_points = options.max_tile_points;
+    std::vector<uint32_t> pack = {uint32_t(tiles), uint32_t(n), uint32_t(tile_points), uint32_t(tile_points >> 32)};
     for (size_t t : mine) {
       const TileResult& r = results[t];
       pack.push_back(uint32_t(t));
@@ -700,8 +702,17 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
     }
     std::vector<std::vector<uint32_t>> all = sharing->gather(std::move(pack));
     if (sharing->rank != 0) return {};
-    for (const std::vector<uint32_t>& from : all)
-      for (size_t at = 0; at < from.size();) {
+    for (size_t rank = 0; rank < all.size(); ++rank) {
+      const std::vector<uint32_t>& from = all[rank];
+      if (from.size() < 4 || !std::equal(from.begin(), from.begin() + 4, all[0].begin()))
+        throw std::runtime_error(
+            "rank " + std::to_string(rank) + " planned other tiles than rank 0 (" +
+            (from.size() < 4 ? std::string("none")
+                             : std::to_string(from[0]) + " tiles of at most " +
+                                   std::to_string(uint64_t(from[3]) << 32 | from[2]) + " points") +
+            " against " + std::to_string(tiles) + " of at most " + std::to_string(tile_points) +
+            "): give every rank the same input and --max-tile-points");
+      for (size_t at = 4; at < from.size();) {
         TileResult& r = results[from[at++]];
         r.final_triangles.resize(from[at++]);
         for (Triangle& tri : r.final_triangles)
@@ -710,6 +721,7 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
         for (Edge& e : r.border)
           for (uint32_t& id : e) id = from[at++];
       }
+    }
     // The final region's vertices, as run_tile marks them, for the other ranks' tiles too.
     for (const TileResult& r : results)
       tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {

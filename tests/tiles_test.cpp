@@ -244,6 +244,36 @@ TEST(Tiles, SharedAmongRanksGiveTheSingleRun) {
   }
 }
 
+// A rank whose plan differs (another tile size: hosts with other core counts and the auto size) is refused at
+// rank 0, never merged.
+TEST(Tiles, RanksWithAnotherPlanAreRefused) {
+  const PreparedInput p = prepare(random_points(2000, 43));
+  std::vector<uint32_t> from_rank1;
+  for (int rank : {1, 0}) {
+    TileSharing sharing;
+    sharing.rank = rank;
+    sharing.ranks = 2;
+    sharing.gather = [&](std::vector<uint32_t> mine) {
+      if (rank == 1) from_rank1 = std::move(mine);
+      return rank == 0 ? std::vector<std::vector<uint32_t>>{std::move(mine), from_rank1}
+                       : std::vector<std::vector<uint32_t>>{};
+    };
+    TileOptions opt;
+    opt.max_tile_points = rank == 1 ? 300 : 100;
+    opt.sharing = &sharing;
+    if (rank == 1) {
+      triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator());
+      continue;
+    }
+    try {
+      triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator());
+      ADD_FAILURE() << "another plan was merged";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("rank 1 planned other tiles than rank 0"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Tiles, CircumdiskTestIsNeverWrongAboutInside) {
   using Q = CGAL::Exact_rational;
   std::mt19937_64 rng(17);
