@@ -144,7 +144,7 @@ int run_tiles(const BenchOptions& o) {
               "vs single", "RSS GB", "same");
   std::fflush(stdout);
 
-  // The device counts of the GPU tiled rows: 1 (the picked device; an empty set), then 2, 4, ... and all of
+  // The device counts of the GPU tiled rows: 0 (the one device --device picks), then 2, 4, ... and all of
   // --devices.
   std::vector<size_t> device_set, gpu_device_counts;
   if (o.gpu) gpu_device_counts.push_back(0);
@@ -156,8 +156,6 @@ int run_tiles(const BenchOptions& o) {
     for (size_t i : device_set) std::printf(" %zu", i);
     std::printf("\n");
   }
-  std::unique_ptr<gpu::Context> ctx_single;
-
   json rows = json::array();
   int failures = 0;
   for (uint64_t n : sizes) {
@@ -197,25 +195,13 @@ int run_tiles(const BenchOptions& o) {
     // triangulate runs them; without --tile-points, tiles of a quarter of the input a device (or what the
     // smallest device holds).
     for (size_t k : gpu_device_counts) {
-      const std::vector<size_t> picked(device_set.begin(), device_set.begin() + std::min(k, device_set.size()));
-      const std::vector<std::unique_ptr<gpu::Context>> ctxs =
-          picked.empty() ? std::vector<std::unique_ptr<gpu::Context>>{}
-                         : gpu::create_contexts(picked, co);
-      std::vector<std::unique_ptr<gpu::GpuCdt>> cdts;
-      std::vector<const gpu::GpuCdt*> users;
-      uint64_t max_tile = UINT64_MAX;
-      if (picked.empty()) {  // the one device create_context picks
-        ctx_single = std::make_unique<gpu::Context>(gpu::create_context(co));
-        cdts.push_back(std::make_unique<gpu::GpuCdt>(*ctx_single));
-        max_tile = gpu::max_tile_points(*ctx_single);
-      }
-      for (const auto& ctx : ctxs) {
-        cdts.push_back(std::make_unique<gpu::GpuCdt>(*ctx));
-        max_tile = std::min(max_tile, gpu::max_tile_points(*ctx));
-      }
-      for (const auto& c : cdts) users.push_back(c.get());
-      const uint64_t gpu_tile =
-          o.tile_points ? o.tile_points : std::min(max_tile, p.vertices.size() / (4 * users.size()) + 1);
+      gpu::TileDevices devices;
+      devices.open(k ? std::vector<size_t>(device_set.begin(), device_set.begin() + std::min(k, device_set.size()))
+                     : gpu::select_devices(gpu::list_devices(), "", o.device),
+                   co);
+      const std::vector<const gpu::GpuCdt*>& users = devices.cdts();
+      const uint64_t gpu_tile = o.tile_points ? o.tile_points
+                                              : std::min(devices.max_tile_points(), p.vertices.size() / (4 * users.size()) + 1);
       gpu::GpuCdtStats sum;
       const TileTriangulator tri = gpu::gpu_tile_triangulator(users, &sum);
       const std::string backend = users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size());
@@ -229,8 +215,6 @@ int run_tiles(const BenchOptions& o) {
           "%9s last tiled %s run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB\n", "",
           backend.c_str(), fmt(sum.gpu_total_ms).c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
           fmt(double(sum.peak_device_bytes) / 1e6).c_str());
-      cdts.clear();
-      ctx_single.reset();
     }
     if (results.empty()) continue;
     const Mesh& reference = results.front().mesh;

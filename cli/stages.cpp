@@ -114,50 +114,24 @@ uint64_t gpu_tile_points(const gpu::Context& ctx, uint64_t vertices, int64_t max
 }
 
 // The devices a tiled GPU run spreads over (issue 29): those of --devices (default: every hardware GPU of the
-// host; the started device alone when it is lavapipe), each with a context and pipelines of its own; the
-// started device's are reused.
-struct TileDevices {
-  std::vector<std::unique_ptr<gpu::Context>> opened;
-  std::vector<std::unique_ptr<gpu::GpuCdt>> opened_cdts;
-  std::vector<const gpu::Context*> contexts;
-  std::vector<const gpu::GpuCdt*> cdts;
-
-  // The device with the least room: the tiles' size is what it holds.
-  const gpu::Context& smallest() const {
-    return **std::min_element(contexts.begin(), contexts.end(), [](const gpu::Context* a, const gpu::Context* b) {
-      return gpu::max_tile_points(*a) < gpu::max_tile_points(*b);
-    });
-  }
-};
-
-TileDevices tile_devices(Job& job, GpuStart& start) {
+// host; the started device alone when it is lavapipe), the started device's context and pipelines reused.
+gpu::TileDevices tile_devices(Job& job, GpuStart& start) {
   const gpu::Context& started = start.context();
   const bool hardware = started.info.type == "discrete" || started.info.type == "integrated";
   std::vector<size_t> picked = {started.info.index};
   if (!job.options.devices.empty() || hardware)
     picked = gpu::select_devices(gpu::list_devices(), job.options.devices.empty() ? "all" : job.options.devices);
-  TileDevices d;
-  std::vector<size_t> others;
-  for (size_t i : picked)
-    if (i == started.info.index) {
-      d.contexts.push_back(&started);
-      d.cdts.push_back(&start.cdt());
-    } else {
-      others.push_back(i);
-    }
-  d.opened = gpu::create_contexts(others, gpu::ContextOptions{});
-  std::string names;
-  for (const auto& c : d.opened) {
-    d.opened_cdts.push_back(std::make_unique<gpu::GpuCdt>(*c));
-    d.contexts.push_back(c.get());
-    d.cdts.push_back(d.opened_cdts.back().get());
+  gpu::TileDevices d;
+  const bool reuse = std::find(picked.begin(), picked.end(), size_t(started.info.index)) != picked.end();
+  if (reuse) {
+    d.borrow(start.cdt());
+    picked.erase(std::find(picked.begin(), picked.end(), size_t(started.info.index)));
   }
-  for (const gpu::Context* c : d.contexts)
-    names += (names.empty() ? "" : ", ") + c->info.name + " (" + std::to_string(c->info.index) + ")";
-  job.stats.counts["tile_devices"] = d.cdts.size();
-  if (d.cdts.size() > 1 || d.contexts[0] != &started) {
-    job.stats.device = names;
-    spdlog::info("tiles on {} device(s): {}", d.cdts.size(), names);
+  d.open(picked, gpu::ContextOptions{});
+  job.stats.counts["tile_devices"] = d.cdts().size();
+  if (d.cdts().size() > 1 || !reuse) {
+    job.stats.device = d.names();
+    spdlog::info("tiles on {} device(s): {}", d.cdts().size(), d.names());
   }
   return d;
 }
@@ -195,11 +169,10 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
     stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
     try {
-      const TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
-      const uint64_t tile_here =
-          options.max_tile_points >= 0 ? tile : std::min(tile, gpu::max_tile_points(devices.smallest()));
-      return triangulate_in_tiles(job, std::move(in), tile_here, gpu::gpu_tile_triangulator(devices.cdts),
-                                  unsigned(2 * devices.cdts.size()));
+      const gpu::TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
+      const uint64_t tile_here = options.max_tile_points >= 0 ? tile : std::min(tile, devices.max_tile_points());
+      return triangulate_in_tiles(job, std::move(in), tile_here, gpu::gpu_tile_triangulator(devices.cdts()),
+                                  unsigned(2 * devices.cdts().size()));
     } catch (const gpu::DeviceError& e) {
       return on_cpu_instead(e);
     }

@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "gpu/check.hpp"
+#include "gpu/devices.hpp"
 #include "shaders/layout_dt.h"
 
 namespace cdtgpu::gpu {
@@ -94,6 +95,29 @@ TileTriangulator gpu_tile_triangulator(std::vector<const GpuCdt*> cdts, GpuCdtSt
       }
     });
   };
+}
+
+void TileDevices::borrow(const GpuCdt& cdt) { cdts_.push_back(&cdt); }
+
+void TileDevices::open(const std::vector<size_t>& indices, const ContextOptions& options) {
+  for (auto& ctx : create_contexts(indices, options)) {
+    opened_cdts_.push_back(std::make_unique<GpuCdt>(*ctx));
+    cdts_.push_back(opened_cdts_.back().get());
+    opened_.push_back(std::move(ctx));
+  }
+}
+
+uint64_t TileDevices::max_tile_points() const {
+  uint64_t smallest = UINT64_MAX;
+  for (const GpuCdt* c : cdts_) smallest = std::min(smallest, gpu::max_tile_points(c->context()));
+  return smallest;
+}
+
+std::string TileDevices::names() const {
+  std::string names;
+  for (const GpuCdt* c : cdts_)
+    names += (names.empty() ? "" : ", ") + c->context().info.name + " (" + std::to_string(c->context().info.index) + ")";
+  return names;
 }
 
 uint64_t max_tile_points(const Context& ctx) {

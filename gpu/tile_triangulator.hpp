@@ -2,6 +2,8 @@
 // tile at a time on each device while other threads gather the next tiles and sort out the finished ones.
 #pragma once
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include "core/tiles.hpp"
@@ -17,6 +19,27 @@ TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum = nul
 // run 2 x cdts.size() tiles in flight (TileOptions::tiles_in_flight). A tile's CDT is the same on every
 // device, so the result does not depend on which device took which tile. A DeviceError names the device too.
 TileTriangulator gpu_tile_triangulator(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum = nullptr);
+
+// The devices a tiled run spreads over, each with a context and a GpuCdt: borrowed (a device started already)
+// or opened here, all at once (gpu/devices.hpp).
+//
+//   TileDevices d;
+//   d.borrow(start.cdt());
+//   d.open({1, 2, 3}, ContextOptions{});
+//   TileTriangulator tri = gpu_tile_triangulator(d.cdts());   // 2 * d.cdts().size() tiles in flight
+class TileDevices {
+ public:
+  void borrow(const GpuCdt& cdt);
+  void open(const std::vector<size_t>& indices, const ContextOptions& options);
+  const std::vector<const GpuCdt*>& cdts() const { return cdts_; }
+  uint64_t max_tile_points() const;  // the smallest device's
+  std::string names() const;         // "NAME (INDEX), ..."
+
+ private:
+  std::vector<std::unique_ptr<Context>> opened_;
+  std::vector<std::unique_ptr<GpuCdt>> opened_cdts_;
+  std::vector<const GpuCdt*> cdts_;
+};
 
 // The most points a tile of its own may hold on this device: the Delaunay build's slot limit and ~260 bytes
 // of device memory a point (the measured peak, docs/performance.md), the storage buffer range (24 bytes a

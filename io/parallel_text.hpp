@@ -71,6 +71,22 @@ inline char* put(char* p, std::string_view s) {
 // The shortest text that reads back to v, as std::to_chars chooses it (at most 24 characters).
 inline char* put_shortest(char* p, double v) { return std::to_chars(p, p + 32, v).ptr; }
 inline char* put_uint(char* p, uint64_t v) { return std::to_chars(p, p + 24, v).ptr; }
+// "x y z", each the shortest text (at most 3 * 25 characters).
+inline char* put_xyz(char* p, const Point3& q) {
+  p = put_shortest(p, q.x);
+  *p++ = ' ';
+  p = put_shortest(p, q.y);
+  *p++ = ' ';
+  return put_shortest(p, q.z);
+}
+// " a b c": the triangle's vertex indices plus `base` (0 or 1), each after a space (at most 3 * 11 characters).
+inline char* put_indices(char* p, const Triangle& tri, uint64_t base) {
+  for (uint32_t v : tri) {
+    *p++ = ' ';
+    p = put_uint(p, v + base);
+  }
+  return p;
+}
 
 // Every triangle's indices checked on all cores before any is written; the first bad one throws
 // checked_triangle's message.

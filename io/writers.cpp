@@ -60,21 +60,6 @@ class Sink {
     reserve(1);
     buf_[n_++] = c;
   }
-  // The shortest decimal text that round-trips (at most 24 characters for a double).
-  void number(double v) {
-    reserve(32);
-    n_ = size_t(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v).ptr - buf_.data());
-  }
-  void number(uint64_t v) {
-    reserve(24);
-    n_ = size_t(std::to_chars(buf_.data() + n_, buf_.data() + buf_.size(), v).ptr - buf_.data());
-  }
-  template <class T>
-  void raw(const T& v) {
-    reserve(sizeof v);
-    std::memcpy(buf_.data() + n_, &v, sizeof v);
-    n_ += sizeof v;
-  }
 
  private:
   std::ostream& out_;
@@ -94,24 +79,10 @@ void write_obj(const Mesh& mesh, const Crs& crs, Sink& out, std::ostream& stream
   out.flush();
   check_triangles(mesh);
   write_items(stream, mesh.vertices.size(), 3 * 25 + 3, [&](uint64_t v, char* p) {
-    const Point3& q = mesh.vertices[v];
-    p = put(p, "v ");
-    p = put_shortest(p, q.x);
-    *p++ = ' ';
-    p = put_shortest(p, q.y);
-    *p++ = ' ';
-    p = put_shortest(p, q.z);
-    *p++ = '\n';
-    return p;
+    return put(put_xyz(put(p, "v "), mesh.vertices[v]), "\n");
   });
   write_items(stream, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
-    *p++ = 'f';
-    for (uint32_t v : mesh.triangles[t]) {
-      *p++ = ' ';
-      p = put_uint(p, uint64_t(v) + 1);
-    }
-    *p++ = '\n';
-    return p;
+    return put(put_indices(put(p, "f"), mesh.triangles[t], 1), "\n");  // OBJ counts from 1
   });
 }
 
@@ -129,23 +100,10 @@ void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out, std::ost
     out.flush();
     check_triangles(mesh);
     write_items(stream, mesh.vertices.size(), 3 * 25 + 3, [&](uint64_t v, char* p) {
-      const Point3& q = mesh.vertices[v];
-      p = put_shortest(p, q.x);
-      *p++ = ' ';
-      p = put_shortest(p, q.y);
-      *p++ = ' ';
-      p = put_shortest(p, q.z);
-      *p++ = '\n';
-      return p;
+      return put(put_xyz(p, mesh.vertices[v]), "\n");
     });
     write_items(stream, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
-      *p++ = '3';
-      for (uint32_t v : mesh.triangles[t]) {
-        *p++ = ' ';
-        p = put_uint(p, uint64_t(v));
-      }
-      *p++ = '\n';
-      return p;
+      return put(put_indices(put(p, "3"), mesh.triangles[t], 0), "\n");
     });
     return;
   }
@@ -188,12 +146,7 @@ void write_wkt(const Mesh& mesh, bool multipolygon, Sink& out, std::ostream& str
   tbb::parallel_for(size_t(0), blocks, [&](size_t k) {
     char buf[80];
     for (size_t v = k * kBlock; v < std::min(V, (k + 1) * kBlock); ++v) {
-      const Point3& q = mesh.vertices[v];
-      char* e = put_shortest(buf, q.x);
-      *e++ = ' ';
-      e = put_shortest(e, q.y);
-      *e++ = ' ';
-      e = put_shortest(e, q.z);
+      char* e = put_xyz(buf, mesh.vertices[v]);
       length[v] = uint8_t(e - buf);
       block_text[k].append(buf, e);
     }
