@@ -10,6 +10,7 @@
 
 namespace cdtgpu {
 
+// v.resize(n), the new elements value-initialised (zero bytes: Point3, Triangle, integers), those kept kept.
 template <class T>
 void resize_touched(std::vector<T>& v, size_t n) {
   static_assert(std::is_trivially_copyable_v<T>);
@@ -18,10 +19,10 @@ void resize_touched(std::vector<T>& v, size_t n) {
     return;
   }
   v.reserve(n);
-  // Zero bytes in freshly allocated storage (implicitly created objects), page by page on all cores; the
-  // resize below then writes over memory that is already there.
-  char* base = reinterpret_cast<char*>(v.data());
-  const size_t bytes = n * sizeof(T), block = size_t(1) << 20;
+  // Zero bytes in freshly allocated storage past the elements kept (implicitly created objects), page by page
+  // on all cores; the resize below then writes over memory that is already there.
+  char* base = reinterpret_cast<char*>(v.data() + v.size());
+  const size_t bytes = (n - v.size()) * sizeof(T), block = size_t(1) << 20;
   tbb::parallel_for(size_t(0), (bytes + block - 1) / block, [&](size_t b) {
     std::memset(base + b * block, 0, std::min(block, bytes - b * block));
   });

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <shapefil.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <charconv>
@@ -13,6 +14,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "core/touched.hpp"
 #include "io/readers.hpp"
 #include "io/text_source.hpp"
 
@@ -53,6 +55,17 @@ std::string error_of(const std::function<void()>& f) {
 }
 
 }  // namespace
+
+// Readers append to what earlier inputs read: growing a vector past its storage keeps its elements and zeroes
+// only the new ones (a 24 MB vector, so the pages are touched on all cores).
+TEST(ResizeTouched, KeepsTheElementsItHasAndZeroesTheNew) {
+  std::vector<Point3> v(1000, Point3{1, 2, 3});
+  v.shrink_to_fit();
+  resize_touched(v, 1000000);
+  ASSERT_EQ(v.size(), 1000000u);
+  EXPECT_EQ(std::count(v.begin(), v.begin() + 1000, Point3{1, 2, 3}), 1000);
+  EXPECT_EQ(std::count(v.begin() + 1000, v.end(), Point3{0, 0, 0}), 999000);
+}
 
 TEST(TextSource, SplitLinesEndsEveryChunkAtALineEndAndNumbersLines) {
   const std::string text = "a\nbb\nccc\ndddd\ne";
