@@ -1,7 +1,8 @@
 // apply_regions: boundaries, holes and max-edge trimming over a finished CDT, on all cores. Cost: O(T) work
 // in parallel passes: the twins of the 3T half-edges, one walk per constraint along mesh edges, union-find
-// over triangle adjacency, a breadth-first search over its few components, one compaction. Every pass gives the same result whatever the thread count or schedule: flags are combined by
-// OR and XOR, the walk breaks ties by vertex id, a set's root is its smallest triangle.
+// over triangle adjacency, a breadth-first search over its few components, one compaction. Every pass gives
+// the same result whatever the thread count or schedule: flags are combined by OR and XOR, the walk breaks
+// ties by vertex id, a set's root is its smallest triangle.
 //
 // The constrained mesh edges are found the way verify.cpp finds them: from one end of a constraint, step to
 // the neighbour that lies on the segment (exact orientation for input vertices; within rounding for Steiner
@@ -29,6 +30,7 @@
 #include <string>
 
 #include "core/big_array.hpp"
+#include "core/compact.hpp"
 #include "core/error.hpp"
 
 namespace cdtgpu {
@@ -72,22 +74,6 @@ uint64_t count_if(size_t n, F&& f) {
         return sum;
       },
       std::plus<uint64_t>());
-}
-
-// Calls emit(i, k) for the k-th index i (in order) with keep(i); returns how many. Parallel scan.
-template <class Keep, class Emit>
-size_t select(size_t n, Keep&& keep, Emit&& emit) {
-  return tbb::parallel_scan(
-      tbb::blocked_range<size_t>(0, n, kGrain), size_t(0),
-      [&](const tbb::blocked_range<size_t>& r, size_t k, bool final) {
-        for (size_t i = r.begin(); i < r.end(); ++i)
-          if (keep(i)) {
-            if (final) emit(i, k);
-            ++k;
-          }
-        return k;
-      },
-      std::plus<size_t>());
 }
 
 // Half-edge h = 3 t + k runs from triangle t's vertex k to vertex k + 1.
@@ -466,32 +452,37 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
   }
 
   // Compaction: kept triangles, then the vertices still used. The renumbering keeps the order of vertices,
-  // so triangles stay sorted and start at their smallest index: the mesh stays canonical. Both are selected
-  // into scratch and copied back, so the mesh's vectors shrink in place (no zeroed reallocation).
+  // so triangles stay sorted and start at their smallest index: the mesh stays canonical.
   BigArray<uint8_t> used(V, 0);
   each(T, [&](size_t t) {
     if (keep[t])
       for (uint32_t v : mesh.triangles[t]) shared(used[v]).store(1, std::memory_order_relaxed);
   });
+  const std::vector<uint32_t> kept_ids = compact<uint32_t>(
+      V, [&](size_t v) { return used[v]; },
+      [&](size_t v, uint32_t* at) {
+        if (used[v]) *at++ = uint32_t(v);
+        return at;
+      });
   BigArray<uint32_t> renumber(V);
-  BigArray<Point3> vertices(V);
-  const size_t kept_vertices = select(
-      V, [&](size_t v) { return used[v] != 0; },
-      [&](size_t v, size_t k) {
-        renumber[v] = uint32_t(k);
-        vertices[k] = mesh.vertices[v];
+  std::vector<Point3> vertices;
+  resize_touched(vertices, kept_ids.size());
+  each(kept_ids.size(), [&](size_t k) {
+    renumber[kept_ids[k]] = uint32_t(k);
+    vertices[k] = mesh.vertices[kept_ids[k]];
+  });
+  std::vector<Triangle> kept = compact<Triangle>(
+      T, [&](size_t t) { return keep[t]; },
+      [&](size_t t, Triangle* at) {
+        if (keep[t]) {
+          const Triangle& tri = mesh.triangles[t];
+          *at++ = {renumber[tri[0]], renumber[tri[1]], renumber[tri[2]]};
+        }
+        return at;
       });
-  BigArray<Triangle> kept(T);
-  const size_t kept_triangles = select(
-      T, [&](size_t t) { return keep[t] != 0; },
-      [&](size_t t, size_t k) {
-        for (int i = 0; i < 3; ++i) kept[k][i] = renumber[mesh.triangles[t][i]];
-      });
-  each(kept_vertices, [&](size_t v) { mesh.vertices[v] = vertices[v]; });
-  each(kept_triangles, [&](size_t t) { mesh.triangles[t] = kept[t]; });
-  mesh.vertices.resize(kept_vertices);
-  mesh.triangles.resize(kept_triangles);
-  stats.vertices_removed = V - kept_vertices;
+  stats.vertices_removed = V - vertices.size();
+  mesh.vertices = std::move(vertices);
+  mesh.triangles = std::move(kept);
   lap("compaction");
   spdlog::debug("regions:{}", passes);
   return stats;

@@ -28,6 +28,7 @@
 #include <thread>
 
 #include "core/canonical.hpp"
+#include "core/compact.hpp"
 #include "core/predicates.hpp"
 #include "core/touched.hpp"
 
@@ -257,25 +258,6 @@ bool disk_inside(const Point3& a, const Point3& b, const Point3& c, const Rect& 
 }
 
 uint64_t key_of(uint32_t a, uint32_t b) { return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a; }
-
-// Parallel compaction: the items of [0, n) that `keep` takes, in order, each written by `emit(i, out)`.
-template <class T, class Count, class Emit>
-std::vector<T> compact(size_t n, Count count, Emit emit) {
-  constexpr size_t kBlock = 1 << 16;
-  const size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<size_t> first(blocks + 1, 0);
-  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
-    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) first[b + 1] += count(i);
-  });
-  for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
-  std::vector<T> out;
-  resize_touched(out, first[blocks]);
-  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
-    T* at = out.data() + first[b];
-    for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) at = emit(i, at);
-  });
-  return out;
-}
 
 // The hull chains of p[ids] (ids in (x, y) order): the lower one left to right, then the upper one right to
 // left, collinear boundary points kept (a triangulation's hull edges join consecutive ones). Returns the
