@@ -361,9 +361,11 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
       ->delimiter(',');
   cmd->add_option("--batch-jobs", o.batch_jobs, "e2e: jobs in the batch row, each the row's whole run (default 20)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--formats", o.formats, "e2e: input formats, text (.xyz + .wkt) and/or shp (default text,shp)")
+  cmd->add_option("--formats", o.formats,
+                  "e2e: input formats (default text,shp): text (.xyz + .wkt), shp, las (LAS 1.4 points + .wkt), "
+                  "and a DEM grid of about as many cells + the .wkt as asc (ESRI ASCII) or tif (GeoTIFF)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"text", "shp"}));
+      ->check(CLI::IsMember({"text", "shp", "las", "asc", "tif"}));
   cmd->add_option("--binary", o.binary, "e2e: the cdtgpu executable to time (default: this one)");
   cmd->add_flag("!--no-first-run", o.first_run,
                 "e2e: skip the run with empty shader and pipeline caches (minutes on lavapipe, which compiles every "

@@ -308,7 +308,8 @@ int run_e2e(const BenchOptions& o) {
   const std::vector<std::string> formats =
       o.formats.empty() ? std::vector<std::string>{"text", "shp"} : o.formats;
   for (const std::string& f : formats)
-    if (f != "text" && f != "shp") throw UsageError("--formats: text or shp, got '" + f + "'");
+    if (f != "text" && f != "shp" && f != "las" && f != "asc" && f != "tif")
+      throw UsageError("--formats: text, shp, las, asc or tif, got '" + f + "'");
   const std::string binary = o.binary.empty() ? self_executable() : fs::absolute(o.binary).string();
   if (access(binary.c_str(), X_OK) != 0) throw UsageError("--binary: not an executable: " + binary);
   const std::string root = work_root(o);
@@ -333,7 +334,8 @@ int run_e2e(const BenchOptions& o) {
       "wall = spawn to exit, median of %d runs after 1 warm-up; first = one run before, with empty "
       "shader and pipeline caches; stages from the child's --stats (medians); other = wall - the stages "
       "(process start, Vulkan device, exit); MB = input bytes the readers read; equal = the PLY is "
-      "byte-identical to the row's first; seed %llu\n\n",
+      "byte-identical to the row's first of its kind (text and shp; las; asc and tif: a DEM grid of about as many "
+      "cells); seed %llu\n\n",
       o.runs, static_cast<unsigned long long>(o.seed));
   std::printf("%9s %9s %7s %-5s %-7s %9s %9s %8s %9s %8s %8s %8s %8s %8s %8s %5s\n", "points", "segments",
               "MB", "input", "backend", "wall ms", "first ms", "read ms", "read MB/s", "project", "prepare",
@@ -349,15 +351,26 @@ int run_e2e(const BenchOptions& o) {
     auto tg = Clock::now();
     const E2eWorkload w = e2e_workload(row.points, row.segments, o.seed);
     const double generate_ms = ms_since(tg);
-    std::string reference;  // the row's first PLY: every other must equal it
+    // The first PLY of each kind of input: every other of the kind must equal it. Text and shapefiles hold
+    // the same points; LAS's may differ by an ulp (bench/e2e_workload.hpp); the grids hold the DEM's cells.
+    std::map<std::string, std::string> references;
+    const bool grids = std::find_if(formats.begin(), formats.end(), [](const std::string& f) {
+                         return f == "asc" || f == "tif";
+                       }) != formats.end();
+    const Raster dem = grids ? e2e_dem(row.points) : Raster{};
     json jformats = json::array();
     for (const std::string& format : formats) {
       auto tw = Clock::now();
       const fs::path fdir = dir / format;
       fs::create_directories(fdir);
-      const E2eFiles files =
-          format == "text" ? write_e2e_text(w, fdir.string()) : write_e2e_shapefiles(w, fdir.string());
+      const bool grid = format == "asc" || format == "tif";
+      const E2eFiles files = format == "text" ? write_e2e_text(w, fdir.string())
+                             : format == "shp" ? write_e2e_shapefiles(w, fdir.string())
+                             : format == "las" ? write_e2e_las(w, fdir.string())
+                                               : write_e2e_grid(w, dem, format == "tif", fdir.string());
       const double write_ms = ms_since(tw);
+      const uint64_t points = grid ? dem.z.size() : w.input.points.size();
+      std::string& reference = references[grid ? "grid" : format == "las" ? "las" : "points"];
       json jcells = json::array();
       for (const std::string& backend : backends) {
         Cell c = run_cell(o, binary, fdir.string(), files, format, backend);
@@ -383,7 +396,7 @@ int run_e2e(const BenchOptions& o) {
         const double mbps = read > 0 ? double(files.bytes) / 1e6 / (read / 1e3) : std::nan("");
         if (c.ok)
           std::printf("%9llu %9llu %7.1f %-5s %-7s %9s %9s %8s %9s %8s %8s %8s %8s %8s %8s %5s\n",
-                      static_cast<unsigned long long>(w.input.points.size()),
+                      static_cast<unsigned long long>(points),
                       static_cast<unsigned long long>(w.segments), double(files.bytes) / 1e6, format.c_str(),
                       backend.c_str(), fmt(median(c.wall)).c_str(),
                       o.first_run ? fmt(c.first.wall_ms).c_str() : "-", fmt(read).c_str(), fmt(mbps).c_str(),
@@ -392,14 +405,14 @@ int run_e2e(const BenchOptions& o) {
                       fmt(median(c.other)).c_str(), c.gpu.empty() ? "-" : fmt(median(c.gpu)).c_str(),
                       c.equal.c_str());
         else
-          std::printf("%9llu %9llu %7.1f %-5s %-7s FAILED: %s\n",
-                      static_cast<unsigned long long>(w.input.points.size()),
+          std::printf("%9llu %9llu %7.1f %-5s %-7s FAILED: %s\n", static_cast<unsigned long long>(points),
                       static_cast<unsigned long long>(w.segments), double(files.bytes) / 1e6, format.c_str(),
                       backend.c_str(), c.error.c_str());
         std::fflush(stdout);
         jcells.push_back(cell_json(c, files.bytes, o.first_run));
       }
       jformats.push_back({{"format", format},
+                          {"points", points},
                           {"inputs", files.inputs},
                           {"input_bytes", files.bytes},
                           {"write_inputs_ms", write_ms},

@@ -18,6 +18,9 @@
 
 #include "core/repair.hpp"
 #include "core/workloads.hpp"
+#include "io/geotiff.hpp"
+#include "io/gis_writers.hpp"
+#include "tests/las_writer.hpp"
 
 namespace cdtgpu {
 
@@ -167,6 +170,25 @@ void write_shapefile(const std::string& base, int type, Write write, E2eFiles& f
   files.bytes += size_of(shp_path) + size_of(shx_path);
 }
 
+// contours.wkt: one LINESTRING Z per line.
+void write_contours(const E2eWorkload& w, const std::string& wkt) {
+  TextFile c(wkt);
+  for (const Polyline& line : w.input.lines) {
+    c.text("LINESTRING Z (");
+    for (size_t j = 0; j < line.points.size(); ++j) {
+      const Point3& q = line.points[j];
+      if (j) c.text(", ");
+      c.number(q.x);
+      c.text(" ");
+      c.number(q.y);
+      c.text(" ");
+      c.number(q.z);
+    }
+    c.text(")\n");
+  }
+  c.close();
+}
+
 }  // namespace
 
 E2eWorkload e2e_workload(uint64_t n, uint64_t m, uint64_t seed) {
@@ -215,21 +237,7 @@ E2eFiles write_e2e_text(const E2eWorkload& w, const std::string& dir) {
     p.text("\n");
   }
   p.close();
-  TextFile c(wkt);
-  for (const Polyline& line : w.input.lines) {
-    c.text("LINESTRING Z (");
-    for (size_t j = 0; j < line.points.size(); ++j) {
-      const Point3& q = line.points[j];
-      if (j) c.text(", ");
-      c.number(q.x);
-      c.text(" ");
-      c.number(q.y);
-      c.text(" ");
-      c.number(q.z);
-    }
-    c.text(")\n");
-  }
-  c.close();
+  write_contours(w, wkt);
   files.inputs = {xyz, wkt};
   files.files = files.inputs;
   files.bytes = size_of(xyz) + size_of(wkt);
@@ -255,6 +263,65 @@ E2eFiles write_e2e_shapefiles(const E2eWorkload& w, const std::string& dir) {
         }
       },
       files);
+  return files;
+}
+
+E2eFiles write_e2e_las(const E2eWorkload& w, const std::string& dir) {
+  const std::string las = path_in(dir, "points.las"), wkt = path_in(dir, "contours.wkt");
+  test::LasFile f;
+  f.format = 6;
+  f.minor = 4;
+  f.scale[0] = f.scale[1] = f.scale[2] = 0.001;
+  f.offset[0] = kUniformX0, f.offset[1] = kUniformY0, f.offset[2] = 0;
+  f.points.resize(w.input.points.size());
+  for (size_t i = 0; i < w.input.points.size(); ++i) {
+    const Point3& p = w.input.points[i];
+    f.points[i] = {.X = int32_t(std::llround((p.x - kUniformX0) * 1000)),
+                   .Y = int32_t(std::llround((p.y - kUniformY0) * 1000)),
+                   .Z = int32_t(std::llround(p.z * 1000)),
+                   .cls = 2};
+  }
+  {
+    std::ofstream out(las, std::ios::binary);
+    out << test::las_bytes(f);
+    if (!out.flush()) throw std::runtime_error("cannot write " + las);
+  }
+  write_contours(w, wkt);
+  E2eFiles files;
+  files.inputs = {las, wkt};
+  files.files = files.inputs;
+  files.bytes = size_of(las) + size_of(wkt);
+  return files;
+}
+
+Raster e2e_dem(uint64_t n) {
+  Raster r;
+  GridSpec& g = r.spec;
+  g.cell = std::max(1.0, std::round(kUniformSide / std::sqrt(double(std::max<uint64_t>(n, 1)))));
+  g.ix0 = int64_t(std::ceil(kUniformX0 / g.cell));
+  g.iy0 = int64_t(std::ceil(kUniformY0 / g.cell));
+  g.ncols = g.nrows = uint64_t(kUniformSide / g.cell);
+  r.z.resize(g.ncols * g.nrows);
+  for (uint64_t row = 0; row < g.nrows; ++row)
+    for (uint64_t col = 0; col < g.ncols; ++col) {
+      const double x = g.x(col) - kUniformX0, y = g.y(row) - kUniformY0;
+      r.z[row * g.ncols + col] =
+          100 + std::round(64 * (40 * std::sin(x / 1500) * std::cos(y / 1700) + 0.002 * (x + y))) / 64;
+    }
+  return r;
+}
+
+E2eFiles write_e2e_grid(const E2eWorkload& w, const Raster& dem, bool geotiff, const std::string& dir) {
+  const std::string grid = path_in(dir, geotiff ? "dem.tif" : "dem.asc"), wkt = path_in(dir, "contours.wkt");
+  if (geotiff)
+    write_geotiff_grid_file(dem, Crs{}, grid);
+  else
+    write_ascii_grid_file(dem, Crs{}, grid);
+  write_contours(w, wkt);
+  E2eFiles files;
+  files.inputs = {grid, wkt};
+  files.files = files.inputs;
+  files.bytes = size_of(grid) + size_of(wkt);
   return files;
 }
 

@@ -1,5 +1,6 @@
 // The end-to-end benchmark's input: a "DEM" of uniform points plus contour-like constraint polylines, written
-// as the files `cdtgpu triangulate` reads, in two formats so that both kinds of reader are timed.
+// as the files `cdtgpu triangulate` reads, in several formats so that every kind of reader is timed (and a DEM
+// grid over the same square for the .asc and GeoTIFF readers).
 //
 //   E2eWorkload w = e2e_workload(200000, 50000, 1);       // 200K points, exactly 50K segments, seed 1
 //   E2eFiles text = write_e2e_text(w, dir);               // dir/points.xyz + dir/contours.wkt
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "core/model.hpp"
+#include "core/raster.hpp"
 
 namespace cdtgpu {
 
@@ -45,5 +47,17 @@ E2eFiles write_e2e_text(const E2eWorkload& w, const std::string& dir);
 // points.shp (PointZ, one record per point) + contours.shp (PolyLineZ, one record per line), each with its
 // .shx and a .dbf holding one integer field ID (the 1-based record number), through shapelib.
 E2eFiles write_e2e_shapefiles(const E2eWorkload& w, const std::string& dir);
+
+// points.las (LAS 1.4 point format 6, scale 0.001, offset the square's corner: X, Y, Z are the millimetres,
+// every point class 2, written by tests/las_writer.hpp) + contours.wkt. The reader's X * scale + offset may
+// differ from the text's nearest double by an ulp, so these points are not byte for byte the text's.
+E2eFiles write_e2e_las(const E2eWorkload& w, const std::string& dir);
+
+// The grid inputs' DEM: the workload's square as a grid of about n cells of whole metres (cell =
+// max(1, round(10 km / sqrt(n))), centres at multiples of it), z a smooth surface in steps of 1/64 m, so the
+// values are exact as Float32 and the .asc and the .tif hold the same cells.
+Raster e2e_dem(uint64_t n);
+// dem.asc (ESRI ASCII) or dem.tif (our GeoTIFF writer: Float32, tiled, DEFLATE) + contours.wkt.
+E2eFiles write_e2e_grid(const E2eWorkload& w, const Raster& dem, bool geotiff, const std::string& dir);
 
 }  // namespace cdtgpu

@@ -8,7 +8,6 @@
 // (or the fill runs on all cores, spreading the faults), and buffers of 4 MiB and more ask the kernel for
 // transparent huge pages (2 MiB: 512 times fewer faults) where it allows them (madvise mode).
 #pragma once
-#include <sys/mman.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -16,6 +15,8 @@
 #include <memory>
 #include <new>
 #include <type_traits>
+
+#include "core/touched.hpp"
 
 namespace cdtgpu {
 
@@ -52,7 +53,7 @@ class BigArray {
     if (bytes >= 2 * kHuge) {
       const size_t rounded = (bytes + kHuge - 1) / kHuge * kHuge;
       p = std::aligned_alloc(kHuge, rounded);
-      if (p) madvise(p, rounded, MADV_HUGEPAGE);  // advice only: without it, 4 KiB pages
+      if (p) advise_huge_pages(p, rounded);
     } else {
       p = std::malloc(bytes ? bytes : 1);
     }

@@ -2,13 +2,24 @@
 // (the kernel zeroes each page on first touch) than in the copy that fills it, and std::vector::resize touches
 // every page on one core: 33 ms for a 2M-point triangulation's triangle array on the H100 machine.
 #pragma once
+#include <sys/mman.h>
 #include <tbb/parallel_for.h>
 
+#include <cstdint>
 #include <cstring>
 #include <type_traits>
 #include <vector>
 
 namespace cdtgpu {
+
+// Asks for transparent huge pages (2 MiB: 512 times fewer faults) on the whole 2 MiB pages inside
+// [p, p + bytes), where the kernel allows them (madvise mode). 520 MB of points on 2 cores: touched in 135 ms
+// with 4 KiB pages, 27-38 ms with huge ones. Advice only: without it, 4 KiB pages.
+inline void advise_huge_pages(void* p, size_t bytes) {
+  constexpr uintptr_t kHuge = uintptr_t(2) << 20;
+  const uintptr_t first = (uintptr_t(p) + kHuge - 1) & ~(kHuge - 1), end = (uintptr_t(p) + bytes) & ~(kHuge - 1);
+  if (end > first) madvise(reinterpret_cast<void*>(first), end - first, MADV_HUGEPAGE);
+}
 
 // v.resize(n), the new elements value-initialised (zero bytes: Point3, Triangle, integers), those kept kept.
 template <class T>
@@ -22,7 +33,8 @@ void resize_touched(std::vector<T>& v, size_t n) {
   // Zero bytes in freshly allocated storage past the elements kept (implicitly created objects), page by page
   // on all cores; the resize below then writes over memory that is already there.
   char* base = reinterpret_cast<char*>(v.data() + v.size());
-  const size_t bytes = (n - v.size()) * sizeof(T), block = size_t(1) << 20;
+  const size_t bytes = (n - v.size()) * sizeof(T), block = size_t(2) << 20;
+  advise_huge_pages(base, bytes);
   tbb::parallel_for(size_t(0), (bytes + block - 1) / block, [&](size_t b) {
     std::memset(base + b * block, 0, std::min(block, bytes - b * block));
   });

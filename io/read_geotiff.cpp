@@ -21,7 +21,7 @@
 
 #include "core/error.hpp"
 #include "core/repair.hpp"
-#include "core/touched.hpp"
+#include "core/big_array.hpp"
 #include "io/geotiff.hpp"
 #include "io/mapped_files.hpp"
 #include "io/tiff_memory.hpp"
@@ -257,10 +257,10 @@ bool read_geokeys(tiff::Handle& h, const std::string& name, InputSet& in) {
 
 // The image, decoded on all cores into one buffer of native samples (row-major, width samples a row).
 // Left uninitialised: every byte is decoded into (the pages first touched by the decoding threads).
-std::unique_ptr<unsigned char[]> decode(std::string_view bytes, const std::string& name, const Layout& l,
-                                        const GeoTiffLimits& limits) {
+BigArray<unsigned char> decode(std::string_view bytes, const std::string& name, const Layout& l,
+                               const GeoTiffLimits& limits) {
   const size_t row_bytes = size_t(l.width) * l.bytes();
-  std::unique_ptr<unsigned char[]> image(new unsigned char[row_bytes * l.height]);
+  BigArray<unsigned char> image(row_bytes * l.height);
   tbb::enumerable_thread_specific<std::optional<tiff::Handle>> handles;
   tbb::enumerable_thread_specific<std::vector<unsigned char>> tiles;
   std::atomic<uint32_t> first_bad{l.blocks};
@@ -292,7 +292,7 @@ std::unique_ptr<unsigned char[]> decode(std::string_view bytes, const std::strin
       }
       if (!l.tiled) {
         want = tmsize_t(rows * row_bytes);
-        got = TIFFReadEncodedStrip(h->tif(), b, image.get() + row0 * row_bytes, want);
+        got = TIFFReadEncodedStrip(h->tif(), b, image.begin() + row0 * row_bytes, want);
       } else {
         want = tmsize_t(tile.size());
         got = TIFFReadEncodedTile(h->tif(), b, tile.data(), want);
@@ -300,7 +300,7 @@ std::unique_ptr<unsigned char[]> decode(std::string_view bytes, const std::strin
           const uint64_t col0 = uint64_t(b % l.across) * l.block_w;
           const size_t n = size_t(std::min<uint64_t>(l.block_w, l.width - col0)) * l.bytes();
           for (uint32_t k = 0; k < rows; ++k)
-            std::memcpy(image.get() + (row0 + k) * row_bytes + col0 * l.bytes(),
+            std::memcpy(image.begin() + (row0 + k) * row_bytes + col0 * l.bytes(),
                         tile.data() + size_t(k) * l.block_w * l.bytes(), n);
         }
       }
@@ -424,9 +424,9 @@ void read_geotiff_bytes(std::string_view bytes, const std::string& name, InputSe
   // A float band's NODATA is compared as the float it stands for (GDAL writes the double of the float).
   if (nd.has && l.sample == Sample::f && l.bits == 32) nd.value = double(float(nd.value));
 
-  const std::unique_ptr<unsigned char[]> image = decode(bytes, name, l, limits);
+  const BigArray<unsigned char> image = decode(bytes, name, l, limits);
   const uint64_t valid = with_sample_type(
-      l, [&](auto zero) { return cells_to_points<decltype(zero)>(image.get(), l, g, nd, name, in); });
+      l, [&](auto zero) { return cells_to_points<decltype(zero)>(image.begin(), l, g, nd, name, in); });
   in.repairs.nodata_cells += cells - valid;
   if (valid == 0) throw InputError(name, 0, "no geometry (every cell is NODATA)");
 }

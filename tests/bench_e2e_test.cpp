@@ -117,6 +117,59 @@ TEST_F(E2eDir, TextAndShapefilesReadBackToTheGeneratedInput) {
   expect_same_geometry(from_text, from_shp);
 }
 
+// LAS holds the points as millimetres: within an ulp of the text's; the DEM's .asc and .tif hold the same cells.
+TEST_F(E2eDir, LasAndGridFormatsReadBackToTheirInput) {
+  const E2eWorkload w = e2e_workload(3000, 750, 7);
+  for (const char* d : {"las", "asc", "tif"}) fs::create_directories(dir_ / d);
+  const E2eFiles las = write_e2e_las(w, path("las"));
+  const InputSet from_las = read_all(las.inputs);
+  ASSERT_EQ(from_las.points.size(), w.input.points.size());
+  for (size_t i = 0; i < w.input.points.size(); ++i) {
+    const Point3 &a = from_las.points[i], &b = w.input.points[i];
+    ASSERT_LE(std::abs(a.x - b.x), 1e-9) << i;
+    ASSERT_LE(std::abs(a.y - b.y), 1e-9) << i;
+    ASSERT_LE(std::abs(a.z - b.z), 1e-12) << i;
+  }
+  ASSERT_EQ(from_las.lines.size(), w.input.lines.size());
+  EXPECT_EQ(las.bytes, fs::file_size(las.inputs[0]) + fs::file_size(las.inputs[1]));
+
+  const Raster dem = e2e_dem(3000);
+  EXPECT_EQ(dem.spec.cell, 183);  // round(10 km / sqrt(3000)) metres
+  EXPECT_EQ(dem.z.size(), 54u * 54u);
+  const InputSet asc = read_all(write_e2e_grid(w, dem, false, path("asc")).inputs);
+  const InputSet tif = read_all(write_e2e_grid(w, dem, true, path("tif")).inputs);
+  ASSERT_EQ(asc.points.size(), dem.z.size());
+  expect_same_geometry(asc, tif);
+  for (size_t row = 0, i = 0; row < dem.spec.nrows; ++row)
+    for (size_t col = 0; col < dem.spec.ncols; ++col, ++i)
+      ASSERT_EQ(asc.points[i], (Point3{dem.spec.x(col), dem.spec.y(row), dem.at(row, col)})) << row << " " << col;
+}
+
+// The LAS and grid rows on a small row: every format's PLYs equal within their kind, the cells counted.
+TEST_F(E2eDir, LasAndGridRowsGiveByteEqualPlysWithinTheirKind) {
+  BenchOptions o;
+  o.table = "e2e";
+  o.sizes = {"2K"};
+  o.runs = 1;
+  o.backends = {"cgal", "gpu"};
+  o.formats = {"las", "asc", "tif"};
+  o.binary = CDTGPU_BINARY;
+  o.first_run = false;
+  o.json_path = path("e2e.json");
+  ASSERT_EQ(run_e2e(o), 0);
+  const nlohmann::json formats = read_json(o.json_path)["rows"][0]["formats"];
+  ASSERT_EQ(formats.size(), 3u);
+  EXPECT_EQ(formats[0]["points"], 2000);
+  EXPECT_EQ(formats[1]["points"], 44 * 44);  // cells of 224 m
+  EXPECT_EQ(formats[2]["points"], 44 * 44);
+  for (const auto& format : formats)
+    for (const auto& cell : format["backends"]) {
+      SCOPED_TRACE(format["format"].get<std::string>() + " " + cell["backend"].get<std::string>());
+      EXPECT_TRUE(cell["bytes_equal"].get<bool>());
+      EXPECT_EQ(cell["counts"]["constraints"], 500);
+    }
+}
+
 // The whole table on a small row with cdtgpu as the child: both backends, both formats, byte-equal PLYs,
 // every stage in the JSON; about 5 s on 2 cores with lavapipe (the first run with empty caches is skipped: it
 // compiles every pipeline, a minute on lavapipe).
