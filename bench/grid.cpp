@@ -191,12 +191,12 @@ int run_grid(const BenchOptions& o) {
       write_geotiff_grid_file(cpu_r, no_crs, (dir / "w.tif").string());
       if (run) tif_write.push_back(ms_since(t));
       tif_bytes = fs::file_size(dir / "w.tif");
-      t = Clock::now();
       {
+        t = Clock::now();
         InputSet back;
         read_geotiff((dir / "w.tif").string(), back);
+        if (run) tif_read.push_back(ms_since(t));  // the read alone: 2.4 GB of vertices are freed after
       }
-      if (run) tif_read.push_back(ms_since(t));
     }
     fs::remove(dir / "w.tif");
     cpu_r = Raster{};

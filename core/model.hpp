@@ -7,12 +7,17 @@
 #include <string>
 #include <vector>
 
+#include "core/uninit.hpp"
+
 namespace cdtgpu {
 
 struct Point3 {
   double x = 0, y = 0, z = 0;
   friend bool operator==(const Point3&, const Point3&) = default;
 };
+
+// Loose vertices as read: resize() leaves the new ones for the reader to write.
+using Points = std::vector<Point3, UninitAllocator<Point3>>;
 
 // A constraint polyline as read: a contour (open) or a ring such as a building footprint (closed; the
 // closing edge from the last point back to the first is implied, the first point is not repeated).
@@ -45,7 +50,7 @@ struct PointClassCounts {
 
 struct InputSet {
   std::vector<std::string> sources;  // file names in the order they were read
-  std::vector<Point3> points;        // loose vertices: DEM points, grid cells, point features
+  Points points;                     // loose vertices: DEM points, grid cells, point features
   std::vector<Polyline> lines;       // constraints
   Repairs repairs;
   PointClassCounts point_classes;

@@ -10,6 +10,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "core/uninit.hpp"
+
 namespace cdtgpu {
 
 // Asks for transparent huge pages (2 MiB: 512 times fewer faults) on the whole 2 MiB pages inside
@@ -22,14 +24,21 @@ inline void advise_huge_pages(void* p, size_t bytes) {
 }
 
 // v.resize(n), the new elements value-initialised (zero bytes: Point3, Triangle, integers), those kept kept.
-template <class T>
-void resize_touched(std::vector<T>& v, size_t n) {
+// With UninitAllocator (Points) the new elements are left for the caller to write, on all cores: their
+// pages are faulted by those writes, on huge pages.
+template <class T, class A>
+void resize_touched(std::vector<T, A>& v, size_t n) {
   static_assert(std::is_trivially_copyable_v<T>);
   if (n <= v.capacity() || n * sizeof(T) < (size_t(8) << 20)) {
     v.resize(n);
     return;
   }
   v.reserve(n);
+  if constexpr (is_uninit_allocator<A>) {
+    advise_huge_pages(v.data() + v.size(), (n - v.size()) * sizeof(T));
+    v.resize(n);
+    return;
+  }
   // Zero bytes in freshly allocated storage past the elements kept (implicitly created objects), page by page
   // on all cores; the resize below then writes over memory that is already there.
   char* base = reinterpret_cast<char*>(v.data() + v.size());

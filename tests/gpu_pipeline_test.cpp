@@ -148,7 +148,7 @@ TEST(GpuPipeline, GridWithConstraintsThroughVertices) {
 TEST(GpuPipeline, DegenerateInputs) {
   auto run = [](const std::vector<Point3>& pts, const std::vector<Polyline>& lines) {
     InputSet in;
-    in.points = pts;
+    in.points.assign(pts.begin(), pts.end());
     in.lines = lines;
     PreparedInput p = prepare(in);
     CdtResult got = cdt().triangulate(p);

@@ -100,8 +100,8 @@ Point3 expected(const LasFile& f, const LasPoint& p) {
 }
 
 // The points of f the filter keeps, in file order, computed here from the rule in read_las.hpp.
-std::vector<Point3> kept(const LasFile& f, const LasFilter& filter) {
-  std::vector<Point3> out;
+Points kept(const LasFile& f, const LasFilter& filter) {
+  Points out;
   for (const LasPoint& p : f.points) {
     const int cls = f.format >= 6 ? p.cls : p.cls & 31;
     if (p.withheld && !filter.keep_withheld) continue;

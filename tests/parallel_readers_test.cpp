@@ -28,7 +28,7 @@ std::string num(double v) {
 }
 
 // n points, one per line, with comments and blank lines between them; far over one chunk (256 KiB).
-std::string xyz_text(int n, std::vector<Point3>& expected) {
+std::string xyz_text(int n, Points& expected) {
   std::string s = "x,y,z\n";
   for (int i = 0; i < n; ++i) {
     const Point3 p{500000 + i * 0.25, 6000000 + (i % 977) * 1.5, i * 0.001};
@@ -94,7 +94,7 @@ TEST(TextSource, MapsAFileAndDropsTheByteOrderMark) {
 }
 
 TEST(ParallelReaders, XyzOfManyChunksGivesEveryPointInOrder) {
-  std::vector<Point3> expected;
+  Points expected;
   const std::string text = xyz_text(60000, expected);
   ASSERT_GT(text.size(), 4u * chunk_bytes(0));
   InputSet in;
@@ -103,7 +103,7 @@ TEST(ParallelReaders, XyzOfManyChunksGivesEveryPointInOrder) {
 }
 
 TEST(ParallelReaders, XyzReportsTheFirstBadLineOfTheFile) {
-  std::vector<Point3> expected;
+  Points expected;
   std::string text = xyz_text(60000, expected);
   // Two errors in different chunks: the earlier one is reported, with its own line number.
   const std::string late = num(expected[55000].x) + ",";
@@ -121,7 +121,7 @@ TEST(ParallelReaders, XyzReportsTheFirstBadLineOfTheFile) {
 TEST(ParallelReaders, WktGeometriesSpanningChunkEndsAreReadWhole) {
   // Every LINESTRING spans three lines, so some cross chunk ends; degenerate ones become points in order.
   std::string text;
-  std::vector<Point3> points;
+  Points points;
   size_t lines = 0;
   for (int i = 0; i < 20000; ++i) {
     const double x = 500000 + i, y = 6000000 + (i % 13);

@@ -141,7 +141,7 @@ TEST(Wkt, ReadsEveryTypeWithAndWithoutZ) {
   read_input(kData + "mixed.wkt", {}, in);
   ASSERT_EQ(in.sources.size(), 1u);
   EXPECT_EQ(in.sources[0], kData + "mixed.wkt");
-  const std::vector<Point3> points = {{1, 2, 3}, {4, 5, 0}, {0, 0, 0}, {1, 0, 0}, {2, 2, 7}, {3, 3, 8}};
+  const Points points = {{1, 2, 3}, {4, 5, 0}, {0, 0, 0}, {1, 0, 0}, {2, 2, 7}, {3, 3, 8}};
   EXPECT_EQ(in.points, points);
   ASSERT_EQ(in.lines.size(), 9u);
   struct Want {
@@ -171,7 +171,7 @@ TEST(Wkt, SuffixDimensionsCollectionsAndSrid) {
           "GEOMETRYCOLLECTION (POINT (9 9), LINESTRING Z (0 0 1, 1 0 2))\n"
           "MULTIPOINT (EMPTY, (5 5))\n"
           "POINT (1e-3 +2.5)\n");
-  EXPECT_EQ(in.points, (std::vector<Point3>{{1, 2, 3}, {1, 2, 0}, {9, 9, 0}, {5, 5, 0}, {1e-3, 2.5, 0}}));
+  EXPECT_EQ(in.points, (Points{{1, 2, 3}, {1, 2, 0}, {9, 9, 0}, {5, 5, 0}, {1e-3, 2.5, 0}}));
   ASSERT_EQ(in.lines.size(), 1u);
   EXPECT_EQ(in.lines[0].record, 3u);
 }
@@ -200,7 +200,7 @@ TEST(Wkt, GeometrySpanningLines) {
   EXPECT_EQ(in.lines[0].record, 2u);
   EXPECT_EQ(in.lines[0].points.size(), 3u);
   EXPECT_TRUE(in.lines[0].closed);
-  EXPECT_EQ(in.points, (std::vector<Point3>{{3, 3, 0}}));
+  EXPECT_EQ(in.points, (Points{{3, 3, 0}}));
   expect_input_error([] { wkt("LINESTRING (0 0,\n 1 nan)\n"); },
                      "not a finite number (geometry starts at line 1)", 2);
 }
@@ -230,7 +230,7 @@ TEST(Wkt, RepairsRingNotClosedAndRepeatedVertices) {
   EXPECT_EQ(in.repairs.repeated_vertices, 3u);
   EXPECT_EQ(in.repairs.rings_closed, 1u);
   EXPECT_EQ(in.repairs.degenerate_lines, 1u);  // LINESTRING (2 2, 2 2) kept as a point
-  EXPECT_EQ(in.points, (std::vector<Point3>{{2, 2, 0}}));
+  EXPECT_EQ(in.points, (Points{{2, 2, 0}}));
 }
 
 // ---- XYZ / CSV ----
@@ -238,7 +238,7 @@ TEST(Wkt, RepairsRingNotClosedAndRepeatedVertices) {
 TEST(Xyz, HeaderCommentsSeparatorsAndExtraColumns) {
   InputSet in;
   read_input(kData + "points.csv", {}, in);
-  EXPECT_EQ(in.points, (std::vector<Point3>{{1.5, 2.5, 3.5}, {-1000, 2, 0.1}, {4, 5, 6}}));
+  EXPECT_EQ(in.points, (Points{{1.5, 2.5, 3.5}, {-1000, 2, 0.1}, {4, 5, 6}}));
   EXPECT_TRUE(in.lines.empty());
 }
 
@@ -255,7 +255,7 @@ TEST(Xyz, BadLinesNameTheirLine) {
 TEST(Xyz, ManyLinesRoundTripExactly) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> d(-1e7, 1e7);
-  std::vector<Point3> want(200000);
+  Points want(200000);
   std::string text;
   char buf[96];
   for (Point3& p : want) {
@@ -273,14 +273,14 @@ TEST(AsciiGrid, CornerOriginAndNodata) {
   InputSet in;
   read_input(kData + "grid_corner.asc", {}, in);
   EXPECT_EQ(in.points,
-            (std::vector<Point3>{{105, 215, 1}, {115, 215, 2}, {125, 215, 3}, {105, 205, 4}, {125, 205, 6}}));
+            (Points{{105, 215, 1}, {115, 215, 2}, {125, 215, 3}, {105, 205, 4}, {125, 205, 6}}));
   EXPECT_EQ(in.repairs.nodata_cells, 1u);
 }
 
 TEST(AsciiGrid, CenterOriginWithDxDy) {
   InputSet in;
   read_input(kData + "grid_center.asc", {}, in);
-  EXPECT_EQ(in.points, (std::vector<Point3>{{0.5, 2.5, 1}, {1.5, 2.5, 2}, {0.5, 0.5, 3}, {1.5, 0.5, 4}}));
+  EXPECT_EQ(in.points, (Points{{0.5, 2.5, 1}, {1.5, 2.5, 2}, {0.5, 0.5, 3}, {1.5, 0.5, 4}}));
   EXPECT_EQ(in.repairs.nodata_cells, 0u);
 }
 
@@ -323,7 +323,7 @@ TEST_F(Inputs, ExtensionIsCaseInsensitive) {
   write("d.ASC", "ncols 1\nnrows 1\nxllcenter 0\nyllcenter 0\ncellsize 1\n7\n");
   InputSet in;
   for (const char* f : {"A.WKT", "b.Xyz", "c.TXT", "d.ASC"}) read_input(path(f), {}, in);
-  EXPECT_EQ(in.points, (std::vector<Point3>{{1, 2, 0}, {1, 2, 3}, {4, 5, 6}, {0, 0, 7}}));
+  EXPECT_EQ(in.points, (Points{{1, 2, 0}, {1, 2, 3}, {4, 5, 6}, {0, 0, 7}}));
   ASSERT_EQ(in.sources.size(), 4u);
   EXPECT_EQ(in.sources[3], path("d.ASC"));
 }
@@ -354,7 +354,7 @@ TEST_F(Shapefile, PointZWithNullShapeAndPrj) {
   write("pts.prj", "PROJCS[\"GDA2020 / MGA zone 55\"]\r\n");
   InputSet in;
   read_input(path("pts.shp"), {}, in);
-  EXPECT_EQ(in.points, (std::vector<Point3>{{1, 2, 3}, {4, 5, 6}}));
+  EXPECT_EQ(in.points, (Points{{1, 2, 3}, {4, 5, 6}}));
   EXPECT_EQ(in.repairs.null_shapes, 1u);
   EXPECT_EQ(in.source_crs_wkt, "PROJCS[\"GDA2020 / MGA zone 55\"]");
   EXPECT_EQ(in.sources, std::vector<std::string>{path("pts.shp")});
@@ -492,7 +492,7 @@ TEST_F(Shapefile, MeasuredTypesHaveNoZAndMultiPatchIsRefused) {
   read_input(path("mpz.shp"), {}, in);
   ASSERT_EQ(in.lines.size(), 1u);
   EXPECT_EQ(in.lines[0].points, (std::vector<Point3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
-  EXPECT_EQ(in.points, (std::vector<Point3>{{1, 3, 5}, {2, 4, 6}}));
+  EXPECT_EQ(in.points, (Points{{1, 3, 5}, {2, 4, 6}}));
   write_shapefile(path("patch"), SHPT_MULTIPATCH, {Shape{{0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}}});
   expect_input_error([&] { read_input(path("patch.shp"), {}, in); }, "shape type MultiPatch is not supported",
                      0);

@@ -607,7 +607,7 @@ TEST(Drape, FootprintOnASlopingPlaneGetsThePlanesZ) {
       EXPECT_EQ(got[k].x, footprint[k].x);
     }
     // The DEM keeps its z.
-    EXPECT_EQ(b.in.points, dem);
+    EXPECT_EQ(b.in.points, Points(dem.begin(), dem.end()));
   }
 }
 

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <span>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -23,7 +24,7 @@ using namespace cdtgpu;
 
 namespace {
 
-std::set<std::pair<double, double>> xy_set(const std::vector<Point3>& pts) {
+std::set<std::pair<double, double>> xy_set(std::span<const Point3> pts) {
   std::set<std::pair<double, double>> s;
   for (const Point3& p : pts) s.insert({p.x, p.y});
   return s;
