@@ -279,7 +279,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     stats->tail_passes = st.c[DT_TAIL_DONE];
     stats->sampled_rounds = st.sampled_rounds;
     stats->small_rounds = st.small_rounds;
-    stats->peak_device_bytes = peak_bytes(n);
+    stats->peak_device_bytes = peak_bytes(n) + stats->voronoi.device_bytes;  // vd buffers live beside the build's
   }
   return std::move(st.tri);
 }
@@ -408,6 +408,7 @@ void DelaunayBuilder::voronoi_start(State& st) const {
   upload(ctx_, st.flip[0], list.data(), list.size() * 4);
   std::vector<uint32_t> counters(DT_COUNTERS, 0), args(DT_ARGS_WORDS, 0);
   counters[DT_COUNT_LIST0] = slots;
+  counters[DT_FLIP_PASSES] = 1;  // the first pass's list, as dt_round_listed counts a round's
   for (uint32_t at = 0; at < DT_ARGS_WORDS; at += 3) args[at + 1] = args[at + 2] = 1;  // 0 groups
   const uint32_t g = uint32_t(groups(slots)), x = std::min(g, 65535u);
   args[DT_ARGS_LIST0] = x;

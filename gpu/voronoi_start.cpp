@@ -83,6 +83,7 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   const uint64_t cells = uint64_t(grid.width) * grid.height;
   // Distinct dual triangles number at most 2 per site; duplicates from neighbouring grid corners come on top.
   const uint32_t capacity = 3 * n + 64;
+  stats.device_bytes = uint64_t(n) * 8 + cells * 8 + uint64_t(capacity) * 12 + 8;
   Buffer demoted = create_buffer(ctx_, uint64_t(n) * 4, "vd demoted");
   Buffer cell_of = create_buffer(ctx_, uint64_t(n) * 4, "vd cell of point");
   Buffer grids[2] = {create_buffer(ctx_, cells * 4, "vd grid a"), create_buffer(ctx_, cells * 4, "vd grid b")};

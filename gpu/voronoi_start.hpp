@@ -34,6 +34,7 @@ struct VoronoiStats {
   uint32_t demoted = 0;
   uint64_t flips = 0;        // flips that made the start Delaunay
   uint32_t flip_passes = 0;  // and their dispatched passes
+  uint64_t device_bytes = 0;  // the stage's own buffers (grids, dual, per-point flags), on top of the build's
   // "vd discretise", "vd flood", "vd dual" (GPU timestamps, all floods summed), "vd repair (host)" (downloads,
   // exact checks, slot layout and upload, host clock); the builder adds "vd flips" (GPU).
   std::vector<std::pair<std::string, double>> stage_ms;

@@ -563,10 +563,12 @@ TEST(GpuDelaunay, Bench) {
   const char* pts = std::getenv("CDTGPU_DT_BENCH_POINTS");
   const size_t n = pts ? std::strtoull(pts, nullptr, 10) : 2000000;
   const bool on_grid = env_is("CDTGPU_DT_BENCH_GRID", "1");
-  std::vector<double> xy =
-      on_grid ? grid(2000, uint32_t((n + 1999) / 2000), 500000, 6000000, 1) : uniform(n, 13);
+  const bool blobs = env_is("CDTGPU_DT_BENCH_CLUSTERED", "1");  // 20 Gaussian blobs over 3000 uniform points
+  std::vector<double> xy = on_grid ? grid(2000, uint32_t((n + 1999) / 2000), 500000, 6000000, 1)
+                           : blobs ? clustered(13, 20, int(n / 20))
+                                   : uniform(n, 13);
   std::printf("[ dt bench ] %zu %s points, %s runs, device %s, %.1f bytes/point\n", xy.size() / 2,
-              on_grid ? "grid" : "uniform", runs, ctx().info.name.c_str(),
+              on_grid ? "grid" : blobs ? "clustered" : "uniform", runs, ctx().info.name.c_str(),
               double(DelaunayBuilder::peak_bytes(uint32_t(xy.size() / 2))) / (xy.size() / 2));
   for (auto& [stage, ms] : bench_delaunay(builder(), xy, std::atoi(runs)))
     std::printf("[ dt bench ] %-10s %9.3f ms (median)\n", stage.c_str(), ms);
@@ -579,6 +581,13 @@ TEST(GpuDelaunay, Bench) {
       "dispatched per round:%s\n",
       stats.rounds, stats.sampled_rounds, (unsigned long long)stats.flips, stats.flip_passes,
       stats.tail_passes, passes.c_str());
+  if (stats.voronoi.used) {
+    const VoronoiStats& v = stats.voronoi;
+    std::printf("[ dt bench ] voronoi start: grid %ux%u, sites %u, kept %u, lost %u, repairs %u (%u demoted), "
+                "fallback %d, start flips %llu in %u passes, %.1f extra bytes/point\n",
+                v.grid_width, v.grid_height, v.sites, v.kept, v.lost, v.repairs, v.demoted, int(v.fallback),
+                (unsigned long long)v.flips, v.flip_passes, double(v.device_bytes) / double(xy.size() / 2));
+  }
   for (size_t r = 0; r < stats.round_log.size(); ++r)
     std::printf("[ dt bench ] round %2zu: %7.3f ms, %8u inserted, %8llu flips, %u passes\n", r,
                 stats.round_log[r].ms, stats.round_log[r].inserted,
