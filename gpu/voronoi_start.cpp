@@ -1,3 +1,5 @@
+// The Voronoi first stage's driver: grid, flood and dual on the GPU, the exact check on the host, demotions and
+// floods again until the dual is valid or the repairs run out. What and why: docs/gpu-delaunay.md.
 #include "gpu/voronoi_start.hpp"
 
 #include <algorithm>
@@ -146,10 +148,10 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
     std::vector<uint32_t> offenders;
     std::optional<StartSlots> slots = dual_to_slots(xy, std::move(dual_tris), offenders);
     const std::vector<uint32_t> owner = download_vector<uint32_t>(ctx_, grids[cur], cells);
-    stats.sites = 0;
     std::vector<char> site(n, 0);
     for (uint32_t s : owner)
-      if (s != VD_NONE && !site[s]) site[s] = 1, ++stats.sites;
+      if (s != VD_NONE) site[s] = 1;
+    stats.sites = uint32_t(std::count(site.begin(), site.end(), 1));
     if (slots) {
       VoronoiStart v;
       // A vertex's loc names a slot it is a corner of; a lost point's, a slot at the site owning its cell (its
