@@ -439,11 +439,14 @@ std::string prepared_difference(const PreparedInput& a, const PreparedInput& b) 
   return "";
 }
 
+using Start = gpu::DelaunayBuilder::Start;
+
 Timings time_gpu(const gpu::ContextOptions& co, const gpu::ConstraintOptions& options, const PreparedInput& p,
-                 int runs, GpuMerge* merge = nullptr) {
+                 int runs, GpuMerge* merge = nullptr, Start start = Start::insertion) {
   gpu::Context ctx = gpu::create_context(co);
   gpu::GpuCdt cdt(ctx);
   cdt.constraint_options = options;
+  cdt.delaunay().initial_dt = start;
   Timings t = time_backend(gpu_backend(cdt), p, runs);
   if (merge) {
     prepare(*merge->in, cdt.merger());  // warm-up
@@ -453,6 +456,27 @@ Timings time_gpu(const gpu::ContextOptions& co, const gpu::ConstraintOptions& op
     merge->difference = prepared_difference(p, q);
   }
   return t;
+}
+
+double stage_median(const Timings& t, const std::string& name) {
+  for (const auto& [k, runs] : t.stages)
+    if (k == name) return median(runs);
+  return 0.0;
+}
+
+// The Voronoi first stage's steps (issue 30), medians: GPU discretise, flood, dual; host checks and repair
+// (downloads and upload included); GPU flips to Delaunay; and the insertion rounds after it.
+std::string voronoi_stages(const Timings& t) {
+  char line[256];
+  std::snprintf(line, sizeof line,
+                "discretise %s, flood %s, dual %s, repair (host) %s, flips %s; then rounds: relocate %s, insert %s, "
+                "flip %s",
+                fmt_ms(stage_median(t, "dt vd discretise")).c_str(), fmt_ms(stage_median(t, "dt vd flood")).c_str(),
+                fmt_ms(stage_median(t, "dt vd dual")).c_str(),
+                fmt_ms(stage_median(t, "dt vd repair (host)")).c_str(),
+                fmt_ms(stage_median(t, "dt vd flips")).c_str(), fmt_ms(stage_median(t, "dt relocate")).c_str(),
+                fmt_ms(stage_median(t, "dt insert")).c_str(), fmt_ms(stage_median(t, "dt flip")).c_str());
+  return line;
 }
 
 std::string bytes_per_point(const Timings& t, const PreparedInput& p) {
@@ -468,8 +492,9 @@ int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std
   struct Variant {
     std::string name;
     Opt options;
+    Start start = Start::insertion;
   };
-  std::vector<Variant> variants(5);
+  std::vector<Variant> variants(6);
   variants[0].name = "full method (with our cavity insertion)";
   variants[1].name = "no prefix-sum layout (fixed slots per constraint)";
   variants[1].options.layout = Opt::Layout::FixedSlots;
@@ -479,6 +504,8 @@ int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std
   variants[3].options.domain_index = false;
   variants[4].name = "the paper's method: flips only, no cavity insertion";
   variants[4].options.cavities = false;
+  variants[5].name = "Voronoi first stage (--initial-dt voronoi)";
+  variants[5].start = Start::voronoi;
 
   std::printf("ablation (the paper's Table 3): %llu points; 'constraints ms' = device time of crossing detection + "
               "prefix-sum layout + flip rounds; 'host' = constraints the host safety net inserted\n",
@@ -500,7 +527,7 @@ int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std
     json rows = json::array();
     for (size_t vi = 0; vi < variants.size(); ++vi) {
       const Variant& v = variants[vi];
-      Timings t = time_gpu(co, v.options, p, o.runs);
+      Timings t = time_gpu(co, v.options, p, o.runs, nullptr, v.start);
       std::string diff = mesh_difference(t.mesh, cgal.mesh);
       failures += !diff.empty();
       if (!diff.empty()) spdlog::error("ablation '{}' differs from CGAL: {}", v.name, diff);
@@ -515,6 +542,7 @@ int run_ablation(const BenchOptions& o, const gpu::ContextOptions& co, const std
       std::printf("%-50s %10s %10s %15s %8u %6s %5u %s\n", v.name.c_str(), fmt_ms(median(t.device)).c_str(),
                   fmt_ms(median(t.total)).c_str(), fmt_ms(insert_ms).c_str(), t.rounds,
                   bytes_per_point(t, p).c_str(), t.host_fallback, diff.empty() ? "ok" : "FAIL");
+      if (v.start == Start::voronoi) std::printf("    Delaunay stages: %s\n", voronoi_stages(t).c_str());
       std::fflush(stdout);
       json row = t.to_json();
       row["variant"] = v.name;
@@ -615,6 +643,10 @@ int run_bench(const BenchOptions& o) {
     GpuMerge merge;
     merge.in = &in;
     if (gpu) g = time_gpu(co, {}, p, o.runs, &merge);
+    // Table 1 also times the Voronoi first stage (issue 30), which must give the same mesh.
+    const bool voronoi = gpu && w.table == "1";
+    Timings gv;
+    if (voronoi) gv = time_gpu(co, {}, p, o.runs, nullptr, Start::voronoi);
 
     json check = json::object();
     std::string status = "-";
@@ -645,6 +677,14 @@ int run_bench(const BenchOptions& o) {
       } else if (status == "-") {
         status = "gpu=cgal";
       }
+      const std::string vdiff = voronoi ? mesh_difference(gv.mesh, cgal.mesh) : "";
+      if (voronoi) check["gpu_voronoi_equal"] = vdiff.empty();
+      if (!vdiff.empty()) {
+        spdlog::error("{} {} points: the GPU backend with the Voronoi start differs from CGAL: {}", w.table, w.points,
+                      vdiff);
+        status = "FAIL";
+        ++failures;
+      }
       check["gpu_prepare_equal"] = merge.difference.empty();
       if (!merge.difference.empty()) {
         spdlog::error("{} {} points: prepare with the GPU's merging differs: {}", w.table, w.points, merge.difference);
@@ -663,6 +703,11 @@ int run_bench(const BenchOptions& o) {
                 gpu && with_cgal ? fmt_ms(cgal_ms / wall_ms).c_str() : "-",
                 gpu ? std::to_string(g.rounds).c_str() : "-", gpu ? bytes_per_point(g, p).c_str() : "-",
                 (with_cgal ? cgal : g).mesh.triangles.size(), len, status.c_str());
+    if (voronoi)
+      std::printf("%-8s %9s %9s %11s %9s %9s %9s %8s %6u %6s   Voronoi start: %s\n", "1 vd", "", "", "", "",
+                  fmt_ms(median(gv.device)).c_str(), fmt_ms(median(gv.total)).c_str(),
+                  with_cgal ? fmt_ms(cgal_ms / median(gv.total)).c_str() : "-", gv.rounds,
+                  bytes_per_point(gv, p).c_str(), voronoi_stages(gv).c_str());
     std::fflush(stdout);
 
     json row;
@@ -682,6 +727,7 @@ int run_bench(const BenchOptions& o) {
     if (gpu) row["prepare_gpu_merge_ms"] = merge.ms;
     row["cgal"] = with_cgal ? cgal.to_json() : json();
     row["gpu"] = gpu ? g.to_json() : json();
+    if (voronoi) row["gpu_voronoi"] = gv.to_json();
     row["speedup"] = gpu && with_cgal ? json(cgal_ms / wall_ms) : json();
     row["speedup_device"] = gpu && with_cgal ? json(cgal_ms / dev_ms) : json();
     row["check"] = check;

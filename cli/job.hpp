@@ -34,6 +34,7 @@ struct TriangulateOptions {
   WriteOptions write;
   std::string backend = "auto";  // auto (default: cli/gpu_start.hpp), gpu or cgal (the CPU reference)
   std::string device;           // Vulkan device override for the gpu backend
+  std::string initial_dt = "insertion";  // the GPU Delaunay build's start: insertion or voronoi (gpu/delaunay.hpp)
   std::string stats_path;    // empty: none
   std::string grid_out;      // ESRI ASCII grid of the TIN (core/raster.hpp); empty: none
   double cell = 1.0;         // its cell size

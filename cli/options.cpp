@@ -60,6 +60,12 @@ void add_triangulate_options(CLI::App* t, TriangulateArgs& args) {
                 "CGAL), gpu (Vulkan compute, any device, lavapipe included) or cgal (the CPU reference)")
       ->default_val("auto")
       ->check(CLI::IsMember({"auto", "gpu", "cgal"}));
+  t->add_option("--initial-dt", tri.initial_dt,
+                "GPU backend: how the Delaunay triangulation starts: insertion (default: one triangle, then "
+                "parallel insertion rounds) or voronoi (the paper's digital Voronoi diagram on a grid, its dual "
+                "repaired and flipped Delaunay); the output is the same. voronoi implies --backend gpu")
+      ->default_val("insertion")
+      ->check(CLI::IsMember({"insertion", "voronoi"}));
   t->add_option("--grid-out", tri.grid_out, "also write the TIN as a DEM grid (.tif: GeoTIFF; else ESRI ASCII .asc), NODATA outside");
   t->add_option("--cell", tri.cell, "grid cell size; cell centres at its multiples")->default_val(1.0)->check(positive);
   t->add_option("--contours-out", tri.contours_out,
@@ -106,6 +112,12 @@ CrsRequest crs_from(const CrsArgs& a) {
 TriangulateOptions triangulate_options(const TriangulateArgs& args) {
   TriangulateOptions o = args.tri;
   o.input.crs = crs_from(args.crs);
+  if (o.initial_dt == "voronoi") {  // a stage of the GPU backend only
+    if (o.backend == "cgal")
+      throw UsageError("--initial-dt voronoi is a GPU method: CGAL builds its own Delaunay triangulation; use "
+                       "--backend gpu (or auto)");
+    o.backend = "gpu";
+  }
   return o;
 }
 

@@ -141,6 +141,8 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
   RunStats& stats = job.stats;
   GpuStart& start = *job.start;
   gpu::GpuCdt& cdt = start.cdt();
+  cdt.delaunay().initial_dt = job.options.initial_dt == "voronoi" ? gpu::DelaunayBuilder::Start::voronoi
+                                                                  : gpu::DelaunayBuilder::Start::insertion;
   stats.stage_ms.emplace_back("gpu start: context (own thread)", start.context_ms);
   stats.stage_ms.emplace_back("gpu start: pipelines queued (own thread)", start.pipelines_ms);
   stats.stage_ms.emplace_back("gpu start: staging memory (own thread)", start.staging_ms);

@@ -73,6 +73,9 @@ class GpuCdt {
 
   // The paper's ablation switches (docs/gpu-constraints.md); defaults are the full method.
   ConstraintOptions constraint_options;
+  // The Delaunay stage's settings, e.g. its start (`cdtgpu triangulate --initial-dt voronoi`); set before a run.
+  DelaunayBuilder& delaunay() { return delaunay_; }
+  const DelaunayBuilder& delaunay() const { return delaunay_; }
   // Threads of the CPU resolve stage (0: all).
   unsigned resolve_threads = 0;
 

@@ -128,6 +128,8 @@ struct DelaunayBuilder::State {
   uint32_t used = 0;          // slots in use
   uint32_t round = 0;
   bool in_round = false;  // the submits belong to st.log_round (its time goes to stats->round_log)
+  bool filled = false;    // pick, claim, counters and bit sets initialised (round 0, or the Voronoi start)
+  uint32_t start_vertices = 3;
   bool sampling = false;  // only every sample_stride-th listed point walks and bids (the first rounds)
   uint32_t sampled_rounds = 0;
   uint32_t small_rounds = 0;
@@ -145,6 +147,15 @@ struct DelaunayBuilder::State {
   Recorder rec;
 
   bool detail = false;  // a stage per kernel as well (DelaunayBuilder::profile_kernels)
+
+  // Free pick and claim words, clear bit sets: what the first round (or the Voronoi start's flips) expects.
+  void fill_round_state() {
+    rec.fill(pick, DT_NONE);
+    rec.fill(claim, DT_NONE);
+    rec.fill(granted, 0);
+    rec.fill(granted_at, 0);
+    filled = true;
+  }
 
   // Flip passes so far that were dispatched (not run by a pass's last workgroup): what a batch must cover.
   uint32_t dispatched_passes() const { return c[DT_FLIP_PASSES] - c[DT_TAIL_DONE]; }
@@ -238,6 +249,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     return std::move(st.tri);
   }
   start(st);
+  if (initial_dt == Start::voronoi) voronoi_start(st);
   while (st.left > 0) {
     insert_round(st);
     flip_passes(st);
@@ -259,6 +271,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
   number_back(st);
   if (stats) {
     stats->rounds = st.round;
+    stats->start_vertices = st.start_vertices;
     stats->flips = st.c[DT_FLIPS];
     stats->exact_walks = st.c[DT_EXACT_WALKS];
     stats->exact_checks = st.c[DT_EXACT_CHECKS];
@@ -266,7 +279,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
     stats->tail_passes = st.c[DT_TAIL_DONE];
     stats->sampled_rounds = st.sampled_rounds;
     stats->small_rounds = st.small_rounds;
-    stats->peak_device_bytes = peak_bytes(n);
+    stats->peak_device_bytes = peak_bytes(n) + stats->voronoi.device_bytes;  // vd buffers live beside the build's
   }
   return std::move(st.tri);
 }
@@ -373,6 +386,54 @@ void DelaunayBuilder::start(State& st) const {
   st.sampling = sample_stride > 1 && n >= sample_min_points;
 }
 
+// The Voronoi first stage (gpu/voronoi_start) on the points start() numbered: the valid triangulation of the
+// sites the digital dual kept replaces the first triangle's slots, every edge is checked and flipped until none
+// is illegal (the walks need a Delaunay triangulation: in others they may cycle), and the rounds insert the
+// points it lost, each from a slot near it. No valid start: the first triangle stays (a fallback, counted).
+void DelaunayBuilder::voronoi_start(State& st) const {
+  if (!voronoi_) voronoi_.emplace(ctx_);
+  VoronoiStats local;
+  VoronoiStats& vs = st.stats ? st.stats->voronoi : local;
+  vs.used = true;
+  std::optional<VoronoiStart> v = voronoi_->run(st.rec, st.pts, st.n, st.prof.has_value(), vs);
+  if (st.stats)
+    for (const auto& [name, ms] : vs.stage_ms) st.stats->stage_ms.push_back({name, ms});
+  if (!v) return;
+  const uint32_t slots = uint32_t(v->slots.verts.size() / 3);
+  upload(ctx_, st.tri.verts, v->slots.verts.data(), v->slots.verts.size() * 4);
+  upload(ctx_, st.tri.nbrs, v->slots.nbrs.data(), v->slots.nbrs.size() * 4);
+  upload(ctx_, st.loc, v->loc.data(), v->loc.size() * 4);
+  std::vector<uint32_t> list(slots);
+  for (uint32_t t = 0; t < slots; ++t) list[t] = DT_ENTRY(t, DT_CHECK_ALL, 0u);
+  upload(ctx_, st.flip[0], list.data(), list.size() * 4);
+  std::vector<uint32_t> counters(DT_COUNTERS, 0), args(DT_ARGS_WORDS, 0);
+  counters[DT_COUNT_LIST0] = slots;
+  counters[DT_FLIP_PASSES] = 1;  // the first pass's list, as dt_round_listed counts a round's
+  for (uint32_t at = 0; at < DT_ARGS_WORDS; at += 3) args[at + 1] = args[at + 2] = 1;  // 0 groups
+  const uint32_t g = uint32_t(groups(slots)), x = std::min(g, 65535u);
+  args[DT_ARGS_LIST0] = x;
+  args[DT_ARGS_LIST0 + 1] = (g + x - 1) / x;
+  upload(ctx_, st.counters, counters.data(), counters.size() * 4);
+  upload(ctx_, st.args, args.data(), args.size() * 4);
+  st.fill_round_state();
+  st.used = slots;
+  st.start_vertices = v->slots.vertices;
+  st.left = st.n - v->slots.vertices;
+  st.list_len = st.n;
+  st.sampling = false;  // the sample is for rounds over few slots
+  std::copy(std::begin(v->corners), std::end(v->corners), st.corners);
+  st.cur = 0;
+  const uint32_t passes_before = st.dispatched_passes();
+  do {
+    const uint32_t exact_before = st.c[DT_EXACT_CHECKS];
+    record_flip_batch(st, flip_passes_per_submit, "vd flips");
+    submit(st, true);
+    st.exact_last_round = st.c[DT_EXACT_CHECKS] - exact_before;
+  } while (st.c[DT_COUNT_LIST0 + st.cur] != 0);
+  vs.flips = st.c[DT_FLIPS];
+  vs.flip_passes = st.dispatched_passes() - passes_before;
+}
+
 // One round, one submit: every point left walks to its slot and bids for it (relocate; walks the filters
 // cannot finish go to the exact pass); the list is compacted once a quarter of it are vertices; every slot
 // with a bid inserts its winner where the claims allow (claim, grant, rank, split, fix); then the first batch
@@ -386,12 +447,9 @@ void DelaunayBuilder::insert_round(State& st) const {
   if (st.stats) st.stats->round_log.push_back({});
 
   st.begin("relocate");
-  if (st.round == 0) {  // recorded here, not in start(): a build of 3 points has no round and no submit
-    st.rec.fill(st.pick, DT_NONE);
-    st.rec.fill(st.claim, DT_NONE);
+  if (!st.filled) {  // recorded here, not in start(): a build of 3 points has no round and no submit
     st.rec.fill(st.counters, 0);
-    st.rec.fill(st.granted, 0);
-    st.rec.fill(st.granted_at, 0);
+    st.fill_round_state();
   }
   // The sample runs low (fewer than sample_until of its points per slot in use are left; every point inserted
   // so far was a sample point): from now on every point walks, the others from a sample point's slot
@@ -518,7 +576,7 @@ void DelaunayBuilder::flip_passes(State& st) const {
 // check the undecided slots exactly (or both in one kernel: ExactChecks), flip (winners flip and repair their
 // neighbours; the next list; the last workgroup sizes the next pass). Indirect dispatches over the current
 // list: no host round trip between passes.
-void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
+void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes, const char* stage) const {
   const uint32_t cap = slot_capacity(st.n);
   const bool inlined = exact_checks == ExactChecks::inlined ||
                        (exact_checks == ExactChecks::adaptive && st.exact_last_round < kInlineExactBelow);
@@ -527,7 +585,7 @@ void DelaunayBuilder::record_flip_batch(State& st, uint32_t passes) const {
   const bool tail = tail_passes && (inlined || exact_checks == ExactChecks::separate);
   const Pass& check = inlined ? flip_check_inline() : flip_check_;
   const Pass& flip = tail ? flip_tail() : flip_;
-  st.begin("flip");
+  st.begin(stage);
   for (uint32_t k = 0; k < passes; ++k) {
     const uint32_t src = st.cur;
     const DtFlipPush fp{src, cap, ++st.epoch};

@@ -25,6 +25,7 @@
 #include "gpu/primitives.hpp"
 #include "gpu/recorder.hpp"
 #include "gpu/triangulation.hpp"
+#include "gpu/voronoi_start.hpp"
 
 namespace cdtgpu::gpu {
 
@@ -37,6 +38,8 @@ struct DelaunayStats {
   uint64_t flips = 0;
   uint64_t exact_walks = 0;                 // relocation walks the filters could not finish (exact pass)
   uint64_t exact_checks = 0;                // slot flip checks the filters could not decide (exact pass)
+  uint32_t start_vertices = 0;              // vertices before the first round: 3, or the Voronoi start's
+  VoronoiStats voronoi;                     // DelaunayBuilder::initial_dt voronoi: its sites, repairs, times
   std::vector<uint32_t> round_flip_passes;  // dispatched non-empty flip passes after each round's insertions
   // Per round: its GPU time (the relocate, insert and flip stages), the points it inserted, the flips after.
   struct Round {
@@ -46,7 +49,8 @@ struct DelaunayStats {
   };
   std::vector<Round> round_log;
   // GPU time per stage (timestamps), summed over rounds, in order of first appearance: "start" (first
-  // triangle, Morton order), "relocate" (walks + compaction), "insert" (pick, claim, split, fix), "flip".
+  // triangle, Morton order), "relocate" (walks + compaction), "insert" (pick, claim, split, fix), "flip"; with
+  // the Voronoi start also "vd discretise", "vd flood", "vd dual", "vd repair (host)" and "vd flips".
   std::vector<std::pair<std::string, double>> stage_ms;
   uint64_t peak_device_bytes = 0;  // every buffer of the build alive at the peak, the result's included
   // With DelaunayBuilder::profile_kernels: every kernel in order, with its round and, for a flip pass, the
@@ -106,6 +110,11 @@ class DelaunayBuilder {
   // / 2M / 4M uniform points: none 8.18 / 12.87 / 22.07; 32 x 2: 8.68 / 12.99 / 20.59; 32 x 8: 8.27 / 12.18 /
   // 19.78; 64 x 8: 8.59 / 12.01 / 20.30 (docs/gpu-delaunay.md).
   uint32_t sample_until = 8;
+  // How the build starts: `insertion`, from one triangle (v0, v1 and the point farthest from their line);
+  // `voronoi`, from the dual of a digital Voronoi diagram of the points on a grid (the paper's first step,
+  // gpu/voronoi_start), flipped Delaunay before the rounds insert the points it lost. The result is the same.
+  enum class Start { insertion, voronoi };
+  Start initial_dt = Start::insertion;
   // Where the per-point and per-slot scratch comes from and goes back to (keys in gpu/buffers.hpp's
   // kPoints4 / kPoints16 / kSlots4 / kSlots8); null: allocated and freed by each build.
   BufferCache* cache = nullptr;
@@ -114,9 +123,10 @@ class DelaunayBuilder {
   struct State;
   bool first_triangle(State& st) const;
   void start(State& st) const;
+  void voronoi_start(State& st) const;
   void insert_round(State& st) const;
   void flip_passes(State& st) const;
-  void record_flip_batch(State& st, uint32_t passes) const;
+  void record_flip_batch(State& st, uint32_t passes, const char* stage = "flip") const;
   void scan(State& st, const Buffer& in, const Buffer& out, uint32_t n) const;
   void number_back(State& st) const;
   void submit(State& st, bool counters) const;
@@ -129,6 +139,7 @@ class DelaunayBuilder {
       grant_, rank_, split_, split_fix_, flip_check_, flip_check_exact_, flip_;
   // Variants queued where the defaults use them, else built on first use.
   mutable std::optional<Pass> flip_check_inline_, flip_tail_, insert_small_;
+  mutable std::optional<VoronoiStarter> voronoi_;
   const Pass& insert_small() const;
   const Pass& flip_check_inline() const;
   const Pass& flip_tail() const;

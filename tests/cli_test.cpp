@@ -111,6 +111,29 @@ TEST_F(Cli, GpuBackendWritesTheSameBytesAsCgal) {
   EXPECT_EQ(files_matching("y."), 0u);
 }
 
+// --initial-dt voronoi (issue 30): the GPU Delaunay build from the digital Voronoi diagram writes the default's
+// bytes; it implies the GPU backend and is refused with CGAL's.
+TEST_F(Cli, VoronoiInitialDtWritesTheSameBytes) {
+  if (first_usable_device().empty()) GTEST_SKIP() << "no Vulkan device";
+  write_terrain();
+  std::string in = path("dem.csv") + " " + path("lines.wkt");
+  Result d = run("triangulate " + in + " -q --backend gpu -o " + path("default.ply"));
+  ASSERT_EQ(d.code, 0) << d.err;
+  Result v = run("triangulate " + in + " -q --initial-dt voronoi -o " + path("voronoi.ply") + " --stats " +
+                 path("vd.json"));
+  ASSERT_EQ(v.code, 0) << v.err;
+  EXPECT_EQ(slurp(path("default.ply")), slurp(path("voronoi.ply")));
+  auto stats = nlohmann::json::parse(slurp(path("vd.json")));
+  EXPECT_EQ(stats["backend"], "gpu");
+  EXPECT_TRUE(stats["gpu_stage_ms"].contains("dt vd flood")) << stats["gpu_stage_ms"].dump();
+  Result c = run("triangulate " + in + " -q --backend cgal --initial-dt voronoi -o " + path("c.ply"));
+  EXPECT_EQ(c.code, 2);
+  EXPECT_NE(c.err.find("--initial-dt voronoi"), std::string::npos) << c.err;
+  EXPECT_EQ(files_matching("c."), 0u);
+  Result bad = run("triangulate " + in + " -q --initial-dt jfa -o " + path("j.ply"));
+  EXPECT_EQ(bad.code, 2);
+}
+
 // --backend auto (the default): CGAL for small inputs, without touching Vulkan; for large ones the GPU only where
 // it is hardware (on lavapipe, CGAL). Whatever it picks, the bytes are the same, and the stats say why.
 TEST_F(Cli, AutoBackendPicksByInputSizeAndDevice) {

@@ -63,6 +63,12 @@ bool large() {
   return v && std::strcmp(v, "1") == 0;
 }
 
+// CDTGPU_DT_START=voronoi (ctest's gpu_cdt_test_voronoi): every input starts from the GPU Delaunay build with
+// the Voronoi first stage instead of CGAL's triangulation, so the constraint stages must give the same bytes.
+bool voronoi_start() {
+  const char* v = std::getenv("CDTGPU_DT_START");
+  return v && std::strcmp(v, "voronoi") == 0;
+}
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -83,6 +89,21 @@ std::vector<Triangle> delaunay(const std::vector<Point3>& v) {
   for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f)
     out.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
   return out;
+}
+
+// The Delaunay triangulation the constraints start from: CGAL's, or with CDTGPU_DT_START=voronoi the GPU build
+// from the Voronoi start, checked against CGAL's.
+gpu::HostTriangulation start_triangulation(const std::string& name, const std::vector<double>& xy,
+                                           const std::vector<Point3>& vertices) {
+  if (!voronoi_start()) return gpu::make_host_triangulation(xy, delaunay(vertices));
+  gpu::DelaunayBuilder dt(ctx());
+  dt.initial_dt = gpu::DelaunayBuilder::Start::voronoi;
+  gpu::HostTriangulation host = gpu::download_host(ctx(), dt.build(xy));
+  std::vector<Triangle> want = delaunay(vertices);
+  for (Triangle& t : want) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  std::sort(want.begin(), want.end());
+  EXPECT_EQ(gpu::finite_triangles(host), want) << name << ": the Voronoi start's Delaunay triangulation";
+  return host;
 }
 
 // Splits every constraint at the vertices lying exactly on it (vertices sorted by x, then y, as prepare makes
@@ -129,7 +150,7 @@ Outcome check_against_cgal(const std::string& name, const InputSet& in, const Co
   xy.reserve(2 * p.vertices.size());
   for (const Point3& q : p.vertices) xy.insert(xy.end(), {q.x, q.y});
   t0 = std::chrono::steady_clock::now();
-  gpu::HostTriangulation host = gpu::make_host_triangulation(xy, delaunay(p.vertices));
+  gpu::HostTriangulation host = start_triangulation(name, xy, p.vertices);
   const double dt_ms = ms_since(t0);
 
   const gpu::ConstraintInserter& ins = inserter();  // pipelines built before the clock starts
@@ -339,6 +360,7 @@ TEST(GpuCdt, GarbageInTheSharedScratchChangesNothing) {
   };
   gpu::Primitives prims(ctx());
   gpu::DelaunayBuilder dt(ctx());
+  if (voronoi_start()) dt.initial_dt = gpu::DelaunayBuilder::Start::voronoi;
   gpu::ConstraintInserter ins(ctx(), prims);
   gpu::TriangleSorter sorter(ctx(), prims);
   dt.cache = ins.cache = sorter.cache = &cache;
@@ -383,7 +405,7 @@ TEST(GpuCdt, ReportsBrokenRequirements) {
   PreparedInput p = prepare(in);
   std::vector<double> xy;
   for (const Point3& q : p.vertices) xy.insert(xy.end(), {q.x, q.y});
-  gpu::HostTriangulation host = gpu::make_host_triangulation(xy, delaunay(p.vertices));
+  gpu::HostTriangulation host = start_triangulation("broken requirements", xy, p.vertices);
   auto index = [&](double x, double y) {
     return uint32_t(std::find_if(p.vertices.begin(), p.vertices.end(),
                                  [&](const Point3& q) { return q.x == x && q.y == y; }) -

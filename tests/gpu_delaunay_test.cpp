@@ -12,6 +12,7 @@
 //   CDTGPU_DT_SMALL=0|1        DelaunayBuilder::small_rounds
 //   CDTGPU_DT_EXACT=separate|inline|adaptive  DelaunayBuilder::exact_checks
 //   CDTGPU_DT_SAMPLE=S         DelaunayBuilder::sample_stride (1: no sampled rounds)
+//   CDTGPU_DT_START=voronoi    DelaunayBuilder::initial_dt in every test (ctest runs the suite so as well)
 //   CDTGPU_DT_SMALL_CASES=N    small degenerate cases (default 300)
 //   CDTGPU_VALIDATION=0        validation off (it is on by default, and a missing layer is then an error)
 #include <CGAL/Delaunay_triangulation_2.h>
@@ -56,9 +57,18 @@ Context& ctx() {
   return c;
 }
 
+bool voronoi_start() { return env_is("CDTGPU_DT_START", "voronoi"); }
+
+// A builder with the start CDTGPU_DT_START asks for.
+DelaunayBuilder new_builder() {
+  DelaunayBuilder d(ctx());
+  if (voronoi_start()) d.initial_dt = DelaunayBuilder::Start::voronoi;
+  return d;
+}
+
 DelaunayBuilder& builder() {
   static DelaunayBuilder b = [] {
-    DelaunayBuilder d(ctx());
+    DelaunayBuilder d = new_builder();
     if (const char* k = std::getenv("CDTGPU_DT_FLIP_BATCH"))
       d.flip_passes_per_submit = uint32_t(std::atoi(k));
     d.profile_kernels = env_is("CDTGPU_DT_PROFILE_KERNELS", "1");
@@ -149,6 +159,12 @@ DelaunayStats expect_cgal(const std::string& name, const std::vector<double>& xy
   std::string stages;
   for (auto& [stage, ms] : stats.stage_ms)
     stages.append(" ").append(stage).append("=").append(std::to_string(ms).substr(0, 7));
+  if (stats.voronoi.used) {
+    const VoronoiStats& v = stats.voronoi;
+    std::printf("[ vd ] %-22s grid=%ux%u sites=%u kept=%u lost=%u repairs=%u demoted=%u fallback=%d flips=%llu\n",
+                name.c_str(), v.grid_width, v.grid_height, v.sites, v.kept, v.lost, v.repairs, v.demoted,
+                int(v.fallback), (unsigned long long)v.flips);
+  }
   std::printf(
       "[ dt ] %-22s n=%zu triangles=%zu rounds=%u flip_passes=%u flips=%llu exact walks/checks=%llu/%llu "
       "bytes/pt=%.1f build=%.0f ms (gpu:%s) cgal=%.0f ms\n",
@@ -164,9 +180,9 @@ DelaunayStats expect_cgal(const std::string& name, const std::vector<double>& xy
     flips += r.flips;
   }
   if (stats.rounds > 0) {
-    EXPECT_EQ(inserted, n - 3) << name;
+    EXPECT_EQ(inserted, n - stats.start_vertices) << name;
   }
-  EXPECT_EQ(flips, stats.flips) << name;
+  EXPECT_EQ(flips + stats.voronoi.flips, stats.flips) << name;
   EXPECT_EQ(got.size(), want.size()) << name;
   if (got.size() != want.size()) return stats;
   size_t diff = 0;
@@ -352,7 +368,7 @@ TEST(GpuDelaunay, SameSlotsOnEveryRun) { expect_same_slots_twice(builder(), unif
 // The flip kernel whose last workgroup runs the short passes itself (the GPU default; forced here so that
 // lavapipe runs it too): the same triangles, the tail must have run, and the same slots on every run.
 TEST(GpuDelaunay, TailPassesMatchCgal) {
-  DelaunayBuilder dt(ctx());
+  DelaunayBuilder dt = new_builder();
   dt.tail_passes = true;
   uint32_t tail = 0;
   tail += expect_cgal("tail: uniform 20k", uniform(20000, 21), dt).tail_passes;
@@ -382,13 +398,16 @@ TEST(GpuDelaunay, SampledRoundsMatchCgal) {
       {"grid 150x100", grid(150, 100, 500000, 6000000, 1)},
       {"integers+dups", integer_lattice(41)}};
   for (uint32_t stride : {8u, 32u}) {
-    DelaunayBuilder dt(ctx());
+    DelaunayBuilder dt = new_builder();
     dt.sample_stride = stride;
     dt.sample_min_points = 0;
     dt.sample_until = stride == 8 ? 8 : 2;  // the default, and longer sampling
     for (const auto& [name, xy] : inputs) {
       const std::string label = "sampled: " + name + " /" + std::to_string(stride);
-      EXPECT_GE(expect_cgal(label, xy, dt).sampled_rounds, 3u) << label;
+      const uint32_t sampled = expect_cgal(label, xy, dt).sampled_rounds;
+      if (!voronoi_start()) {
+        EXPECT_GE(sampled, 3u) << label;
+      }
     }
     expect_same_slots_twice(dt, uniform(15000, 43));
   }
@@ -405,14 +424,14 @@ TEST(GpuDelaunay, SmallRoundsMatchCgal) {
       {"integers+dups", integer_lattice(53)},
       {"clustered", clustered(54, 4, 1500)}};
   for (bool small : {false, true}) {
-    DelaunayBuilder dt(ctx());
+    DelaunayBuilder dt = new_builder();
     dt.small_rounds = small;
     for (const auto& [name, xy] : inputs) {
       const std::string label = std::string(small ? "small rounds: " : "dispatched rounds: ") + name;
       const DelaunayStats stats = expect_cgal(label, xy, dt);
-      if (small) {
+      if (small && !voronoi_start()) {
         EXPECT_GE(stats.small_rounds, 3u) << label;
-      } else {
+      } else if (!small) {
         EXPECT_EQ(stats.small_rounds, 0u) << label;
       }
     }
@@ -459,12 +478,76 @@ void expect_kernel_log(const DelaunayStats& stats) {
 // passes (on by default on GPUs only).
 TEST(GpuDelaunay, KernelLogCoversEveryPass) {
   for (bool tail : {false, true}) {
-    DelaunayBuilder dt(ctx());
+    DelaunayBuilder dt = new_builder();
     dt.profile_kernels = true;
     dt.tail_passes = tail;
     expect_kernel_log(
         expect_cgal(tail ? "profiled, tail: uniform 5k" : "profiled: uniform 5k", uniform(5000, 31), dt));
   }
+}
+
+// The Voronoi first stage (issue 30): the same triangles as CGAL (so as the default start) on uniform, clustered,
+// grid, duplicate-heavy, collinear and far-apart inputs; where the digital diagram is poor, more insertion, never
+// another mesh. On uniform points the start must really be used (no fallback), or the test would prove nothing.
+TEST(GpuDelaunay, VoronoiStartMatchesCgal) {
+  DelaunayBuilder dt(ctx());
+  dt.initial_dt = DelaunayBuilder::Start::voronoi;
+  DelaunayStats s = expect_cgal("vd: uniform 20k", uniform(20000, 61), dt);
+  EXPECT_TRUE(s.voronoi.used);
+  EXPECT_FALSE(s.voronoi.fallback);
+  EXPECT_GT(s.voronoi.kept, 20000u * 3 / 4);
+  EXPECT_EQ(s.voronoi.kept + s.voronoi.lost, 20000u);
+  EXPECT_EQ(s.start_vertices, s.voronoi.kept);
+  for (const char* stage : {"vd discretise", "vd flood", "vd dual", "vd repair (host)", "vd flips"})
+    EXPECT_TRUE(std::any_of(s.stage_ms.begin(), s.stage_ms.end(), [&](const auto& e) { return e.first == stage; }))
+        << stage;
+  expect_cgal("vd: clustered", clustered(62, 6, 2000), dt);
+  s = expect_cgal("vd: grid 150x100", grid(150, 100, 0, 0, 1), dt);  // co-circular everywhere
+  EXPECT_FALSE(s.voronoi.fallback);
+  expect_cgal("vd: grid 400x6 utm", grid(400, 6, 500000.25, 6000000.5, 0.5), dt);  // cells shared
+  expect_cgal("vd: integers+duplicates", integer_lattice(63), dt);
+  std::vector<std::pair<double, double>> far;  // two dense clusters 10^6 apart, nothing between
+  Rng r(64);
+  for (int i = 0; i < 4000; ++i) far.push_back({r.unit(), r.unit()});
+  for (int i = 0; i < 4000; ++i) far.push_back({1e6 + r.unit(), 1e6 + r.unit()});
+  far.push_back({0, 1e6});
+  expect_cgal("vd: far apart", canonical(far), dt);
+  std::vector<std::pair<double, double>> lines;
+  for (int i = 0; i < 3000; ++i) lines.push_back({double(i), double(2 * i)});
+  lines.push_back({1500, 0});
+  lines.push_back({0, 6000});
+  expect_cgal("vd: collinear + two", canonical(lines), dt);
+  std::vector<std::pair<double, double>> ring;
+  for (int i = 0; i < 3000; ++i) {
+    const double a = r.uniform(0, 6.283185307179586), d = 1 + r.uniform(0, 1e-3);
+    ring.push_back({d * std::cos(a), d * std::sin(a)});
+  }
+  expect_cgal("vd: ring", canonical(ring), dt);
+  expect_same_slots_twice(dt, uniform(15000, 65));
+}
+
+// Small lattices (collinear and co-circular everywhere, several points per cell): the Voronoi start's repairs
+// and fallbacks on the hardest cases, each compared with CGAL.
+TEST(GpuDelaunay, VoronoiStartSmallDegenerateInputs) {
+  DelaunayBuilder dt(ctx());
+  dt.initial_dt = DelaunayBuilder::Start::voronoi;
+  Rng r(66);
+  uint32_t used = 0;
+  for (int it = 0; it < 120; ++it) {
+    const int n = 3 + int(r.g() % (it % 10 == 9 ? 400 : 60)), side = 2 + int(r.g() % (it % 10 == 9 ? 30 : 7));
+    std::vector<std::pair<double, double>> pts;
+    for (int i = 0; i < n; ++i) pts.push_back({double(r.g() % side), double(r.g() % side) * (it % 2 ? 1.0 : 0.125)});
+    std::vector<double> xy = canonical(pts);
+    DelaunayStats stats;
+    HostTriangulation host = download_host(ctx(), dt.build(xy, &stats));
+    if (!host.verts.empty()) {
+      ASSERT_EQ(check_triangulation(host), "") << "case " << it;
+    }
+    ASSERT_EQ(finite_triangles(host), cgal_delaunay(xy)) << "case " << it << ", " << xy.size() / 2 << " points";
+    used += stats.voronoi.used && !stats.voronoi.fallback;
+  }
+  EXPECT_GT(used, 30u);
+  no_validation_messages();
 }
 
 TEST(GpuDelaunay, Large) {
@@ -480,10 +563,12 @@ TEST(GpuDelaunay, Bench) {
   const char* pts = std::getenv("CDTGPU_DT_BENCH_POINTS");
   const size_t n = pts ? std::strtoull(pts, nullptr, 10) : 2000000;
   const bool on_grid = env_is("CDTGPU_DT_BENCH_GRID", "1");
-  std::vector<double> xy =
-      on_grid ? grid(2000, uint32_t((n + 1999) / 2000), 500000, 6000000, 1) : uniform(n, 13);
+  const bool blobs = env_is("CDTGPU_DT_BENCH_CLUSTERED", "1");  // 20 Gaussian blobs over 3000 uniform points
+  std::vector<double> xy = on_grid ? grid(2000, uint32_t((n + 1999) / 2000), 500000, 6000000, 1)
+                           : blobs ? clustered(13, 20, int(n / 20))
+                                   : uniform(n, 13);
   std::printf("[ dt bench ] %zu %s points, %s runs, device %s, %.1f bytes/point\n", xy.size() / 2,
-              on_grid ? "grid" : "uniform", runs, ctx().info.name.c_str(),
+              on_grid ? "grid" : blobs ? "clustered" : "uniform", runs, ctx().info.name.c_str(),
               double(DelaunayBuilder::peak_bytes(uint32_t(xy.size() / 2))) / (xy.size() / 2));
   for (auto& [stage, ms] : bench_delaunay(builder(), xy, std::atoi(runs)))
     std::printf("[ dt bench ] %-10s %9.3f ms (median)\n", stage.c_str(), ms);
@@ -496,6 +581,13 @@ TEST(GpuDelaunay, Bench) {
       "dispatched per round:%s\n",
       stats.rounds, stats.sampled_rounds, (unsigned long long)stats.flips, stats.flip_passes,
       stats.tail_passes, passes.c_str());
+  if (stats.voronoi.used) {
+    const VoronoiStats& v = stats.voronoi;
+    std::printf("[ dt bench ] voronoi start: grid %ux%u, sites %u, kept %u, lost %u, repairs %u (%u demoted), "
+                "fallback %d, start flips %llu in %u passes, %.1f extra bytes/point\n",
+                v.grid_width, v.grid_height, v.sites, v.kept, v.lost, v.repairs, v.demoted, int(v.fallback),
+                (unsigned long long)v.flips, v.flip_passes, double(v.device_bytes) / double(xy.size() / 2));
+  }
   for (size_t r = 0; r < stats.round_log.size(); ++r)
     std::printf("[ dt bench ] round %2zu: %7.3f ms, %8u inserted, %8llu flips, %u passes\n", r,
                 stats.round_log[r].ms, stats.round_log[r].inserted,

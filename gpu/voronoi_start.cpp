@@ -1,0 +1,193 @@
+// The Voronoi first stage's driver: grid, flood and dual on the GPU, the exact check on the host, demotions and
+// floods again until the dual is valid or the repairs run out. What and why: docs/gpu-delaunay.md.
+#include "gpu/voronoi_start.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <chrono>
+#include <cmath>
+
+#include "gpu/profiler.hpp"
+#include "shaders/layout_dt.h"
+#include "shaders/layout_vd.h"
+
+namespace cdtgpu::gpu {
+
+using namespace layout;
+
+namespace {
+
+// 64 MiB per grid copy: lavapipe binds at most 128 MiB, and two copies flood.
+constexpr uint64_t kMaxCells = uint64_t(1) << 24;
+constexpr uint32_t kMaxSide = 1u << 15;
+constexpr uint32_t kNone = UINT32_MAX;
+
+uint64_t groups(uint64_t n) { return (n + VD_WG - 1) / VD_WG; }
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void add_ms(std::vector<std::pair<std::string, double>>& stages, const std::string& name, double ms) {
+  auto it = std::find_if(stages.begin(), stages.end(), [&](const auto& e) { return e.first == name; });
+  if (it == stages.end())
+    stages.push_back({name, ms});
+  else
+    it->second += ms;
+}
+
+// Square cells over the bounding box, about cells_per_point per point: with 4, a uniform input loses ~12% of
+// its points to shared cells (1 - (1 - e^-1/4) * 4), and the grid costs 8 bytes per cell while it floods.
+VdGridPush grid_for(std::span<const double> xy, uint32_t n, double cells_per_point) {
+  double x0 = xy[0], x1 = xy[0], y0 = xy[1], y1 = xy[1];
+  for (uint32_t i = 0; i < n; ++i) {
+    x0 = std::min(x0, xy[2 * i]);
+    x1 = std::max(x1, xy[2 * i]);
+    y0 = std::min(y0, xy[2 * i + 1]);
+    y1 = std::max(y1, xy[2 * i + 1]);
+  }
+  const double w = x1 - x0, h = y1 - y0;
+  const double cells = std::min(double(kMaxCells), std::max(16.0, cells_per_point * n));
+  double cell = std::sqrt(w * h / cells);
+  cell = std::max({cell, w / kMaxSide, h / kMaxSide});
+  if (!(cell > 0)) cell = std::max(w, h);  // a degenerate box (the caller excludes all-collinear inputs)
+  VdGridPush g{};
+  g.width = uint32_t(std::clamp(std::ceil(w / cell), 1.0, double(kMaxSide)));
+  g.height = uint32_t(std::clamp(std::ceil(h / cell), 1.0, double(kMaxSide)));
+  while (uint64_t(g.width) * g.height > kMaxCells) {  // rounding up both sides can overshoot
+    cell *= 1.01;
+    g.width = uint32_t(std::clamp(std::ceil(w / cell), 1.0, double(kMaxSide)));
+    g.height = uint32_t(std::clamp(std::ceil(h / cell), 1.0, double(kMaxSide)));
+  }
+  g.x0 = x0;
+  g.y0 = y0;
+  g.cell = cell;
+  return g;
+}
+
+}  // namespace
+
+VoronoiStarter::VoronoiStarter(const Context& ctx)
+    : ctx_(ctx),
+      seed_(create_pass(ctx, {"vd_seed", 4, sizeof(VdGridPush)})),
+      flood_(create_pass(ctx, {"vd_flood", 3, sizeof(VdGridPush)})),
+      dual_(create_pass(ctx, {"vd_dual", 3, sizeof(VdGridPush)})) {}
+
+// Discretise, flood, dual on the GPU; check on the host; on failure demote the blamed sites and go again.
+std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& points, uint32_t n, bool timed,
+                                                VoronoiStats& stats) const {
+  auto t0 = std::chrono::steady_clock::now();
+  double host_ms = 0;
+  const std::vector<double> xy = download_vector<double>(ctx_, points, size_t(n) * 2);
+  VdGridPush grid = grid_for(xy, n, cells_per_point);
+  stats.grid_width = grid.width;
+  stats.grid_height = grid.height;
+  const uint64_t cells = uint64_t(grid.width) * grid.height;
+  // Distinct dual triangles number at most 2 per site; duplicates from neighbouring grid corners come on top.
+  const uint32_t capacity = 3 * n + 64;
+  stats.device_bytes = uint64_t(n) * 8 + cells * 8 + uint64_t(capacity) * 12 + 8;
+  Buffer demoted = create_buffer(ctx_, uint64_t(n) * 4, "vd demoted");
+  Buffer cell_of = create_buffer(ctx_, uint64_t(n) * 4, "vd cell of point");
+  Buffer grids[2] = {create_buffer(ctx_, cells * 4, "vd grid a"), create_buffer(ctx_, cells * 4, "vd grid b")};
+  Buffer tris = create_buffer(ctx_, uint64_t(capacity) * 12, "vd dual triangles");
+  Buffer count = create_buffer(ctx_, 8, "vd dual count");
+  std::vector<uint32_t> demoted_host(n, 0);
+  std::optional<Profiler> prof;
+  if (timed) prof.emplace(ctx_, 64);
+  auto begin = [&](const char* name) {
+    if (prof) prof->begin(rec, name);
+  };
+  auto end = [&] {
+    if (prof) prof->end(rec);
+  };
+  std::optional<VoronoiStart> result;
+  host_ms += ms_since(t0);
+  for (uint32_t attempt = 0; attempt <= max_repairs && !result; ++attempt) {
+    t0 = std::chrono::steady_clock::now();
+    if (attempt > 0) upload(ctx_, demoted, demoted_host.data(), uint64_t(n) * 4);
+    host_ms += ms_since(t0);
+    begin("vd discretise");
+    if (attempt == 0) rec.fill(demoted, 0);
+    rec.fill(grids[0], VD_NONE);
+    grid.n = n;
+    rec.dispatch_groups(seed_, {points, demoted, grids[0], cell_of}, grid, groups(n));
+    end();
+    begin("vd flood");
+    // Jumps W/2 .. 1 (powers of two), then 1 again (JFA+1: fixes most of the plain flood's errors).
+    std::vector<uint32_t> steps;
+    for (uint32_t s = std::bit_floor(std::max({grid.width, grid.height, 2u}) - 1); s >= 1; s /= 2) steps.push_back(s);
+    steps.push_back(1);
+    uint32_t cur = 0;
+    for (uint32_t s : steps) {
+      grid.step = s;
+      rec.dispatch_groups(flood_, {points, grids[cur], grids[1 - cur]}, grid, groups(cells));
+      cur = 1 - cur;
+    }
+    end();
+    begin("vd dual");
+    rec.fill(count, 0);
+    VdGridPush dual = grid;
+    dual.n = capacity;
+    rec.dispatch_groups(dual_, {grids[cur], tris, count}, dual, groups(cells));
+    end();
+    rec.submit();
+    if (prof) {
+      for (const StageTime& s : prof->results()) add_ms(stats.stage_ms, s.name, s.ms);
+      prof->reset();
+    }
+
+    t0 = std::chrono::steady_clock::now();
+    uint32_t counts[2];
+    download(ctx_, count, counts, sizeof(counts));
+    if (counts[VD_COUNT_OVERFLOW] != 0) {  // never seen; a start is an optimisation, so give up rather than grow
+      host_ms += ms_since(t0);
+      break;
+    }
+    std::vector<Triangle> dual_tris(counts[VD_COUNT_TRIS]);
+    if (!dual_tris.empty()) download(ctx_, tris, dual_tris.data(), dual_tris.size() * 12);
+    std::vector<uint32_t> offenders;
+    std::optional<StartSlots> slots = dual_to_slots(xy, std::move(dual_tris), offenders);
+    const std::vector<uint32_t> owner = download_vector<uint32_t>(ctx_, grids[cur], cells);
+    std::vector<char> site(n, 0);
+    for (uint32_t s : owner)
+      if (s != VD_NONE) site[s] = 1;
+    stats.sites = uint32_t(std::count(site.begin(), site.end(), 1));
+    if (slots) {
+      VoronoiStart v;
+      // A vertex's loc names a slot it is a corner of; a lost point's, a slot at the site owning its cell (its
+      // first walk is then short), else the first.
+      std::vector<uint32_t> slot_of(n, kNone);
+      for (uint32_t t = 0; t < slots->finite; ++t)
+        for (uint32_t k = 0; k < 3; ++k) slot_of[slots->verts[3 * t + k]] = t;
+      const std::vector<uint32_t> cell = download_vector<uint32_t>(ctx_, cell_of, n);
+      v.loc.resize(n);
+      for (uint32_t i = 0; i < n; ++i) {
+        const uint32_t o = owner[cell[i]];
+        v.loc[i] = slot_of[i] != kNone                    ? DT_INSERTED | NBR(slot_of[i], DT_INSIDE)
+                   : o != VD_NONE && slot_of[o] != kNone ? NBR(slot_of[o], DT_INSIDE)
+                                                          : NBR(0u, DT_INSIDE);
+      }
+      for (uint32_t k = 0; k < 3; ++k) {
+        v.corners[2 * k] = xy[2 * size_t(slots->verts[k])];
+        v.corners[2 * k + 1] = xy[2 * size_t(slots->verts[k]) + 1];
+      }
+      stats.kept = slots->vertices;
+      stats.lost = n - slots->vertices;
+      v.slots = std::move(*slots);
+      result = std::move(v);
+    } else if (!offenders.empty() && attempt < max_repairs) {
+      for (uint32_t o : offenders) stats.demoted += !demoted_host[o];
+      for (uint32_t o : offenders) demoted_host[o] = 1;
+      ++stats.repairs;
+    } else {
+      host_ms += ms_since(t0);
+      break;
+    }
+    host_ms += ms_since(t0);
+  }
+  stats.fallback = !result;
+  add_ms(stats.stage_ms, "vd repair (host)", host_ms);
+  return result;
+}
+
+}  // namespace cdtgpu::gpu

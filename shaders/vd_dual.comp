@@ -1,0 +1,44 @@
+// Voronoi first stage, step 3 (dual): every grid corner where three or four regions meet gives the dual
+// triangles of its sites, taken counter-clockwise around the corner (cells (x, y), (x+1, y), (x+1, y+1),
+// (x, y+1)); four sites give two triangles sharing the first one. Appended in any order (the host sorts
+// them): nothing here is trusted, the host checks the result exactly (gpu/voronoi_start.cpp).
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#include "layout_vd.h"
+#include "common.glsl"
+
+layout(local_size_x = VD_WG) in;
+layout(std430, binding = 0) readonly buffer Grid { uint grid[]; };
+layout(std430, binding = 1) writeonly buffer Tris { uint tris[]; };
+layout(std430, binding = 2) buffer Count { uint count[]; };
+layout(push_constant) uniform Push { VdGridPush p; };
+
+void main() {
+  uint v = linear_group_id() * VD_WG + gl_LocalInvocationIndex;
+  uint w = p.width - 1u;
+  if (p.width < 2u || p.height < 2u || v >= w * (p.height - 1u)) return;
+  uint x = v % w, y = v / w;
+  uint c = y * p.width + x;
+  uint s[4] = uint[4](grid[c], grid[c + 1u], grid[c + 1u + p.width], grid[c + p.width]);
+  // The distinct sites in cyclic order: drop each that repeats its predecessor (around the cycle).
+  uint d[4];
+  uint m = 0u;
+  for (uint k = 0u; k < 4u; ++k)
+    if (s[k] != s[(k + 3u) % 4u] && s[k] != VD_NONE) d[m++] = s[k];
+  if (m < 3u) return;
+  if (m == 4u && (d[0] == d[2] || d[1] == d[3])) return;  // two regions touching twice: no triangle
+  uint t = m - 2u;
+  uint at = atomicAdd(count[VD_COUNT_TRIS], t);
+  if (at + t > p.n) {
+    atomicAdd(count[VD_COUNT_OVERFLOW], 1u);
+    return;
+  }
+  tris[3u * at] = d[0];
+  tris[3u * at + 1u] = d[1];
+  tris[3u * at + 2u] = d[2];
+  if (t == 2u) {
+    tris[3u * at + 3u] = d[0];
+    tris[3u * at + 4u] = d[2];
+    tris[3u * at + 5u] = d[3];
+  }
+}
