@@ -1,5 +1,7 @@
 // Point readers for plain text: XYZ/CSV ("x y z" per line) and ESRI ASCII grids (.asc, one vertex per cell).
 // Numbers go through std::from_chars: locale-free, exact (round-trips what a %.17g writer printed) and fast.
+// Both parse on all cores; a grid whose data has any fault is read again by the sequential reader, whose
+// message (the first fault in the file) is the one reported.
 #include <algorithm>
 #include <cctype>
 #include <charconv>
@@ -8,9 +10,14 @@
 #include <cstring>
 #include <string>
 #include <string_view>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
+#include <sstream>
 
 #include "core/error.hpp"
 #include "core/repair.hpp"
+#include "core/touched.hpp"
 #include "io/readers.hpp"
 #include "io/text_source.hpp"
 
@@ -292,6 +299,115 @@ void read_ascii_grid(std::istream& text, const std::string& name, InputSet& in) 
         name, line_no,
         "expected ncols x nrows = " + std::to_string(total) + " values, found " + std::to_string(k));
   require_geometry(in, before, name);
+}
+
+namespace {
+
+// A fault in a grid's data: the sequential reader reads the file again to report it.
+struct GridFault {};
+
+// The data of one chunk of grid lines: every value in order, and how many values each line with any holds.
+struct GridChunk {
+  std::vector<double> z;
+  std::vector<std::pair<uint64_t, uint64_t>> lines;  // (line number, values on it)
+  uint64_t valid = 0;                                 // values that are not NODATA
+};
+
+}  // namespace
+
+void read_ascii_grid_text(std::string_view text, const std::string& name, InputSet& in) {
+  auto sequential = [&] {
+    std::istringstream s{std::string(text)};
+    read_ascii_grid(s, name, in);
+  };
+  // The header, line by line, up to the first line that starts with a number.
+  GridHeader h;
+  uint64_t line_no = 0;
+  size_t data = text.size();
+  for_each_line(text, 0, text.size(), [&](const char* b, const char* e) {
+    ++line_no;
+    const std::string_view s = trim(std::string_view(b, size_t(e - b)));
+    if (s.empty()) return true;
+    if (read_header_line(s, line_no, name, h)) return true;
+    data = size_t(b - text.data());
+    return false;
+  });
+  if (data == text.size()) return sequential();  // no data: its message
+  check_header(h, line_no, name);
+  const uint64_t ncols = uint64_t(h.ncols), nrows = uint64_t(h.nrows), total = ncols * nrows;
+  auto is_nodata = [&](double v) { return h.has_nodata && (v == h.nodata || (std::isnan(h.nodata) && std::isnan(v))); };
+
+  // Every value of each chunk, on all cores.
+  const std::string_view body = text.substr(data);
+  const std::vector<Chunk> chunks = split_lines(body, chunk_bytes(body.size()), line_no);
+  std::vector<GridChunk> parts(chunks.size());
+  try {
+    parse_chunks(chunks, [&](size_t k, const Chunk& c) {
+      GridChunk& part = parts[k];
+      part.z.reserve((c.end - c.begin) / 4);
+      uint64_t line = c.first_line;
+      for_each_line(body, c.begin, c.end, [&](const char* p, const char* end) {
+        const size_t before = part.z.size();
+        for (;;) {
+          while (p < end && is_space(*p)) ++p;
+          if (p == end) break;
+          double v = 0;
+          if (parse_number(p, end, v, is_space) != Parse::ok) throw GridFault{};
+          part.z.push_back(v);
+          part.valid += !is_nodata(v);
+        }
+        if (part.z.size() > before) part.lines.emplace_back(line, part.z.size() - before);
+        ++line;
+        return true;
+      });
+    });
+  } catch (const GridFault&) {
+    return sequential();
+  }
+  // The counts the sequential reader checks: ncols x nrows values; one row a line if the first line holds one.
+  std::vector<uint64_t> first(parts.size() + 1, 0), at(parts.size() + 1, 0);
+  int row_per_line = -1;
+  for (size_t k = 0; k < parts.size(); ++k) {
+    for (const auto& [line, values] : parts[k].lines) {
+      if (row_per_line < 0) row_per_line = values == ncols ? 1 : 0;
+      if (row_per_line == 1 && values != ncols) return sequential();
+    }
+    first[k + 1] = first[k] + parts[k].z.size();
+    at[k + 1] = at[k] + parts[k].valid;
+  }
+  if (first.back() != total) return sequential();
+
+  // The vertices, each chunk at its offset, as the sequential reader computes them.
+  const uint32_t source = add_source(in, name);
+  const size_t base = in.points.size();
+  const double x0 = h.x_center ? 0.0 : 0.5, y0 = h.y_center ? 0.0 : 0.5;
+  resize_touched(in.points, base + at.back());
+  std::atomic<bool> bad{false};
+  tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
+    Point3* out = in.points.data() + base + at[k];
+    uint64_t cell = first[k];
+    for (const double v : parts[k].z) {
+      const uint64_t row = cell / ncols, col = cell % ncols;
+      ++cell;
+      if (is_nodata(v)) continue;
+      const Point3 q{h.xll + (double(col) + x0) * h.dx, h.yll + (double(nrows - 1 - row) + y0) * h.dy, v};
+      try {
+        check_finite(in, source, 0, q);
+      } catch (const InputError&) {
+        bad = true;
+        return;
+      }
+      *out++ = q;
+    }
+    parts[k] = GridChunk{};
+  });
+  if (bad) {
+    in.points.resize(base);
+    in.sources.pop_back();
+    return sequential();
+  }
+  in.repairs.nodata_cells += total - at.back();
+  require_geometry(in, base + in.lines.size(), name);
 }
 
 }  // namespace cdtgpu

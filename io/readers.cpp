@@ -38,13 +38,6 @@ std::ifstream open_text(const std::string& path) {
   return file;
 }
 
-template <typename Reader>
-void read_text_file(const std::string& path, Reader reader, InputSet& in) {
-  std::ifstream file = open_text(path);
-  reader(file, path, in);
-  if (file.bad()) throw InputError(path, 0, "read error");
-}
-
 // Mapped whole and parsed on all cores.
 template <typename Reader>
 void read_mapped(const std::string& path, Reader reader, InputSet& in) {
@@ -68,7 +61,7 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
   else if (ext == ".xyz" || ext == ".csv" || ext == ".txt")
     read_mapped(path, read_xyz_text, in);
   else if (ext == ".asc")
-    read_text_file(path, read_ascii_grid, in);
+    read_mapped(path, read_ascii_grid_text, in);
   else if (ext == ".tif" || ext == ".tiff")
     read_geotiff(path, in);
   else if (ext == ".geojson" || ext == ".json")

@@ -51,6 +51,8 @@ void read_xyz(std::istream& text, const std::string& name, InputSet& in);
 void read_wkt_text(std::string_view text, const std::string& name, InputSet& in);
 void read_xyz_text(std::string_view text, const std::string& name, InputSet& in);
 void read_ascii_grid(std::istream& text, const std::string& name, InputSet& in);
+// The same on text in memory, parsed on all cores.
+void read_ascii_grid_text(std::string_view text, const std::string& name, InputSet& in);
 
 // The text format of ../shared/data/cdt-peer-inputs: "V E", V lines "x y", E lines "i j" (0-based).
 void read_peer_input(std::istream& text, const std::string& name, InputSet& in);

@@ -213,3 +213,78 @@ TEST(ParallelReaders, ShapefileOfManyRangesGivesEveryPointInOrderAndNamesTheBadR
   EXPECT_NE(err.find("pts.shp:27001:"), std::string::npos) << err;
   std::filesystem::remove_all(dir);
 }
+
+namespace {
+
+// A 300 x 400 grid (about 1 MB of text: several chunks), NODATA here and there, one row a line unless
+// `wrapped` (then rows are split over lines of 7 values, as some writers wrap them).
+std::string asc_text(bool wrapped, bool centre) {
+  std::string s = "ncols 300\nnrows 400\n";
+  s += centre ? "xllcenter 500000.5\nyllcenter 6000000.5\n" : "xllcorner 500000\nyllcorner 6000000\n";
+  s += "cellsize 2.5\nNODATA_value -9999\n";
+  for (int r = 0; r < 400; ++r) {
+    for (int c = 0; c < 300; ++c) {
+      const bool nodata = (r * 300 + c) % 97 == 0;
+      s += nodata ? std::string("-9999") : num(100 + r * 0.125 - c * 0.0625);
+      s += (wrapped && c % 7 == 6) || c == 299 ? (r % 5 ? "\n" : "\r\n") : " ";
+    }
+  }
+  return s;
+}
+
+// The sequential reader (std::istream), for comparison.
+InputSet asc_sequential(const std::string& text) {
+  InputSet in;
+  std::istringstream s(text);
+  read_ascii_grid(s, "dem.asc", in);
+  return in;
+}
+
+}  // namespace
+
+TEST(ParallelReaders, AsciiGridGivesTheSequentialReadersVertices) {
+  for (const bool wrapped : {false, true})
+    for (const bool centre : {false, true}) {
+      const std::string text = asc_text(wrapped, centre);
+      ASSERT_GT(text.size(), 3u * chunk_bytes(0));
+      InputSet in;
+      in.points.push_back({1, 2, 3});  // an earlier input's vertex stays
+      read_ascii_grid_text(text, "dem.asc", in);
+      const InputSet want = asc_sequential(text);
+      ASSERT_EQ(in.points.size(), want.points.size() + 1);
+      EXPECT_EQ(in.points[0], (Point3{1, 2, 3}));
+      EXPECT_TRUE(std::equal(want.points.begin(), want.points.end(), in.points.begin() + 1));
+      EXPECT_EQ(in.repairs.nodata_cells, want.repairs.nodata_cells);
+      EXPECT_EQ(in.repairs.nodata_cells, 1238u);  // every 97th of 120000 cells
+      EXPECT_EQ(in.sources, (std::vector<std::string>{"dem.asc"}));
+    }
+}
+
+// Any fault in the data is reported as the sequential reader reports it: the first in the file.
+TEST(ParallelReaders, AsciiGridReportsTheFirstFaultOfTheFile) {
+  const std::string good = asc_text(false, false);
+  auto both = [](const std::string& text) {
+    const std::string seq = error_of([&] { asc_sequential(text); });
+    const std::string par = error_of([&] {
+      InputSet in;
+      read_ascii_grid_text(text, "dem.asc", in);
+    });
+    EXPECT_EQ(par, seq);
+    return par;
+  };
+  // A bad value in the last row, then also a short second row: the short row is first.
+  std::string text = good;
+  text.replace(text.rfind("\n149.875 "), 9, "\n149.875x ");
+  EXPECT_EQ(both(text), "dem.asc:406: not a number: '149.875x'");
+  text.erase(text.find("\n100.125 ") + 1, 8);
+  EXPECT_EQ(both(text), "dem.asc:8: row 2 has 299 values, ncols is 300");
+  // Values missing at the end, one too many, NaN without NODATA, a coordinate out of range.
+  EXPECT_NE(both(good.substr(0, good.size() - 20)).find("row 400 has"), std::string::npos);
+  EXPECT_NE(both(good + "7\n").find("more values than"), std::string::npos);
+  std::string with_nan = good;
+  with_nan.replace(with_nan.rfind("\n149.875 "), 9, "\nnan ");
+  EXPECT_NE(both(with_nan).find("not a finite number"), std::string::npos);
+  std::string far = good;
+  far.replace(far.find("xllcorner 500000"), 16, "xllcorner 5e15");
+  EXPECT_NE(both(far).find("beyond"), std::string::npos);
+}
