@@ -144,6 +144,7 @@ int run_batch(const BatchOptions& options) {
       throw UsageError("--stats-dir " + options.stats_dir + ": cannot create the folder");
   }
   GpuStarts gpus;  // one device for every job
+  if (lines.size() >= kBatchWarmJobs) gpus.auto_min_points = batch_auto_min_points();
   JobQueue to_device, to_writer;
   std::counting_semaphore<kInFlight> slots(kInFlight);
   Written written;

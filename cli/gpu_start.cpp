@@ -18,6 +18,11 @@ uint64_t auto_min_points() {
   return kAutoMinPoints;
 }
 
+uint64_t batch_auto_min_points() {
+  if (const char* v = std::getenv("CDTGPU_AUTO_MIN_POINTS"); v && *v) return std::strtoull(v, nullptr, 10);
+  return kBatchAutoMinPoints;
+}
+
 namespace {
 
 // Points in a text file, from its size and the first 64 KiB: lines for XYZ, coordinates (commas and line ends)

@@ -20,6 +20,12 @@ namespace cdtgpu {
 // H100 machine with `cdtgpu bench --table e2e` (docs/performance.md). CDTGPU_AUTO_MIN_POINTS overrides it.
 constexpr uint64_t kAutoMinPoints = 100000;
 uint64_t auto_min_points();
+// In a batch of kBatchWarmJobs jobs or more the start-up is paid once, and auto sends jobs of this many points
+// to the GPU: 200 jobs of 20K points + 5K segments on the H100 machine took 16.5 ms a job on the GPU, 42-59 on
+// CGAL (docs/performance.md). CDTGPU_AUTO_MIN_POINTS, when set, rules batches too.
+constexpr uint64_t kBatchAutoMinPoints = 10000;
+constexpr size_t kBatchWarmJobs = 8;
+uint64_t batch_auto_min_points();
 
 // About how many points the input files hold, from their sizes and first bytes (stdin counts 0). Auto starts
 // the GPU while reading when this reaches auto_min_points(): a guess that decides what overlaps, never what
@@ -56,6 +62,9 @@ class GpuStart {
 // every later job: a batch pays for one Vulkan device and its pipelines. Thread-safe.
 class GpuStarts {
  public:
+  // The fewest input points for which `--backend auto` uses the GPU in this process: auto_min_points(), or
+  // batch_auto_min_points() for a batch of many jobs.
+  uint64_t auto_min_points = cdtgpu::auto_min_points();
   // The start for this device and rule: started now with `expected_points`, or the one started before.
   GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points);
   // GpuStart::leave_for_exit for each.

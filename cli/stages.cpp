@@ -250,12 +250,12 @@ void check_job(Job& job) {
 }
 
 // The GPU starts on its own thread while the inputs are read: forced, or when auto may pick it (the files are
-// large enough to hold auto_min_points() points).
+// large enough to hold gpus.auto_min_points points).
 void start_gpu_early(Job& job, GpuStarts& gpus) {
   const TriangulateOptions& options = job.options;
   const uint64_t estimate = options.backend != "cgal" ? estimate_input_points(job.input_paths) : 0;
   spdlog::debug("about {} input points in the files", estimate);
-  if (options.backend == "gpu" || (options.backend == "auto" && estimate >= auto_min_points()))
+  if (options.backend == "gpu" || (options.backend == "auto" && estimate >= gpus.auto_min_points))
     job.start = &gpus.start(options.device, hardware_only(options), estimate);
 }
 
@@ -281,11 +281,11 @@ void read_job(Job& job) {
   job.stats.counts["vertices_without_z"] = zero_z;
 }
 
-// Auto: the GPU from auto_min_points() points read. Started now if the files' estimate did not start it, so
+// Auto: the GPU from gpus.auto_min_points points read. Started now if the files' estimate did not start it, so
 // that it overlaps prepare; a device named with --device is used as it is.
 void choose_backend(Job& job, GpuStarts& gpus) {
   const TriangulateOptions& options = job.options;
-  const uint64_t min_points = auto_min_points();
+  const uint64_t min_points = gpus.auto_min_points;
   const uint64_t n = point_count(job.in);
   job.backend_reason = "--backend " + options.backend;
   job.want_gpu = options.backend == "gpu";
@@ -293,7 +293,8 @@ void choose_backend(Job& job, GpuStarts& gpus) {
     job.want_gpu = n >= min_points;
     if (!job.want_gpu)
       job.backend_reason = std::to_string(n) + " input points, fewer than " + std::to_string(min_points) +
-                           ": the CPU is faster than the GPU's start-up";
+                           (min_points == auto_min_points() ? ": the CPU is faster than the GPU's start-up"
+                                                            : ": the CPU is faster than the GPU on jobs this small");
     else if (!job.start)
       job.start = &gpus.start(options.device, hardware_only(options), n);
   }

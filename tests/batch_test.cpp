@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/gpu_start.hpp"  // kBatchWarmJobs
 #include "tests/binary_test.hpp"
 #include <sys/wait.h>
 
@@ -253,3 +254,42 @@ TEST_F(Batch, TheBundledJobFileRuns) {
 }
 
 }  // namespace
+
+// In a batch of kBatchWarmJobs jobs or more, auto counts the GPU's start-up once and wants the GPU from
+// kBatchAutoMinPoints points (here it falls back to CGAL where the machine has no hardware GPU, and says so);
+// a shorter batch and a single run keep the single run's rule. The bytes are the single run's either way.
+TEST_F(Batch, ManyJobsWantTheGpuForSmallerInputs) {
+  using cdtgpu::kBatchWarmJobs;
+  std::ostringstream xyz;
+  for (int i = 0; i < 120; ++i)
+    for (int j = 0; j < 100; ++j)
+      xyz << 500000 + i * 3 << '.' << (i * 7 + j * 3) % 10 << ' ' << 6000000 + j * 3 << '.' << (i + j * 9) % 10
+          << ' ' << 100 + (i * j) % 17 << '\n';
+  write("dem12k.xyz", xyz.str());  // 12000 points: more than kBatchAutoMinPoints, fewer than kAutoMinPoints
+  ASSERT_EQ(run("triangulate " + q("dem12k.xyz") + " -q -o " + q("single.ply") + " --stats " + q("single.json"))
+                .code,
+            0);
+  const std::string single_reason = stats("single.json")["backend_reason"];
+  EXPECT_NE(single_reason.find("fewer than 100000"), std::string::npos) << single_reason;
+  for (const size_t n : {kBatchWarmJobs - 1, kBatchWarmJobs}) {
+    std::vector<std::string> lines;
+    for (size_t k = 0; k < n; ++k)
+      lines.push_back(q("dem12k.xyz") + " -o " + q("b" + std::to_string(k) + ".ply") + " --stats " +
+                      q("b" + std::to_string(k) + ".json"));
+    write_jobs("jobs.txt", lines);
+    Result r = run("batch " + q("jobs.txt"));
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (size_t k = 0; k < n; ++k) {
+      const std::string name = "b" + std::to_string(k);
+      EXPECT_TRUE(slurp(path(name + ".ply")) == slurp(path("single.ply"))) << n << " " << name;
+      const nlohmann::json s = stats(name + ".json");
+      const std::string reason = s["backend_reason"];
+      if (n < kBatchWarmJobs) {
+        EXPECT_EQ(reason, single_reason);
+      } else {
+        EXPECT_EQ(reason.find("fewer than"), std::string::npos) << reason;
+        EXPECT_TRUE(s["backend"] == "gpu" || reason.rfind("no GPU to use", 0) == 0) << reason;
+      }
+    }
+  }
+}

@@ -242,9 +242,11 @@ TEST(Bench, AblationVariantsAllGiveCgalsTriangles) {
   EXPECT_EQ(j["workloads"][1]["constraints"], 1000);
   EXPECT_EQ(j["workloads"][2]["constraints"], 2000);
   for (const auto& w : j["workloads"]) {
-    ASSERT_EQ(w["variants"].size(), 5u);  // full, fixed slots, one flip per constraint, no domain index, flips only
+    // full, fixed slots, one flip per constraint, no domain index, flips only, the Voronoi first stage
+    ASSERT_EQ(w["variants"].size(), 6u);
     for (const auto& v : w["variants"]) EXPECT_TRUE(v["cgal_equal"].get<bool>()) << v["variant"];
     EXPECT_EQ(w["variants"][3]["variant"], "no influence-domain index (slot claims alone)");
+    EXPECT_NE(w["variants"][5]["variant"].get<std::string>().find("Voronoi"), std::string::npos);
   }
   std::filesystem::remove(json_path);
 }
