@@ -9,7 +9,10 @@
 #include <sstream>
 
 #include "gpu/buffers.hpp"
+#include "core/error.hpp"
 #include "io/geotiff.hpp"
+#include "io/mapped_files.hpp"
+#include "io/read_las.hpp"
 
 namespace cdtgpu {
 
@@ -27,10 +30,18 @@ namespace {
 
 // Points in a text file, from its size and the first 64 KiB: lines for XYZ, coordinates (commas and line ends)
 // for WKT. An ASCII grid says its size in its header (ncols x nrows); a shapefile point record is 28 bytes or
-// more, so size / 28 bounds it; a GeoTIFF's header says its cells.
+// more, so size / 28 bounds it; GeoTIFF and LAS headers say their cells and points.
 uint64_t estimate_points(const std::string& path, uint64_t size, const std::string& ext) {
   if (ext == ".shp") return size / 28;
   if (ext == ".tif" || ext == ".tiff") return geotiff_cell_count(path);
+  if (ext == ".las") {  // the header's count (before the class and return filters)
+    try {
+      const files::Open f(files::open(path));
+      if (f) return parse_las_header(f->bytes(), path).point_count;
+    } catch (const InputError&) {
+    }
+    return size / 20;  // the shortest record
+  }
   std::ifstream in(path, std::ios::binary);
   std::string head(64 << 10, '\0');
   in.read(head.data(), std::streamsize(head.size()));

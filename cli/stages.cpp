@@ -7,6 +7,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "cli/memory.hpp"
 #include "cli/progress.hpp"
 #include "core/cdt_cgal.hpp"
 #include "core/drape.hpp"
@@ -263,7 +264,9 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
 void read_job(Job& job) {
   std::vector<InputSpec> specs;
   for (const std::string& arg : job.options.input.inputs) specs.push_back(parse_input_spec(arg));
+  check_host_memory(estimate_input_points(job.input_paths), "estimated from the input files");
   timed(job, "read", [&] { job.parts = read_inputs(specs, job.options.input.read, job.in); });
+  check_host_memory(point_count(job.in), "read");
   job.crs = choose_crs(job.in, job.options.input.crs);
   timed(job, "project", [&] { project(job.in, job.crs); });
   const DrapeStats drape = timed(job, "drape", [&] { return apply_z_rules(job.in, job.parts); });
@@ -514,6 +517,7 @@ void count_results(Job& job) {
   c["steiner_points"] = result.steiner_points;
   c["vertices"] = result.mesh.vertices.size();
   c["triangles"] = result.mesh.triangles.size();
+  job.stats.peak_host_bytes = peak_host_bytes();  // the process's: in a batch, the largest job's so far
   spdlog::info("{} vertices, {} triangles ({} constraints, {} Steiner points)", result.mesh.vertices.size(),
                result.mesh.triangles.size(), job.prepared.constraints.size(), result.steiner_points);
   if (job.gpu) {

@@ -168,6 +168,30 @@ TEST_F(Cli, AutoBackendPicksByInputSizeAndDevice) {
   EXPECT_EQ(slurp(path("nodev.ply")), slurp(path("cgal.ply")));
 }
 
+// CDTGPU_HOST_MEMORY stands for the machine's memory: a run whose points cannot fit is refused before it reads
+// (exit 3, the need and the memory named, the old output kept); one that fits runs, and --stats gives its peak.
+TEST_F(Cli, RunTooLargeForHostMemoryIsRefusedBeforeReading) {
+  std::ostringstream xyz;
+  for (int i = 0; i < 250; ++i)
+    for (int j = 0; j < 200; ++j) xyz << 500000 + i * 2 << ' ' << 6000000 + j * 2 + (i % 3) * 0.25 << ' ' << i % 7 << '\n';
+  write("dem.xyz", xyz.str());  // 50000 points: about 10 MB at kHostBytesPerPoint
+  write("tin.ply", "old bytes");
+  ::setenv("CDTGPU_HOST_MEMORY", "5000000", 1);
+  Result small = run("triangulate " + path("dem.xyz") + " -o " + path("tin.ply"));
+  ::setenv("CDTGPU_HOST_MEMORY", "100000000", 1);
+  Result roomy = run("triangulate " + path("dem.xyz") + " -q -o " + path("roomy.ply") + " --stats " + path("s.json"));
+  ::unsetenv("CDTGPU_HOST_MEMORY");
+  EXPECT_EQ(small.code, 3) << small.err;
+  EXPECT_NE(small.err.find("input points (estimated from the input files) need about 10."), std::string::npos)
+      << small.err;  // the estimate from the file's size is within a few per cent of the 50000 points
+  EXPECT_NE(small.err.find("this machine has 5.0 MB"), std::string::npos) << small.err;
+  EXPECT_EQ(small.err.find("read:"), std::string::npos) << "refused before reading: " << small.err;
+  EXPECT_EQ(slurp(path("tin.ply")), "old bytes");
+  ASSERT_EQ(roomy.code, 0) << roomy.err;
+  const auto stats = nlohmann::json::parse(slurp(path("s.json")));
+  EXPECT_GT(stats["peak_host_bytes"].get<uint64_t>(), 1000000u);
+}
+
 // CDTGPU_DEVICE_MEMORY_LIMIT caps what the GPU backend may hold on the device: a forced GPU run that needs more
 // fails (exit 3, the limit named, nothing written); auto leaves it to CGAL with the same bytes and says why. A
 // device named with --device is used by auto even when it is a CPU driver, which lets lavapipe test this.

@@ -1,0 +1,64 @@
+#include "cli/memory.hpp"
+
+#include <spdlog/spdlog.h>
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace cdtgpu {
+
+namespace {
+
+std::string gigabytes(uint64_t bytes) {
+  char buf[32];
+  if (bytes >= 1000000000)
+    std::snprintf(buf, sizeof buf, "%.1f GB", double(bytes) / 1e9);
+  else
+    std::snprintf(buf, sizeof buf, "%.1f MB", double(bytes) / 1e6);
+  return buf;
+}
+
+}  // namespace
+
+HostMemory host_memory() {
+  HostMemory m;
+  if (const char* v = std::getenv("CDTGPU_HOST_MEMORY"); v && *v) {
+    m.total = m.available = std::strtoull(v, nullptr, 10);
+    return m;
+  }
+  std::ifstream meminfo("/proc/meminfo");
+  for (std::string line; std::getline(meminfo, line);) {
+    std::istringstream s(line);
+    std::string key;
+    uint64_t kib = 0;
+    s >> key >> kib;
+    if (key == "MemTotal:") m.total = kib * 1024;
+    if (key == "MemAvailable:") m.available = kib * 1024;
+  }
+  return m;
+}
+
+void check_host_memory(uint64_t points, const std::string& what) {
+  const HostMemory m = host_memory();
+  if (!m.total || !points) return;
+  const uint64_t need = points * kHostBytesPerPoint;
+  const std::string about = std::to_string(points) + " input points (" + what + ") need about " + gigabytes(need) +
+                            " of memory (" + std::to_string(kHostBytesPerPoint) + " bytes a point)";
+  if (need > m.total)
+    throw HostMemoryError(about + "; this machine has " + gigabytes(m.total) +
+                          ": split the input (by area, into several runs) or use a machine with more memory");
+  if (need > m.available)
+    spdlog::warn("{}; {} of this machine's {} are free now: the run may page or be killed", about,
+                 gigabytes(m.available), gigabytes(m.total));
+}
+
+uint64_t peak_host_bytes() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return uint64_t(u.ru_maxrss) * 1024;  // KiB on Linux
+}
+
+}  // namespace cdtgpu

@@ -1,0 +1,36 @@
+// Host memory: what a run will need, what the machine has, and the refusal of a run that cannot fit, before
+// it reads (from the files' sizes) and again once the points are read. A run that does not fit would otherwise
+// be killed by the kernel's out-of-memory killer after minutes of work, or page for hours.
+//
+//   check_host_memory(estimate_input_points(paths), "estimated from the input files");
+#pragma once
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace cdtgpu {
+
+// Resident bytes a `cdtgpu triangulate` run holds at its peak per input vertex, the largest measured on the
+// lent machines over the untiled GPU run and the tiled CPU and GPU runs (docs/performance.md, "Host memory").
+constexpr uint64_t kHostBytesPerPoint = 200;
+
+struct HostMemory {
+  uint64_t total = 0;      // MemTotal of /proc/meminfo (0: unknown)
+  uint64_t available = 0;  // MemAvailable
+};
+// The machine's memory; CDTGPU_HOST_MEMORY=BYTES stands for both (tests).
+HostMemory host_memory();
+
+// A run the machine's memory cannot hold: exit code 3, before the work.
+struct HostMemoryError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Throws HostMemoryError when `points` vertices need more than the machine's memory; warns when they need more
+// than is available now (other processes hold the rest). `what`: where the count comes from, for the message.
+void check_host_memory(uint64_t points, const std::string& what);
+
+// The process's peak resident bytes so far (getrusage).
+uint64_t peak_host_bytes();
+
+}  // namespace cdtgpu
