@@ -41,12 +41,12 @@ HostMemory host_memory() {
   return m;
 }
 
-void check_host_memory(uint64_t points, const std::string& what) {
+void check_host_memory(uint64_t points, uint64_t bytes_per_point, const std::string& what) {
   const HostMemory m = host_memory();
   if (!m.total || !points) return;
-  const uint64_t need = points * kHostBytesPerPoint;
+  const uint64_t need = points * bytes_per_point;
   const std::string about = std::to_string(points) + " input points (" + what + ") need about " + gigabytes(need) +
-                            " of memory (" + std::to_string(kHostBytesPerPoint) + " bytes a point)";
+                            " of memory (" + std::to_string(bytes_per_point) + " bytes a point)";
   if (need > m.total)
     throw HostMemoryError(about + "; this machine has " + gigabytes(m.total) +
                           ": split the input (by area, into several runs) or use a machine with more memory");

@@ -2,7 +2,7 @@
 // it reads (from the files' sizes) and again once the points are read. A run that does not fit would otherwise
 // be killed by the kernel's out-of-memory killer after minutes of work, or page for hours.
 //
-//   check_host_memory(estimate_input_points(paths), "estimated from the input files");
+//   check_host_memory(estimate_input_points(paths), kHostBytesPerPoint, "estimated from the input files");
 #pragma once
 #include <cstdint>
 #include <stdexcept>
@@ -11,9 +11,10 @@
 namespace cdtgpu {
 
 // Resident bytes a `cdtgpu triangulate` run holds at its peak per input vertex, the largest measured (H100
-// machine, 16M points + 4M segments, 20M input vertices): GPU 177, GPU tiles 178, CGAL tiles 202, GPU with
-// --max-edge 237 (docs/performance.md, "Host memory").
-constexpr uint64_t kHostBytesPerPoint = 240;
+// machine, 16M points + 4M segments, 20M input vertices): GPU 177, GPU tiles 178, CGAL tiles 202; with regions
+// or --max-edge (GPU, --max-edge 20) 237 (docs/performance.md, "Host memory").
+constexpr uint64_t kHostBytesPerPoint = 205;
+constexpr uint64_t kHostBytesPerPointRegions = 240;
 
 struct HostMemory {
   uint64_t total = 0;      // MemTotal of /proc/meminfo (0: unknown)
@@ -29,7 +30,7 @@ struct HostMemoryError : std::runtime_error {
 
 // Throws HostMemoryError when `points` vertices need more than the machine's memory; warns when they need more
 // than is available now (other processes hold the rest). `what`: where the count comes from, for the message.
-void check_host_memory(uint64_t points, const std::string& what);
+void check_host_memory(uint64_t points, uint64_t bytes_per_point, const std::string& what);
 
 // The process's peak resident bytes so far (getrusage).
 uint64_t peak_host_bytes();

@@ -264,9 +264,13 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
 void read_job(Job& job) {
   std::vector<InputSpec> specs;
   for (const std::string& arg : job.options.input.inputs) specs.push_back(parse_input_spec(arg));
-  check_host_memory(estimate_input_points(job.input_paths), "estimated from the input files");
+  const bool regions = job.options.max_edge > 0 || std::any_of(specs.begin(), specs.end(), [](const InputSpec& s) {
+                         return s.role == Role::boundary || s.role == Role::hole;
+                       });
+  const uint64_t bytes = regions ? kHostBytesPerPointRegions : kHostBytesPerPoint;
+  check_host_memory(estimate_input_points(job.input_paths), bytes, "estimated from the input files");
   timed(job, "read", [&] { job.parts = read_inputs(specs, job.options.input.read, job.in); });
-  check_host_memory(point_count(job.in), "read");
+  check_host_memory(point_count(job.in), bytes, "read");
   job.crs = choose_crs(job.in, job.options.input.crs);
   timed(job, "project", [&] { project(job.in, job.crs); });
   const DrapeStats drape = timed(job, "drape", [&] { return apply_z_rules(job.in, job.parts); });
