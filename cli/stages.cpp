@@ -1,5 +1,6 @@
 #include "cli/stages.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <future>
 #include <optional>
