@@ -48,6 +48,14 @@ class TextFile {
     buf_ += s;
     if (buf_.size() > (1 << 20) - 256) flush();
   }
+  // "x y z"
+  void xyz(const Point3& q) {
+    number(q.x);
+    text(" ");
+    number(q.y);
+    text(" ");
+    number(q.z);
+  }
   void close() {
     flush();
     out_.close();
@@ -176,13 +184,8 @@ void write_contours(const E2eWorkload& w, const std::string& wkt) {
   for (const Polyline& line : w.input.lines) {
     c.text("LINESTRING Z (");
     for (size_t j = 0; j < line.points.size(); ++j) {
-      const Point3& q = line.points[j];
       if (j) c.text(", ");
-      c.number(q.x);
-      c.text(" ");
-      c.number(q.y);
-      c.text(" ");
-      c.number(q.z);
+      c.xyz(line.points[j]);
     }
     c.text(")\n");
   }
@@ -229,11 +232,7 @@ E2eFiles write_e2e_text(const E2eWorkload& w, const std::string& dir) {
   const std::string xyz = path_in(dir, "points.xyz"), wkt = path_in(dir, "contours.wkt");
   TextFile p(xyz);
   for (const Point3& q : w.input.points) {
-    p.number(q.x);
-    p.text(" ");
-    p.number(q.y);
-    p.text(" ");
-    p.number(q.z);
+    p.xyz(q);
     p.text("\n");
   }
   p.close();
