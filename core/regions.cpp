@@ -138,9 +138,11 @@ HalfEdges half_edges(const Mesh& mesh) {
   return e;
 }
 
-// Marks the mesh edges along every constraint: kConstrained, plus kRegion for region edges.
+// Marks the mesh edges along the constraints: kConstrained, plus kRegion for region edges. Without `all`, only
+// the region edges (the nesting levels need no other; trimming needs every constraint): a boundary and a hole
+// over 500K contour segments walk 1K segments, not 500K.
 void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std::vector<uint8_t>& region,
-                      const HalfEdges& e, BigArray<uint8_t>& flag) {
+                      bool all, const HalfEdges& e, BigArray<uint8_t>& flag) {
   const std::vector<Point3>& mv = mesh.vertices;
   const uint32_t V = uint32_t(mv.size());
   auto P = [&](uint32_t v) { return P2(mv[v].x, mv[v].y); };
@@ -172,6 +174,7 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
   each(prepared.constraints.size(), [&](size_t c) {
     // Region edges toggle: a mesh edge covered by two region segments (collinear overlaps) is crossed twice.
     const uint8_t toggle = c < region.size() && region[c] ? kRegion : 0;
+    if (!all && !toggle) return;
     const uint32_t A = mesh_of[prepared.constraints[c][0]], B = mesh_of[prepared.constraints[c][1]];
     const P2 pa = P(A), pb = P(B);
     const double ux = pb.x() - pa.x(), uy = pb.y() - pa.y();
@@ -433,7 +436,7 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
   const HalfEdges e = half_edges(mesh);
   lap("half-edges");
   BigArray<uint8_t> flag(3 * T, 0);
-  mark_constraints(mesh, prepared, rules.region_edge, e, flag);
+  mark_constraints(mesh, prepared, rules.region_edge, rules.max_edge > 0, e, flag);
   lap("constraints");
 
   BigArray<uint8_t> keep(T, 1);
