@@ -12,8 +12,9 @@
 // once; Euler's V - E + F = 1. A triangulated disc whose map is locally one-to-one and whose boundary is a simple
 // convex curve covers the convex region once, so these local checks make it a triangulation of the convex hull
 // of its vertices. Pockets between the dual's boundary and the hull (the dual rarely has a convex boundary) are
-// closed first by a Graham scan along the boundary, whose triangles are checked with the rest. Cost: O(F log F)
-// for F triangles (one sort), the rest linear.
+// closed first by a Graham scan along the boundary, whose triangles are checked with the rest. Cost: O(F) for F
+// triangles (bucket sorts by vertex), in parallel passes on all cores; the boundary's walk, pocket filling and
+// convexity (O(sqrt F) for a grid's dual) on one.
 #pragma once
 #include <cstdint>
 #include <optional>
@@ -28,6 +29,7 @@ struct StartSlots {
   std::vector<uint32_t> verts, nbrs;  // 3 per slot: finite triangles first, then one infinite slot per hull edge
   uint32_t finite = 0;                // finite slots
   uint32_t vertices = 0;              // points used (the slots hold 2 * vertices - 2)
+  std::vector<uint32_t> slot_of;      // per point: the last finite slot it is a corner of, or UINT32_MAX
 };
 
 // `xy`: 2 doubles per point; `tris`: counter-clockwise (by the grid, not yet by the points) triples of point

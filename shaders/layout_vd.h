@@ -9,6 +9,8 @@ namespace cdtgpu::gpu::layout {
 #endif
 
 #define VD_WG 256
+// vd_flood's workgroup: a VD_TILE x VD_TILE tile of cells (VD_TILE * VD_TILE = VD_WG).
+#define VD_TILE 16
 // A grid cell with no site yet (the seed grid is filled with it).
 #define VD_NONE 0xFFFFFFFFu
 // Words of the dual's counter buffer: triangles appended, appends past the capacity.
