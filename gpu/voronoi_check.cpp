@@ -2,6 +2,9 @@
 // the boundary walk, the pocket filling and the convexity test run on one core, and the boundary is O(sqrt n).
 // Every pass gives the same result on every run: groups are sorted after their atomic scatter, offenders are
 // sorted by the caller, and the one ordered choice (the lowest vertex) is a reduction with index tie-breaks.
+// Each corner's twin is looked up once (boundary) and reused by the fans and the slots. The pockets' triangles
+// go after the dual's (sorted) ones; the index is patched for them and the boundary checked again on the old
+// cycle's vertices only, the only ones they touch.
 #include "gpu/voronoi_check.hpp"
 
 #include <tbb/blocked_range.h>
@@ -13,6 +16,9 @@
 #include <algorithm>
 #include <atomic>
 #include <functional>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
 
 #include "core/predicates.hpp"
 #include "shaders/layout.h"
@@ -137,11 +143,41 @@ std::vector<Triangle> normalise(std::vector<Triangle> tris, size_t points) {
 struct Mesh {
   std::vector<Triangle> tris;
   std::vector<uint32_t> first, corners, heads;
+  std::vector<uint32_t> twin;  // per corner: edge(head, tail of the edge), set by boundary()
 
   void index(size_t points) {
     group(tris.size() * 3, points, [&](size_t c) { return tris[c / 3][c % 3]; }, first, corners);
     heads.resize(corners.size());
     each(corners.size(), [&](size_t i) { heads[i] = head(corners[i]); });
+  }
+  // The index again after appending tris[before ..] (a few triangles, at few vertices): their corners go after
+  // each vertex's others, as index() would put them, in one copying pass.
+  void reindex(size_t before, size_t points) {
+    std::vector<std::pair<uint32_t, uint32_t>> added;  // (vertex, corner)
+    for (size_t t = before; t < tris.size(); ++t)
+      for (uint32_t j = 0; j < 3; ++j) added.push_back({tris[t][j], uint32_t(3 * t + j)});
+    std::sort(added.begin(), added.end());
+    std::vector<uint32_t> nfirst(points + 1), ncorners(corners.size() + added.size()), nheads(ncorners.size());
+    each(points + 1, [&](size_t v) {
+      const size_t lo = std::lower_bound(added.begin(), added.end(), std::pair<uint32_t, uint32_t>(uint32_t(v), 0)) -
+                        added.begin();
+      nfirst[v] = first[v] + uint32_t(lo);
+      if (v == points) return;
+      const uint32_t d = first[v + 1] - first[v];
+      std::copy_n(corners.begin() + first[v], d, ncorners.begin() + nfirst[v]);
+      std::copy_n(heads.begin() + first[v], d, nheads.begin() + nfirst[v]);
+      for (size_t k = lo, at = nfirst[v] + d; k < added.size() && added[k].first == v; ++k, ++at) {
+        ncorners[at] = added[k].second;
+        nheads[at] = head(added[k].second);
+      }
+    });
+    first = std::move(nfirst);
+    corners = std::move(ncorners);
+    heads = std::move(nheads);
+  }
+  // twin[] of the corners at v.
+  void twins(uint32_t v) {
+    for (uint32_t i = first[v]; i < first[v + 1]; ++i) twin[corners[i]] = edge(heads[i], v);
   }
   uint32_t degree(uint32_t v) const { return first[v + 1] - first[v]; }
   uint32_t head(uint32_t c) const { return tris[c / 3][(c % 3 + 1) % 3]; }
@@ -161,7 +197,7 @@ struct Checker {
 
   // Steps that need a fresh index: each directed edge once, the boundary one simple cycle from the
   // lexicographically smallest vertex (into `cycle`, `next`: the boundary edge out of each vertex).
-  bool boundary(const Mesh& m, std::vector<uint32_t>& cycle, std::vector<uint32_t>& next) {
+  bool boundary(Mesh& m, std::vector<uint32_t>& cycle, std::vector<uint32_t>& next) {
     Blame blame;
     next.assign(points, kNone);
     each(points, [&](size_t v) {
@@ -198,12 +234,14 @@ struct Checker {
     blame.into(off);
     if (!off.empty()) return false;
     std::vector<uint32_t> in(points, 0);
+    m.twin.resize(m.tris.size() * 3);
     each(points, [&](size_t v) {
       const uint32_t a = uint32_t(v);
+      m.twins(a);
       bool out = false;
       for (uint32_t i = m.first[a]; i < m.first[a + 1]; ++i) {
         const uint32_t b = m.heads[i];
-        if (m.edge(b, a) != kNone) continue;
+        if (m.twin[m.corners[i]] != kNone) continue;
         if (out) blame.add(a);
         out = true;
         next[a] = b;
@@ -229,6 +267,52 @@ struct Checker {
       if (next[v] != kNone && !seen[v]) blame.add(uint32_t(v));
     });
     blame.into(off);
+    return off.empty();
+  }
+
+  // boundary() again after fill(), on the cycle's vertices only: the pockets' triangles have no other corners,
+  // and an edge with a twin keeps it, so no other vertex gains a duplicate edge, a boundary edge (after
+  // boundary() passed, none has one) or a new twin. The lowest vertex, where the walk starts, is the same.
+  bool reboundary(Mesh& m, std::vector<uint32_t>& cycle, std::vector<uint32_t>& next) {
+    const std::vector<uint32_t> old = cycle;
+    std::vector<uint32_t> h;
+    for (uint32_t v : old) {
+      h.assign(m.heads.begin() + m.first[v], m.heads.begin() + m.first[v + 1]);
+      std::sort(h.begin(), h.end());
+      for (size_t i = 1; i < h.size(); ++i)
+        if (h[i] == h[i - 1]) off.insert(off.end(), {v, h[i]});
+    }
+    if (!off.empty()) return false;
+    std::unordered_map<uint32_t, uint32_t> in;
+    for (uint32_t v : old) next[v] = kNone;
+    m.twin.resize(m.tris.size() * 3);
+    for (uint32_t a : old) m.twins(a);
+    for (uint32_t a : old) {
+      bool out = false;
+      for (uint32_t i = m.first[a]; i < m.first[a + 1]; ++i) {
+        const uint32_t b = m.heads[i];
+        if (m.twin[m.corners[i]] != kNone) continue;
+        if (out) off.push_back(a);
+        out = true;
+        next[a] = b;
+        ++in[b];
+      }
+    }
+    for (uint32_t v : old) {
+      const uint32_t k = in.count(v) ? in[v] : 0;
+      if (k > 1 || (k == 1) != (next[v] != kNone)) off.push_back(v);
+    }
+    const uint32_t lowest = old[0];
+    if (!off.empty()) return false;
+    if (next[lowest] == kNone) {
+      off.push_back(lowest);
+      return false;
+    }
+    cycle.clear();
+    std::unordered_set<uint32_t> seen;
+    for (uint32_t v = lowest; seen.insert(v).second; v = next[v]) cycle.push_back(v);
+    for (uint32_t v : old)
+      if (next[v] != kNone && !seen.count(v)) off.push_back(v);
     return off.empty();
   }
 
@@ -263,7 +347,7 @@ struct Checker {
         const uint32_t b = m.tail(c);  // the triangle (v, last, b) turns from last to b
         crossings += !g.upper(v, last) && g.upper(v, b);
         last = b;
-        const uint32_t nc = m.edge(v, b);
+        const uint32_t nc = m.twin[c / 3 * 3 + (c % 3 + 2) % 3];  // edge(v, b): the twin of b -> v
         if (nc == kNone) break;
         if (nc == c0) {
           closed = true;
@@ -312,7 +396,7 @@ StartSlots slots_of(const Mesh& m, const std::vector<uint32_t>& cycle, size_t po
     const uint32_t t = uint32_t(ti);
     for (uint32_t k = 0; k < 3; ++k) {
       s.verts[3 * size_t(t) + k] = m.tris[t][k];
-      const uint32_t a = m.tris[t][(k + 1) % 3], b = m.tris[t][(k + 2) % 3], c = m.edge(b, a);
+      const uint32_t a = m.tris[t][(k + 1) % 3], c = m.twin[3 * t + (k + 1) % 3];  // edge(b, a) for b -> a
       if (c != kNone) {
         s.nbrs[3 * size_t(t) + k] = NBR(c / 3, (c % 3 + 2) % 3);
         continue;
@@ -363,10 +447,10 @@ std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<
   m.index(points);
   std::vector<uint32_t> cycle, next;
   if (!ck.boundary(m, cycle, next)) return fail();
+  const size_t before = m.tris.size();
   if (ck.fill(m, cycle)) {  // fill triangles are counter-clockwise by construction (a reflex turn reversed)
-    m.tris = normalise(std::move(m.tris), points);
-    m.index(points);
-    if (!ck.boundary(m, cycle, next)) return fail();
+    m.reindex(before, points);
+    if (!ck.reboundary(m, cycle, next)) return fail();
   }
   ck.fans(m, next);
   ck.convex(cycle);

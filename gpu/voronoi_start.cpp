@@ -83,8 +83,9 @@ VdGridPush grid_for(std::span<const double> xy, uint32_t n, double cells_per_poi
 
 VoronoiStarter::VoronoiStarter(const Context& ctx)
     : ctx_(ctx),
-      seed_(create_pass(ctx, {"vd_seed", 5, sizeof(VdGridPush)})),
-      flood_(create_pass(ctx, {"vd_flood", 3, sizeof(VdGridPush)})),
+      seed_(create_pass(ctx, {"vd_seed", 6, sizeof(VdGridPush)})),
+      clear_(create_pass(ctx, {"vd_clear", 3, sizeof(VdGridPush)})),
+      flood_(create_pass(ctx, {"vd_flood", 4, sizeof(VdGridPush)})),
       dual_(create_pass(ctx, {"vd_dual", 3, sizeof(VdGridPush)})) {}
 
 // Discretise, flood, dual on the GPU; check on the host; on failure demote the blamed sites and go again.
@@ -99,13 +100,13 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   const uint64_t cells = uint64_t(grid.width) * grid.height;
   // Distinct dual triangles number at most 2 per site; duplicates from neighbouring grid corners come on top.
   const uint32_t capacity = 3 * n + 64;
-  stats.device_bytes = uint64_t(n) * 16 + cells * 8 + uint64_t(capacity) * 12 + 8;
+  stats.device_bytes = uint64_t(n) * 16 + cells * 8 + uint64_t(capacity) * 12 + VD_COUNT_WORDS * 4;
   Buffer demoted = create_buffer(ctx_, uint64_t(n) * 4, "vd demoted");
   Buffer cell_of = create_buffer(ctx_, uint64_t(n) * 4, "vd cell of point");
   Buffer sites = create_buffer(ctx_, uint64_t(n) * 8, "vd site positions");
   Buffer grids[2] = {create_buffer(ctx_, cells * 4, "vd grid a"), create_buffer(ctx_, cells * 4, "vd grid b")};
   Buffer tris = create_buffer(ctx_, uint64_t(capacity) * 12, "vd dual triangles");
-  Buffer count = create_buffer(ctx_, 8, "vd dual count");
+  Buffer count = create_buffer(ctx_, VD_COUNT_WORDS * 4, "vd counts");
   std::vector<uint32_t> demoted_host(n, 0);
   std::optional<Profiler> prof;
   if (timed) prof.emplace(ctx_, 64);
@@ -117,31 +118,40 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   };
   std::optional<VoronoiStart> result;
   host_ms += ms_since(t0);
-  for (uint32_t attempt = 0; attempt <= max_repairs && !result; ++attempt) {
-    t0 = std::chrono::steady_clock::now();
-    if (attempt > 0) upload(ctx_, demoted, demoted_host.data(), uint64_t(n) * 4);
-    host_ms += ms_since(t0);
+  const uint64_t tiles = uint64_t((grid.width + VD_TILE - 1) / VD_TILE) * ((grid.height + VD_TILE - 1) / VD_TILE);
+  uint32_t cur = 0;  // the grid copy the last flood ended in
+  // One flood and its dual, submitted; returns the counter words. A repair starts from the last flood's grid
+  // with the demoted sites' cells emptied and reseeded, and jumps repair_jump .. 1, 1 only.
+  auto flood = [&](bool repair) {
     begin("vd discretise");
-    if (attempt == 0) rec.fill(demoted, 0);
-    rec.fill(grids[0], VD_NONE);
-    grid.n = n;
-    rec.dispatch_groups(seed_, {points, demoted, grids[0], cell_of, sites}, grid, groups(n));
+    rec.fill(count, 0);
+    VdGridPush seed = grid;
+    seed.n = n;
+    seed.step = repair ? 1 : 0;
+    if (repair) {
+      rec.dispatch_groups(clear_, {demoted, grids[cur], grids[1 - cur]}, grid, groups(cells));
+      cur = 1 - cur;
+    } else {
+      cur = 0;
+      rec.fill(grids[0], VD_NONE);
+    }
+    rec.dispatch_groups(seed_, {points, demoted, grids[cur], cell_of, sites, grids[1 - cur]}, seed, groups(n));
     end();
     begin("vd flood");
     // Jumps W/2 .. 1 (powers of two), then 1 again (JFA+1: fixes most of the plain flood's errors).
     std::vector<uint32_t> steps;
-    for (uint32_t s = std::bit_floor(std::max({grid.width, grid.height, 2u}) - 1); s >= 1; s /= 2) steps.push_back(s);
+    const uint32_t top = std::bit_floor(std::max({grid.width, grid.height, 2u}) - 1);
+    for (uint32_t s = repair ? std::min(top, repair_jump) : top; s >= 1; s /= 2) steps.push_back(s);
     steps.push_back(1);
-    uint32_t cur = 0;
-    const uint64_t tiles = uint64_t((grid.width + VD_TILE - 1) / VD_TILE) * ((grid.height + VD_TILE - 1) / VD_TILE);
-    for (uint32_t s : steps) {
-      grid.step = s;
-      rec.dispatch_groups(flood_, {sites, grids[cur], grids[1 - cur]}, grid, tiles);
+    for (size_t i = 0; i < steps.size(); ++i) {
+      VdGridPush pass = grid;
+      pass.step = steps[i];
+      pass.n = i + 1 == steps.size();
+      rec.dispatch_groups(flood_, {sites, grids[cur], grids[1 - cur], count}, pass, tiles);
       cur = 1 - cur;
     }
     end();
     begin("vd dual");
-    rec.fill(count, 0);
     VdGridPush dual = grid;
     dual.n = capacity;
     rec.dispatch_groups(dual_, {grids[cur], tris, count}, dual, groups(cells));
@@ -151,10 +161,21 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
       for (const StageTime& s : prof->results()) add_ms(stats.stage_ms, s.name, s.ms);
       prof->reset();
     }
-
+    std::array<uint32_t, VD_COUNT_WORDS> counts;
+    download(ctx_, count, counts.data(), sizeof(counts));
+    return counts;
+  };
+  for (uint32_t attempt = 0; attempt <= max_repairs && !result; ++attempt) {
     t0 = std::chrono::steady_clock::now();
-    uint32_t counts[2];
-    download(ctx_, count, counts, sizeof(counts));
+    if (attempt > 0) upload(ctx_, demoted, demoted_host.data(), uint64_t(n) * 4);
+    host_ms += ms_since(t0);
+    if (attempt == 0) rec.fill(demoted, 0);
+    std::array<uint32_t, VD_COUNT_WORDS> counts = flood(attempt > 0 && repair_jump > 0);
+    if (attempt > 0 && repair_jump > 0 && counts[VD_COUNT_EMPTY] != 0) {  // holes too wide for the short jumps
+      ++stats.full_refloods;
+      counts = flood(false);
+    }
+    t0 = std::chrono::steady_clock::now();
     if (counts[VD_COUNT_OVERFLOW] != 0) {  // never seen; a start is an optimisation, so give up rather than grow
       host_ms += ms_since(t0);
       break;

@@ -4,7 +4,9 @@
 // digital Voronoi diagram with few errors; the errors cost repairs, never exactness (docs/gpu-delaunay.md).
 // Distances are in float cell units from vd_seed's site positions: the flood only has to be deterministic,
 // the exact checks and flips fix the rest. A workgroup floods a 16 x 16 tile (a subgroup a 16 x 2 strip or
-// more), so neighbouring cells, which mostly share sites, fetch the same few positions.
+// more), so neighbouring cells, which mostly share sites, fetch the same few positions. A repair's flood
+// starts from the last grid with holes (vd_clear) and jumps 2^k .. 1, 1 only (gpu/voronoi_start.cpp); its last
+// pass counts the cells left empty, and any sends the repair back to a full flood.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #include "layout_vd.h"
@@ -14,6 +16,7 @@ layout(local_size_x = VD_WG) in;
 layout(std430, binding = 0) readonly buffer Sites { vec2 site[]; };
 layout(std430, binding = 1) readonly buffer Src { uint src[]; };
 layout(std430, binding = 2) writeonly buffer Dst { uint dst[]; };
+layout(std430, binding = 3) buffer Count { uint count[]; };
 layout(push_constant) uniform Push { VdGridPush p; };
 
 void main() {
@@ -46,4 +49,5 @@ void main() {
     }
   }
   dst[c] = best;
+  if (p.n != 0u && best == VD_NONE) atomicAdd(count[VD_COUNT_EMPTY], 1u);  // the last pass: none expected
 }
