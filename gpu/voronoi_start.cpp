@@ -86,7 +86,7 @@ VoronoiStarter::VoronoiStarter(const Context& ctx)
       seed_(create_pass(ctx, {"vd_seed", 6, sizeof(VdGridPush)})),
       clear_(create_pass(ctx, {"vd_clear", 3, sizeof(VdGridPush)})),
       flood_(create_pass(ctx, {"vd_flood", 4, sizeof(VdGridPush)})),
-      dual_(create_pass(ctx, {"vd_dual", 3, sizeof(VdGridPush)})) {}
+      dual_(create_pass(ctx, {"vd_dual", 6, sizeof(VdGridPush)})) {}
 
 // Discretise, flood, dual on the GPU; check on the host; on failure demote the blamed sites and go again.
 std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& points, uint32_t n, bool timed,
@@ -100,10 +100,12 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   const uint64_t cells = uint64_t(grid.width) * grid.height;
   // Distinct dual triangles number at most 2 per site; duplicates from neighbouring grid corners come on top.
   const uint32_t capacity = 3 * n + 64;
-  stats.device_bytes = uint64_t(n) * 16 + cells * 8 + uint64_t(capacity) * 12 + VD_COUNT_WORDS * 4;
+  stats.device_bytes = uint64_t(n) * 24 + cells * 8 + uint64_t(capacity) * 12 + VD_COUNT_WORDS * 4;
   Buffer demoted = create_buffer(ctx_, uint64_t(n) * 4, "vd demoted");
   Buffer cell_of = create_buffer(ctx_, uint64_t(n) * 4, "vd cell of point");
   Buffer sites = create_buffer(ctx_, uint64_t(n) * 8, "vd site positions");
+  Buffer blamed = create_buffer(ctx_, uint64_t(n) * 4, "vd blamed");
+  Buffer blame_list = create_buffer(ctx_, uint64_t(n) * 4, "vd blame list");
   Buffer grids[2] = {create_buffer(ctx_, cells * 4, "vd grid a"), create_buffer(ctx_, cells * 4, "vd grid b")};
   Buffer tris = create_buffer(ctx_, uint64_t(capacity) * 12, "vd dual triangles");
   Buffer count = create_buffer(ctx_, VD_COUNT_WORDS * 4, "vd counts");
@@ -125,6 +127,7 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   auto flood = [&](bool repair) {
     begin("vd discretise");
     rec.fill(count, 0);
+    rec.fill(blamed, 0);
     VdGridPush seed = grid;
     seed.n = n;
     seed.step = repair ? 1 : 0;
@@ -154,7 +157,7 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
     begin("vd dual");
     VdGridPush dual = grid;
     dual.n = capacity;
-    rec.dispatch_groups(dual_, {grids[cur], tris, count}, dual, groups(cells));
+    rec.dispatch_groups(dual_, {grids[cur], tris, count, points, blamed, blame_list}, dual, groups(cells));
     end();
     rec.submit();
     if (prof) {
@@ -180,10 +183,17 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
       host_ms += ms_since(t0);
       break;
     }
-    std::vector<Triangle> dual_tris(counts[VD_COUNT_TRIS]);
-    if (!dual_tris.empty()) download(ctx_, tris, dual_tris.data(), dual_tris.size() * 12);
     std::vector<uint32_t> offenders;
-    std::optional<StartSlots> slots = dual_to_slots(xy, std::move(dual_tris), offenders);
+    std::optional<StartSlots> slots;
+    if (counts[VD_COUNT_BLAMED] != 0) {  // dual_to_slots would fail its first check, blaming these
+      offenders.resize(counts[VD_COUNT_BLAMED]);
+      download(ctx_, blame_list, offenders.data(), offenders.size() * 4);
+      std::sort(offenders.begin(), offenders.end());
+    } else {
+      std::vector<Triangle> dual_tris(counts[VD_COUNT_TRIS]);
+      if (!dual_tris.empty()) download(ctx_, tris, dual_tris.data(), dual_tris.size() * 12);
+      slots = dual_to_slots(xy, std::move(dual_tris), offenders);
+    }
     // The flooded grid: only for the start's loc codes and the last attempt's site count.
     std::vector<uint32_t> owner;
     if (slots || offenders.empty() || attempt == max_repairs) {

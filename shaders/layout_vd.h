@@ -13,12 +13,13 @@ namespace cdtgpu::gpu::layout {
 #define VD_TILE 16
 // A grid cell with no site yet (the seed grid is filled with it).
 #define VD_NONE 0xFFFFFFFFu
-// Words of the counter buffer: triangles appended, appends past the capacity (vd_dual), cells left empty by
-// the last flood pass (vd_flood).
+// Words of the counter buffer: triangles appended, appends past the capacity, points blamed for a triangle
+// surely not counter-clockwise (vd_dual), cells left empty by the last flood pass (vd_flood).
 #define VD_COUNT_TRIS 0
 #define VD_COUNT_OVERFLOW 1
 #define VD_COUNT_EMPTY 2
-#define VD_COUNT_WORDS 3
+#define VD_COUNT_BLAMED 3
+#define VD_COUNT_WORDS 4
 
 // Square cells of side `cell` from (x0, y0): cell (cx, cy) is cy * width + cx.
 struct VdGridPush {

@@ -3,6 +3,9 @@
 // (x, y+1)); four sites give two triangles sharing the first one. Appended in any order (the host sorts
 // them), one atomic per workgroup: ~2 triangles per site on one counter would queue (shaders/subgroup_append.glsl
 // has the H100's cost). Nothing here is trusted, the host checks the result exactly (gpu/voronoi_check.cpp).
+// A triangle the orientation filter finds clockwise or flat blames its corners here already (each once, by a
+// flag per point, into a list): the host's first check would blame them too, so with any blamed the host
+// demotes them without downloading or checking the dual. Triangles the filter cannot decide go to the host.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
@@ -14,7 +17,25 @@ layout(local_size_x = VD_WG) in;
 layout(std430, binding = 0) readonly buffer Grid { uint grid[]; };
 layout(std430, binding = 1) writeonly buffer Tris { uint tris[]; };
 layout(std430, binding = 2) buffer Count { uint count[]; };
+layout(std430, binding = 3) readonly buffer Points { dvec2 xy[]; };
+layout(std430, binding = 4) buffer Blamed { uint blamed[]; };           // per point: 1 once listed
+layout(std430, binding = 5) writeonly buffer BlameList { uint blame_list[]; };  // at most one entry per point
 layout(push_constant) uniform Push { VdGridPush p; };
+#include "predicates.glsl"
+
+void blame(uint v) {
+  if (atomicExchange(blamed[v], 1u) == 0u) blame_list[atomicAdd(count[VD_COUNT_BLAMED], 1u)] = v;
+}
+
+// Blames the corners of (a, b, c) when it is surely not counter-clockwise.
+void check(uint a, uint b, uint c) {
+  int o = pred_orient2d_filter(xy[a], xy[b], xy[c]);
+  if (o != PRED_UNDECIDED && o <= 0) {
+    blame(a);
+    blame(b);
+    blame(c);
+  }
+}
 
 shared uint sg_part[VD_WG];  // per subgroup: its total, then the workgroup's sum before it
 shared uint wg_base;
@@ -55,6 +76,8 @@ void main() {
     atomicAdd(count[VD_COUNT_OVERFLOW], 1u);
     return;
   }
+  check(d[0], d[1], d[2]);
+  if (t == 2u) check(d[0], d[2], d[3]);
   tris[3u * at] = d[0];
   tris[3u * at + 1u] = d[1];
   tris[3u * at + 2u] = d[2];
