@@ -123,8 +123,10 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   const uint64_t tiles = uint64_t((grid.width + VD_TILE - 1) / VD_TILE) * ((grid.height + VD_TILE - 1) / VD_TILE);
   uint32_t cur = 0;  // the grid copy the last flood ended in
   // One flood and its dual, submitted; returns the counter words. A repair starts from the last flood's grid
-  // with the demoted sites' cells emptied and reseeded, and jumps repair_jump .. 1, 1 only.
-  auto flood = [&](bool repair) {
+  // with the demoted sites' cells emptied and reseeded. Jumps `top` .. 1, then 1 again (JFA+1: fixes most of
+  // the plain flood's errors).
+  const uint32_t full = std::bit_floor(std::max({grid.width, grid.height, 2u}) - 1);
+  auto flood = [&](bool repair, uint32_t top) {
     begin("vd discretise");
     rec.fill(count, 0);
     rec.fill(blamed, 0);
@@ -141,10 +143,8 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
     rec.dispatch_groups(seed_, {points, demoted, grids[cur], cell_of, sites, grids[1 - cur]}, seed, groups(n));
     end();
     begin("vd flood");
-    // Jumps W/2 .. 1 (powers of two), then 1 again (JFA+1: fixes most of the plain flood's errors).
     std::vector<uint32_t> steps;
-    const uint32_t top = std::bit_floor(std::max({grid.width, grid.height, 2u}) - 1);
-    for (uint32_t s = repair ? std::min(top, repair_jump) : top; s >= 1; s /= 2) steps.push_back(s);
+    for (uint32_t s = top; s >= 1; s /= 2) steps.push_back(s);
     steps.push_back(1);
     for (size_t i = 0; i < steps.size(); ++i) {
       VdGridPush pass = grid;
@@ -173,10 +173,13 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
     if (attempt > 0) upload(ctx_, demoted, demoted_host.data(), uint64_t(n) * 4);
     host_ms += ms_since(t0);
     if (attempt == 0) rec.fill(demoted, 0);
-    std::array<uint32_t, VD_COUNT_WORDS> counts = flood(attempt > 0 && repair_jump > 0);
-    if (attempt > 0 && repair_jump > 0 && counts[VD_COUNT_EMPTY] != 0) {  // holes too wide for the short jumps
-      ++stats.full_refloods;
-      counts = flood(false);
+    // Short jumps first (a dense seed grid, or a repair's holes, need no long ones); cells they leave empty
+    // (sparse regions, wide holes) send the attempt to a full flood.
+    const uint32_t top = short_jump ? std::min(full, std::bit_floor(short_jump)) : full;
+    std::array<uint32_t, VD_COUNT_WORDS> counts = flood(attempt > 0 && short_jump > 0, top);
+    if (top < full && counts[VD_COUNT_EMPTY] != 0) {
+      ++stats.full_floods;
+      counts = flood(false, full);
     }
     t0 = std::chrono::steady_clock::now();
     if (counts[VD_COUNT_OVERFLOW] != 0) {  // never seen; a start is an optimisation, so give up rather than grow
