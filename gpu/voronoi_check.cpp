@@ -56,7 +56,15 @@ uint64_t count_if(size_t n, F&& f) {
 }
 
 // first[0] = 0 and first[i + 1] a count for i: afterwards first[i] is the sum of the counts before i.
-void scan(std::vector<uint32_t>& first) {
+using Array = RawVector<uint32_t>;
+
+// Every element of `a` set to `value`, on all cores.
+void set_all(Array& a, size_t size, uint32_t value) {
+  a.resize(size);
+  each(size, [&](size_t i) { a[i] = value; });
+}
+
+void scan(Array& first) {
   tbb::parallel_scan(
       tbb::blocked_range<size_t>(1, first.size(), kGrain), uint32_t(0),
       [&](const tbb::blocked_range<size_t>& r, uint32_t sum, bool final) {
@@ -72,11 +80,12 @@ void scan(std::vector<uint32_t>& first) {
 // Items 0 .. m - 1 grouped by key(i) < buckets: group b is items[first[b] .. first[b + 1]), ascending (the
 // order a serial counting sort gives).
 template <class Key>
-void group(size_t m, size_t buckets, Key&& key, std::vector<uint32_t>& first, std::vector<uint32_t>& items) {
-  first.assign(buckets + 1, 0);
+void group(size_t m, size_t buckets, Key&& key, Array& first, Array& items) {
+  set_all(first, buckets + 1, 0);
   each(m, [&](size_t i) { shared(first[key(i) + 1]).fetch_add(1, std::memory_order_relaxed); });
   scan(first);
-  std::vector<uint32_t> cursor(first.begin(), first.end() - 1);
+  Array cursor(buckets);
+  each(buckets, [&](size_t b) { cursor[b] = first[b]; });
   items.resize(m);
   each(m, [&](size_t i) { items[shared(cursor[key(i)]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(i); });
   each(buckets, [&](size_t b) { std::sort(items.begin() + first[b], items.begin() + first[b + 1]); });
@@ -121,9 +130,10 @@ std::vector<Triangle> normalise(std::vector<Triangle> tris, size_t points) {
     Triangle& t = tris[i];
     std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
   });
-  std::vector<uint32_t> first, items;
+  Array first, items;
   group(tris.size(), points, [&](size_t i) { return tris[i][0]; }, first, items);
-  std::vector<uint32_t> kept(points + 1, 0);
+  Array kept(points + 1);
+  kept[0] = 0;
   each(points, [&](size_t v) {
     auto b = items.begin() + first[v], e = items.begin() + first[v + 1];
     std::sort(b, e, [&](uint32_t i, uint32_t j) { return tris[i] < tris[j]; });
@@ -142,8 +152,8 @@ std::vector<Triangle> normalise(std::vector<Triangle> tris, size_t points) {
 // t[j] -> t[j + 1], with that edge's head beside it.
 struct Mesh {
   std::vector<Triangle> tris;
-  std::vector<uint32_t> first, corners, heads;
-  std::vector<uint32_t> twin;  // per corner: edge(head, tail of the edge), set by boundary()
+  Array first, corners, heads;
+  Array twin;  // per corner: edge(head, tail of the edge), set by boundary()
 
   void index(size_t points) {
     group(tris.size() * 3, points, [&](size_t c) { return tris[c / 3][c % 3]; }, first, corners);
@@ -157,7 +167,7 @@ struct Mesh {
     for (size_t t = before; t < tris.size(); ++t)
       for (uint32_t j = 0; j < 3; ++j) added.push_back({tris[t][j], uint32_t(3 * t + j)});
     std::sort(added.begin(), added.end());
-    std::vector<uint32_t> nfirst(points + 1), ncorners(corners.size() + added.size()), nheads(ncorners.size());
+    Array nfirst(points + 1), ncorners(corners.size() + added.size()), nheads(ncorners.size());
     each(points + 1, [&](size_t v) {
       const size_t lo = std::lower_bound(added.begin(), added.end(), std::pair<uint32_t, uint32_t>(uint32_t(v), 0)) -
                         added.begin();
@@ -197,9 +207,9 @@ struct Checker {
 
   // Steps that need a fresh index: each directed edge once, the boundary one simple cycle from the
   // lexicographically smallest vertex (into `cycle`, `next`: the boundary edge out of each vertex).
-  bool boundary(Mesh& m, std::vector<uint32_t>& cycle, std::vector<uint32_t>& next) {
+  bool boundary(Mesh& m, std::vector<uint32_t>& cycle, Array& next) {
     Blame blame;
-    next.assign(points, kNone);
+    set_all(next, points, kNone);
     each(points, [&](size_t v) {
       const uint32_t d = m.degree(uint32_t(v));
       if (d < 2) return;
@@ -233,7 +243,8 @@ struct Checker {
         });
     blame.into(off);
     if (!off.empty()) return false;
-    std::vector<uint32_t> in(points, 0);
+    Array in;
+    set_all(in, points, 0);
     m.twin.resize(m.tris.size() * 3);
     each(points, [&](size_t v) {
       const uint32_t a = uint32_t(v);
@@ -273,7 +284,7 @@ struct Checker {
   // boundary() again after fill(), on the cycle's vertices only: the pockets' triangles have no other corners,
   // and an edge with a twin keeps it, so no other vertex gains a duplicate edge, a boundary edge (after
   // boundary() passed, none has one) or a new twin. The lowest vertex, where the walk starts, is the same.
-  bool reboundary(Mesh& m, std::vector<uint32_t>& cycle, std::vector<uint32_t>& next) {
+  bool reboundary(Mesh& m, std::vector<uint32_t>& cycle, Array& next) {
     const std::vector<uint32_t> old = cycle;
     std::vector<uint32_t> h;
     for (uint32_t v : old) {
@@ -333,7 +344,7 @@ struct Checker {
   }
 
   // Every vertex's fan turns once around it (interior) or across its interior angle (boundary).
-  void fans(const Mesh& m, const std::vector<uint32_t>& next) {
+  void fans(const Mesh& m, const Array& next) {
     Blame blame;
     each(points, [&](size_t vi) {
       const uint32_t v = uint32_t(vi), degree = m.degree(v);
@@ -389,7 +400,8 @@ StartSlots slots_of(const Mesh& m, const std::vector<uint32_t>& cycle, size_t po
   s.finite = f;
   s.verts.resize(3 * size_t(f + h));
   s.nbrs.resize(3 * size_t(f + h));
-  std::vector<uint32_t> pos(points, kNone);
+  Array pos;
+  set_all(pos, points, kNone);
   for (uint32_t i = 0; i < h; ++i) pos[cycle[i]] = i;
   s.vertices = uint32_t(count_if(points, [&](size_t v) { return m.degree(uint32_t(v)) > 0; }));
   each(f, [&](size_t ti) {
@@ -424,7 +436,7 @@ StartSlots slots_of(const Mesh& m, const std::vector<uint32_t>& cycle, size_t po
 }  // namespace
 
 std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<Triangle> tris,
-                                        std::vector<uint32_t>& offenders) {
+                                        std::vector<uint32_t>& offenders, bool oriented) {
   const size_t points = xy.size() / 2;
   offenders.clear();
   Checker ck{Geometry{xy}, points, offenders};
@@ -437,7 +449,7 @@ std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<
   Blame blame;
   each(tris.size(), [&](size_t i) {
     const Triangle& t = tris[i];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || ck.g.orient(t[0], t[1], t[2]) <= 0)
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || (!oriented && ck.g.orient(t[0], t[1], t[2]) <= 0))
       for (uint32_t v : t) blame.add(v);
   });
   blame.into(offenders);
@@ -445,7 +457,8 @@ std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<
   Mesh m;
   m.tris = std::move(tris);
   m.index(points);
-  std::vector<uint32_t> cycle, next;
+  std::vector<uint32_t> cycle;
+  Array next;
   if (!ck.boundary(m, cycle, next)) return fail();
   const size_t before = m.tris.size();
   if (ck.fill(m, cycle)) {  // fill triangles are counter-clockwise by construction (a reflex turn reversed)

@@ -21,21 +21,24 @@
 #include <span>
 #include <vector>
 
+#include "core/big_array.hpp"
 #include "core/model.hpp"
 
 namespace cdtgpu::gpu {
 
 struct StartSlots {
-  std::vector<uint32_t> verts, nbrs;  // 3 per slot: finite triangles first, then one infinite slot per hull edge
-  uint32_t finite = 0;                // finite slots
-  uint32_t vertices = 0;              // points used (the slots hold 2 * vertices - 2)
-  std::vector<uint32_t> slot_of;      // per point: the last finite slot it is a corner of, or UINT32_MAX
+  RawVector<uint32_t> verts, nbrs;  // 3 per slot: finite triangles first, then one infinite slot per hull edge
+  uint32_t finite = 0;              // finite slots
+  uint32_t vertices = 0;            // points used (the slots hold 2 * vertices - 2)
+  RawVector<uint32_t> slot_of;      // per point: the last finite slot it is a corner of, or UINT32_MAX
 };
 
 // `xy`: 2 doubles per point; `tris`: counter-clockwise (by the grid, not yet by the points) triples of point
 // ids, in any order, duplicates allowed. On failure returns nothing and lists in `offenders` the vertices
 // whose removal should help (empty: no repair known).
+// `oriented`: every triangle is known counter-clockwise (shaders/vd_dual.comp's exact filter decided them all),
+// so only their corners' distinctness is checked.
 std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<Triangle> tris,
-                                        std::vector<uint32_t>& offenders);
+                                        std::vector<uint32_t>& offenders, bool oriented = false);
 
 }  // namespace cdtgpu::gpu

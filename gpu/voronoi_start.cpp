@@ -195,7 +195,7 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
     } else {
       std::vector<Triangle> dual_tris(counts[VD_COUNT_TRIS]);
       if (!dual_tris.empty()) download(ctx_, tris, dual_tris.data(), dual_tris.size() * 12);
-      slots = dual_to_slots(xy, std::move(dual_tris), offenders);
+      slots = dual_to_slots(xy, std::move(dual_tris), offenders, counts[VD_COUNT_UNDECIDED] == 0);
     }
     // The flooded grid: only for the start's loc codes and the last attempt's site count.
     std::vector<uint32_t> owner;
@@ -218,7 +218,7 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
       VoronoiStart v;
       // A vertex's loc names a slot it is a corner of; a lost point's, a slot at the site owning its cell (its
       // first walk is then short), else the first.
-      const std::vector<uint32_t>& slot_of = slots->slot_of;
+      const RawVector<uint32_t>& slot_of = slots->slot_of;
       const std::vector<uint32_t> cell = download_vector<uint32_t>(ctx_, cell_of, n);
       v.loc.resize(n);
       tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kGrain), [&](const tbb::blocked_range<uint32_t>& r) {

@@ -45,7 +45,7 @@ struct VoronoiStats {
 // the point to start its first walk from).
 struct VoronoiStart {
   StartSlots slots;
-  std::vector<uint32_t> loc;
+  RawVector<uint32_t> loc;
   double corners[6] = {};  // a finite triangle of the start (the relocation's cone centre)
 };
 

@@ -19,7 +19,8 @@ namespace cdtgpu::gpu::layout {
 #define VD_COUNT_OVERFLOW 1
 #define VD_COUNT_EMPTY 2
 #define VD_COUNT_BLAMED 3
-#define VD_COUNT_WORDS 4
+#define VD_COUNT_UNDECIDED 4  // triangles whose orientation the dual's filter left to the host
+#define VD_COUNT_WORDS 5
 
 // Square cells of side `cell` from (x0, y0): cell (cx, cy) is cy * width + cx.
 struct VdGridPush {

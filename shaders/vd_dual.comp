@@ -5,7 +5,9 @@
 // has the H100's cost). Nothing here is trusted, the host checks the result exactly (gpu/voronoi_check.cpp).
 // A triangle the orientation filter finds clockwise or flat blames its corners here already (each once, by a
 // flag per point, into a list): the host's first check would blame them too, so with any blamed the host
-// demotes them without downloading or checking the dual. Triangles the filter cannot decide go to the host.
+// demotes them without downloading or checking the dual. Triangles the filter cannot decide go to the host,
+// and only then does the host check orientations again (the filter's decisions are exact: `precise`, error
+// bound as in core/predicates).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
@@ -27,10 +29,12 @@ void blame(uint v) {
   if (atomicExchange(blamed[v], 1u) == 0u) blame_list[atomicAdd(count[VD_COUNT_BLAMED], 1u)] = v;
 }
 
-// Blames the corners of (a, b, c) when it is surely not counter-clockwise.
+// Blames the corners of (a, b, c) when it is surely not counter-clockwise; counts it when the filter cannot
+// tell (the host then checks every triangle's orientation exactly, else none).
 void check(uint a, uint b, uint c) {
   int o = pred_orient2d_filter(xy[a], xy[b], xy[c]);
-  if (o != PRED_UNDECIDED && o <= 0) {
+  if (o == PRED_UNDECIDED) atomicAdd(count[VD_COUNT_UNDECIDED], 1u);
+  else if (o <= 0) {
     blame(a);
     blame(b);
     blame(c);
