@@ -4,6 +4,9 @@
 // why the result equals CGAL's: docs/gpu-delaunay.md.
 #include "gpu/delaunay.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -414,8 +417,10 @@ void DelaunayBuilder::voronoi_start(State& st) const {
   upload(ctx_, st.tri.verts, v->slots.verts.data(), v->slots.verts.size() * 4);
   upload(ctx_, st.tri.nbrs, v->slots.nbrs.data(), v->slots.nbrs.size() * 4);
   upload(ctx_, st.loc, v->loc.data(), v->loc.size() * 4);
-  std::vector<uint32_t> list(slots);
-  for (uint32_t t = 0; t < slots; ++t) list[t] = DT_ENTRY(t, DT_CHECK_ALL, 0u);
+  RawVector<uint32_t> list(slots);
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, slots, 1 << 14), [&](const tbb::blocked_range<uint32_t>& r) {
+    for (uint32_t t = r.begin(); t < r.end(); ++t) list[t] = DT_ENTRY(t, DT_CHECK_ALL, 0u);
+  });
   upload(ctx_, st.flip[0], list.data(), list.size() * 4);
   std::vector<uint32_t> counters(DT_COUNTERS, 0), args(DT_ARGS_WORDS, 0);
   counters[DT_COUNT_LIST0] = slots;

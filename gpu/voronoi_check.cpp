@@ -125,7 +125,7 @@ struct Geometry {
 
 // Each triangle rotated to start at its smallest vertex; sorted, duplicates removed. By buckets of the first
 // vertex (a counting sort), then each bucket's few triangles by their other two: O(F) on all cores.
-std::vector<Triangle> normalise(std::vector<Triangle> tris, size_t points) {
+RawVector<Triangle> normalise(RawVector<Triangle> tris, size_t points) {
   each(tris.size(), [&](size_t i) {
     Triangle& t = tris[i];
     std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
@@ -141,7 +141,7 @@ std::vector<Triangle> normalise(std::vector<Triangle> tris, size_t points) {
     kept[v + 1] = uint32_t(e - b);
   });
   scan(kept);
-  std::vector<Triangle> out(kept[points]);
+  RawVector<Triangle> out(kept[points]);
   each(points, [&](size_t v) {
     for (uint32_t k = 0; k < kept[v + 1] - kept[v]; ++k) out[kept[v] + k] = tris[items[first[v] + k]];
   });
@@ -151,7 +151,7 @@ std::vector<Triangle> normalise(std::vector<Triangle> tris, size_t points) {
 // Triangles and, per vertex, its corners (3t + j, ascending), each the start of the directed edge
 // t[j] -> t[j + 1], with that edge's head beside it.
 struct Mesh {
-  std::vector<Triangle> tris;
+  RawVector<Triangle> tris;
   Array first, corners, heads;
   Array twin;  // per corner: edge(head, tail of the edge), set by boundary()
 
@@ -435,7 +435,7 @@ StartSlots slots_of(const Mesh& m, const std::vector<uint32_t>& cycle, size_t po
 
 }  // namespace
 
-std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<Triangle> tris,
+std::optional<StartSlots> dual_to_slots(std::span<const double> xy, RawVector<Triangle> tris,
                                         std::vector<uint32_t>& offenders, bool oriented) {
   const size_t points = xy.size() / 2;
   offenders.clear();

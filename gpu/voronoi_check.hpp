@@ -38,7 +38,7 @@ struct StartSlots {
 // whose removal should help (empty: no repair known).
 // `oriented`: every triangle is known counter-clockwise (shaders/vd_dual.comp's exact filter decided them all),
 // so only their corners' distinctness is checked.
-std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<Triangle> tris,
+std::optional<StartSlots> dual_to_slots(std::span<const double> xy, RawVector<Triangle> tris,
                                         std::vector<uint32_t>& offenders, bool oriented = false);
 
 }  // namespace cdtgpu::gpu

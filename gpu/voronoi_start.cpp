@@ -193,14 +193,15 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
       download(ctx_, blame_list, offenders.data(), offenders.size() * 4);
       std::sort(offenders.begin(), offenders.end());
     } else {
-      std::vector<Triangle> dual_tris(counts[VD_COUNT_TRIS]);
+      RawVector<Triangle> dual_tris(counts[VD_COUNT_TRIS]);  // not zeroed: the download writes it
       if (!dual_tris.empty()) download(ctx_, tris, dual_tris.data(), dual_tris.size() * 12);
       slots = dual_to_slots(xy, std::move(dual_tris), offenders, counts[VD_COUNT_UNDECIDED] == 0);
     }
     // The flooded grid: only for the start's loc codes and the last attempt's site count.
-    std::vector<uint32_t> owner;
+    RawVector<uint32_t> owner;
     if (slots || offenders.empty() || attempt == max_repairs) {
-      owner = download_vector<uint32_t>(ctx_, grids[cur], cells);
+      owner.resize(cells);
+      download(ctx_, grids[cur], owner.data(), cells * 4);
       std::vector<uint8_t> site(n, 0);
       tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cells, kGrain), [&](const tbb::blocked_range<uint64_t>& r) {
         for (uint64_t c = r.begin(); c < r.end(); ++c)
@@ -219,7 +220,8 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
       // A vertex's loc names a slot it is a corner of; a lost point's, a slot at the site owning its cell (its
       // first walk is then short), else the first.
       const RawVector<uint32_t>& slot_of = slots->slot_of;
-      const std::vector<uint32_t> cell = download_vector<uint32_t>(ctx_, cell_of, n);
+      RawVector<uint32_t> cell(n);
+      download(ctx_, cell_of, cell.data(), uint64_t(n) * 4);
       v.loc.resize(n);
       tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kGrain), [&](const tbb::blocked_range<uint32_t>& r) {
         for (uint32_t i = r.begin(); i < r.end(); ++i) {
