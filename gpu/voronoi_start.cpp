@@ -99,7 +99,10 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   stats.grid_height = grid.height;
   const uint64_t cells = uint64_t(grid.width) * grid.height;
   // Distinct dual triangles number at most 2 per site; duplicates from neighbouring grid corners come on top.
-  const uint32_t capacity = 3 * n + 64;
+  // Within the device's binding limit (lavapipe: 128 MiB, 11M triangles; above ~5M points on it the dual may
+  // overflow, which gives up like any overflow).
+  const uint32_t capacity =
+      uint32_t(std::min<uint64_t>(3 * uint64_t(n) + 64, ctx_.props.limits.maxStorageBufferRange / 12));
   stats.device_bytes = uint64_t(n) * 24 + cells * 8 + uint64_t(capacity) * 12 + VD_COUNT_WORDS * 4;
   Buffer demoted = create_buffer(ctx_, uint64_t(n) * 4, "vd demoted");
   Buffer cell_of = create_buffer(ctx_, uint64_t(n) * 4, "vd cell of point");
