@@ -1,6 +1,24 @@
+// The checks run as parallel passes over triangles, corners and vertices (TBB, as core/regions.cpp does); only
+// the boundary walk, the pocket filling and the convexity test run on one core, and the boundary is O(sqrt n).
+// Every pass gives the same result on every run: groups are sorted after their atomic scatter, offenders are
+// sorted by the caller, and the one ordered choice (the lowest vertex) is a reduction with index tie-breaks.
+// Each corner's twin is looked up once (boundary) and reused by the fans and the slots. The pockets' triangles
+// go after the dual's (sorted) ones; the index is patched for them and the boundary checked again on the old
+// cycle's vertices only, the only ones they touch.
 #include "gpu/voronoi_check.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_scan.h>
+
 #include <algorithm>
+#include <atomic>
+#include <functional>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
 
 #include "core/predicates.hpp"
 #include "shaders/layout.h"
@@ -12,6 +30,78 @@ using namespace layout;
 namespace {
 
 constexpr uint32_t kNone = UINT32_MAX;
+constexpr size_t kGrain = 1 << 13;
+
+template <class T>
+std::atomic_ref<T> shared(T& x) {
+  return std::atomic_ref<T>(x);
+}
+
+template <class F>
+void each(size_t n, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) f(i);
+  });
+}
+
+template <class F>
+uint64_t count_if(size_t n, F&& f) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, kGrain), uint64_t(0),
+      [&](const tbb::blocked_range<size_t>& r, uint64_t sum) {
+        for (size_t i = r.begin(); i < r.end(); ++i) sum += f(i) ? 1 : 0;
+        return sum;
+      },
+      std::plus<uint64_t>());
+}
+
+// first[0] = 0 and first[i + 1] a count for i: afterwards first[i] is the sum of the counts before i.
+using Array = RawVector<uint32_t>;
+
+// Every element of `a` set to `value`, on all cores.
+void set_all(Array& a, size_t size, uint32_t value) {
+  a.resize(size);
+  each(size, [&](size_t i) { a[i] = value; });
+}
+
+void scan(Array& first) {
+  tbb::parallel_scan(
+      tbb::blocked_range<size_t>(1, first.size(), kGrain), uint32_t(0),
+      [&](const tbb::blocked_range<size_t>& r, uint32_t sum, bool final) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          sum += first[i];
+          if (final) first[i] = sum;
+        }
+        return sum;
+      },
+      std::plus<uint32_t>());
+}
+
+// Items 0 .. m - 1 grouped by key(i) < buckets: group b is items[first[b] .. first[b + 1]), ascending (the
+// order a serial counting sort gives).
+template <class Key>
+void group(size_t m, size_t buckets, Key&& key, Array& first, Array& items) {
+  set_all(first, buckets + 1, 0);
+  each(m, [&](size_t i) { shared(first[key(i) + 1]).fetch_add(1, std::memory_order_relaxed); });
+  scan(first);
+  Array cursor(buckets);
+  each(buckets, [&](size_t b) { cursor[b] = first[b]; });
+  items.resize(m);
+  each(m, [&](size_t i) { items[shared(cursor[key(i)]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(i); });
+  each(buckets, [&](size_t b) { std::sort(items.begin() + first[b], items.begin() + first[b + 1]); });
+}
+
+// Offenders found on all cores; their order does not matter (the caller sorts them).
+struct Blame {
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> local;
+  void add(uint32_t v) { local.local().push_back(v); }
+  void into(std::vector<uint32_t>& off) {
+    for (std::vector<uint32_t>& l : local) {
+      off.insert(off.end(), l.begin(), l.end());
+      l.clear();
+    }
+  }
+};
 
 struct Geometry {
   std::span<const double> xy;
@@ -33,20 +123,71 @@ struct Geometry {
   }
 };
 
-// Triangles and, per vertex, its corners (3t + j), each the start of the directed edge t[j] -> t[j + 1].
+// Each triangle rotated to start at its smallest vertex; sorted, duplicates removed. By buckets of the first
+// vertex (a counting sort), then each bucket's few triangles by their other two: O(F) on all cores.
+RawVector<Triangle> normalise(RawVector<Triangle> tris, size_t points) {
+  each(tris.size(), [&](size_t i) {
+    Triangle& t = tris[i];
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  });
+  Array first, items;
+  group(tris.size(), points, [&](size_t i) { return tris[i][0]; }, first, items);
+  Array kept(points + 1);
+  kept[0] = 0;
+  each(points, [&](size_t v) {
+    auto b = items.begin() + first[v], e = items.begin() + first[v + 1];
+    std::sort(b, e, [&](uint32_t i, uint32_t j) { return tris[i] < tris[j]; });
+    e = std::unique(b, e, [&](uint32_t i, uint32_t j) { return tris[i] == tris[j]; });
+    kept[v + 1] = uint32_t(e - b);
+  });
+  scan(kept);
+  RawVector<Triangle> out(kept[points]);
+  each(points, [&](size_t v) {
+    for (uint32_t k = 0; k < kept[v + 1] - kept[v]; ++k) out[kept[v] + k] = tris[items[first[v] + k]];
+  });
+  return out;
+}
+
+// Triangles and, per vertex, its corners (3t + j, ascending), each the start of the directed edge
+// t[j] -> t[j + 1], with that edge's head beside it.
 struct Mesh {
-  std::vector<Triangle> tris;
-  std::vector<uint32_t> first, corners;
+  RawVector<Triangle> tris;
+  Array first, corners, heads;
+  Array twin;  // per corner: edge(head, tail of the edge), set by boundary()
 
   void index(size_t points) {
-    first.assign(points + 1, 0);
-    for (const Triangle& t : tris)
-      for (uint32_t v : t) ++first[v + 1];
-    for (size_t v = 0; v < points; ++v) first[v + 1] += first[v];
-    corners.resize(tris.size() * 3);
-    std::vector<uint32_t> at(first.begin(), first.end() - 1);
-    for (uint32_t t = 0; t < tris.size(); ++t)
-      for (uint32_t j = 0; j < 3; ++j) corners[at[tris[t][j]]++] = 3 * t + j;
+    group(tris.size() * 3, points, [&](size_t c) { return tris[c / 3][c % 3]; }, first, corners);
+    heads.resize(corners.size());
+    each(corners.size(), [&](size_t i) { heads[i] = head(corners[i]); });
+  }
+  // The index again after appending tris[before ..] (a few triangles, at few vertices): their corners go after
+  // each vertex's others, as index() would put them, in one copying pass.
+  void reindex(size_t before, size_t points) {
+    std::vector<std::pair<uint32_t, uint32_t>> added;  // (vertex, corner)
+    for (size_t t = before; t < tris.size(); ++t)
+      for (uint32_t j = 0; j < 3; ++j) added.push_back({tris[t][j], uint32_t(3 * t + j)});
+    std::sort(added.begin(), added.end());
+    Array nfirst(points + 1), ncorners(corners.size() + added.size()), nheads(ncorners.size());
+    each(points + 1, [&](size_t v) {
+      const size_t lo = std::lower_bound(added.begin(), added.end(), std::pair<uint32_t, uint32_t>(uint32_t(v), 0)) -
+                        added.begin();
+      nfirst[v] = first[v] + uint32_t(lo);
+      if (v == points) return;
+      const uint32_t d = first[v + 1] - first[v];
+      std::copy_n(corners.begin() + first[v], d, ncorners.begin() + nfirst[v]);
+      std::copy_n(heads.begin() + first[v], d, nheads.begin() + nfirst[v]);
+      for (size_t k = lo, at = nfirst[v] + d; k < added.size() && added[k].first == v; ++k, ++at) {
+        ncorners[at] = added[k].second;
+        nheads[at] = head(added[k].second);
+      }
+    });
+    first = std::move(nfirst);
+    corners = std::move(ncorners);
+    heads = std::move(nheads);
+  }
+  // twin[] of the corners at v.
+  void twins(uint32_t v) {
+    for (uint32_t i = first[v]; i < first[v + 1]; ++i) twin[corners[i]] = edge(heads[i], v);
   }
   uint32_t degree(uint32_t v) const { return first[v + 1] - first[v]; }
   uint32_t head(uint32_t c) const { return tris[c / 3][(c % 3 + 1) % 3]; }
@@ -54,7 +195,7 @@ struct Mesh {
   // The corner at a of the triangle holding the directed edge a -> b, or kNone.
   uint32_t edge(uint32_t a, uint32_t b) const {
     for (uint32_t i = first[a]; i < first[a + 1]; ++i)
-      if (head(corners[i]) == b) return corners[i];
+      if (heads[i] == b) return corners[i];
     return kNone;
   }
 };
@@ -66,29 +207,62 @@ struct Checker {
 
   // Steps that need a fresh index: each directed edge once, the boundary one simple cycle from the
   // lexicographically smallest vertex (into `cycle`, `next`: the boundary edge out of each vertex).
-  bool boundary(const Mesh& m, std::vector<uint32_t>& cycle, std::vector<uint32_t>& next) {
-    next.assign(points, kNone);
-    std::vector<uint32_t> in(points, 0), heads;
-    uint32_t lowest = kNone;
-    for (uint32_t v = 0; v < points; ++v) {
-      if (!m.degree(v)) continue;
-      if (lowest == kNone || g.less(v, lowest)) lowest = v;
-      heads.clear();
-      for (uint32_t i = m.first[v]; i < m.first[v + 1]; ++i) heads.push_back(m.head(m.corners[i]));
-      std::sort(heads.begin(), heads.end());
-      for (size_t i = 1; i < heads.size(); ++i)
-        if (heads[i] == heads[i - 1]) off.insert(off.end(), {v, heads[i]});
-    }
+  bool boundary(Mesh& m, std::vector<uint32_t>& cycle, Array& next) {
+    Blame blame;
+    set_all(next, points, kNone);
+    each(points, [&](size_t v) {
+      const uint32_t d = m.degree(uint32_t(v));
+      if (d < 2) return;
+      uint32_t small[16];
+      std::vector<uint32_t> large;
+      uint32_t* h = small;
+      if (d > 16) {
+        large.resize(d);
+        h = large.data();
+      }
+      std::copy(m.heads.begin() + m.first[v], m.heads.begin() + m.first[v + 1], h);
+      std::sort(h, h + d);
+      for (uint32_t i = 1; i < d; ++i)
+        if (h[i] == h[i - 1]) {
+          blame.add(uint32_t(v));
+          blame.add(h[i]);
+        }
+    });
+    // The smallest used vertex in (x, y) order, the smaller index among equal points (as a serial scan).
+    const uint32_t lowest = tbb::parallel_reduce(
+        tbb::blocked_range<size_t>(0, points, kGrain), kNone,
+        [&](const tbb::blocked_range<size_t>& r, uint32_t best) {
+          for (size_t v = r.begin(); v < r.end(); ++v)
+            if (m.degree(uint32_t(v)) && (best == kNone || g.less(uint32_t(v), best))) best = uint32_t(v);
+          return best;
+        },
+        [&](uint32_t a, uint32_t b) {
+          if (a == kNone) return b;
+          if (b == kNone) return a;
+          return g.less(b, a) || (!g.less(a, b) && b < a) ? b : a;
+        });
+    blame.into(off);
     if (!off.empty()) return false;
-    for (uint32_t c = 0; c < m.corners.size(); ++c) {
-      const uint32_t a = m.tris[c / 3][c % 3], b = m.head(c);
-      if (m.edge(b, a) != kNone) continue;
-      if (next[a] != kNone) off.push_back(a);
-      next[a] = b;
-      ++in[b];
-    }
-    for (uint32_t v = 0; v < points; ++v)
-      if (in[v] > 1 || (in[v] == 1) != (next[v] != kNone)) off.push_back(v);
+    Array in;
+    set_all(in, points, 0);
+    m.twin.resize(m.tris.size() * 3);
+    each(points, [&](size_t v) {
+      const uint32_t a = uint32_t(v);
+      m.twins(a);
+      bool out = false;
+      for (uint32_t i = m.first[a]; i < m.first[a + 1]; ++i) {
+        const uint32_t b = m.heads[i];
+        if (m.twin[m.corners[i]] != kNone) continue;
+        if (out) blame.add(a);
+        out = true;
+        next[a] = b;
+        shared(in[b]).fetch_add(1, std::memory_order_relaxed);
+      }
+    });
+    each(points, [&](size_t v) {
+      if (in[v] > 1 || (in[v] == 1) != (next[v] != kNone)) blame.add(uint32_t(v));
+    });
+    blame.into(off);
     if (!off.empty() || lowest == kNone) return false;
     if (next[lowest] == kNone) {
       off.push_back(lowest);
@@ -100,8 +274,56 @@ struct Checker {
       seen[v] = 1;
       cycle.push_back(v);
     }
-    for (uint32_t v = 0; v < points; ++v)  // holes and other pieces
-      if (next[v] != kNone && !seen[v]) off.push_back(v);
+    each(points, [&](size_t v) {  // holes and other pieces
+      if (next[v] != kNone && !seen[v]) blame.add(uint32_t(v));
+    });
+    blame.into(off);
+    return off.empty();
+  }
+
+  // boundary() again after fill(), on the cycle's vertices only: the pockets' triangles have no other corners,
+  // and an edge with a twin keeps it, so no other vertex gains a duplicate edge, a boundary edge (after
+  // boundary() passed, none has one) or a new twin. The lowest vertex, where the walk starts, is the same.
+  bool reboundary(Mesh& m, std::vector<uint32_t>& cycle, Array& next) {
+    const std::vector<uint32_t> old = cycle;
+    std::vector<uint32_t> h;
+    for (uint32_t v : old) {
+      h.assign(m.heads.begin() + m.first[v], m.heads.begin() + m.first[v + 1]);
+      std::sort(h.begin(), h.end());
+      for (size_t i = 1; i < h.size(); ++i)
+        if (h[i] == h[i - 1]) off.insert(off.end(), {v, h[i]});
+    }
+    if (!off.empty()) return false;
+    std::unordered_map<uint32_t, uint32_t> in;
+    for (uint32_t v : old) next[v] = kNone;
+    m.twin.resize(m.tris.size() * 3);
+    for (uint32_t a : old) m.twins(a);
+    for (uint32_t a : old) {
+      bool out = false;
+      for (uint32_t i = m.first[a]; i < m.first[a + 1]; ++i) {
+        const uint32_t b = m.heads[i];
+        if (m.twin[m.corners[i]] != kNone) continue;
+        if (out) off.push_back(a);
+        out = true;
+        next[a] = b;
+        ++in[b];
+      }
+    }
+    for (uint32_t v : old) {
+      const uint32_t k = in.count(v) ? in[v] : 0;
+      if (k > 1 || (k == 1) != (next[v] != kNone)) off.push_back(v);
+    }
+    const uint32_t lowest = old[0];
+    if (!off.empty()) return false;
+    if (next[lowest] == kNone) {
+      off.push_back(lowest);
+      return false;
+    }
+    cycle.clear();
+    std::unordered_set<uint32_t> seen;
+    for (uint32_t v = lowest; seen.insert(v).second; v = next[v]) cycle.push_back(v);
+    for (uint32_t v : old)
+      if (next[v] != kNone && !seen.count(v)) off.push_back(v);
     return off.empty();
   }
 
@@ -122,10 +344,11 @@ struct Checker {
   }
 
   // Every vertex's fan turns once around it (interior) or across its interior angle (boundary).
-  void fans(const Mesh& m, const std::vector<uint32_t>& next) {
-    for (uint32_t v = 0; v < points; ++v) {
-      const uint32_t degree = m.degree(v);
-      if (!degree) continue;
+  void fans(const Mesh& m, const Array& next) {
+    Blame blame;
+    each(points, [&](size_t vi) {
+      const uint32_t v = uint32_t(vi), degree = m.degree(v);
+      if (!degree) return;
       const bool on_boundary = next[v] != kNone;
       const uint32_t c0 = on_boundary ? m.edge(v, next[v]) : m.corners[m.first[v]];
       uint32_t c = c0, count = 0, crossings = 0, last = m.head(c0);
@@ -135,7 +358,7 @@ struct Checker {
         const uint32_t b = m.tail(c);  // the triangle (v, last, b) turns from last to b
         crossings += !g.upper(v, last) && g.upper(v, b);
         last = b;
-        const uint32_t nc = m.edge(v, b);
+        const uint32_t nc = m.twin[c / 3 * 3 + (c % 3 + 2) % 3];  // edge(v, b): the twin of b -> v
         if (nc == kNone) break;
         if (nc == c0) {
           closed = true;
@@ -152,8 +375,9 @@ struct Checker {
         ok = o > 0 ? crossings == uint32_t(lower_a && g.upper(v, p))
                    : o == 0 && g.between(a, v, p) && crossings == uint32_t(lower_a);
       }
-      if (!ok) off.push_back(v);
-    }
+      if (!ok) blame.add(v);
+    });
+    blame.into(off);
   }
 
   // The boundary convex and winding once.
@@ -170,33 +394,30 @@ struct Checker {
   }
 };
 
-void normalise(std::vector<Triangle>& tris) {
-  for (Triangle& t : tris) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
-  std::sort(tris.begin(), tris.end());
-  tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
-}
-
 StartSlots slots_of(const Mesh& m, const std::vector<uint32_t>& cycle, size_t points) {
   const uint32_t f = uint32_t(m.tris.size()), h = uint32_t(cycle.size());
   StartSlots s;
   s.finite = f;
   s.verts.resize(3 * size_t(f + h));
   s.nbrs.resize(3 * size_t(f + h));
-  std::vector<uint32_t> pos(points, kNone);
+  Array pos;
+  set_all(pos, points, kNone);
   for (uint32_t i = 0; i < h; ++i) pos[cycle[i]] = i;
-  for (uint32_t v = 0; v < points; ++v) s.vertices += m.degree(v) > 0;
-  for (uint32_t t = 0; t < f; ++t)
+  s.vertices = uint32_t(count_if(points, [&](size_t v) { return m.degree(uint32_t(v)) > 0; }));
+  each(f, [&](size_t ti) {
+    const uint32_t t = uint32_t(ti);
     for (uint32_t k = 0; k < 3; ++k) {
-      s.verts[3 * t + k] = m.tris[t][k];
-      const uint32_t a = m.tris[t][(k + 1) % 3], b = m.tris[t][(k + 2) % 3], c = m.edge(b, a);
+      s.verts[3 * size_t(t) + k] = m.tris[t][k];
+      const uint32_t a = m.tris[t][(k + 1) % 3], c = m.twin[3 * t + (k + 1) % 3];  // edge(b, a) for b -> a
       if (c != kNone) {
-        s.nbrs[3 * t + k] = NBR(c / 3, (c % 3 + 2) % 3);
+        s.nbrs[3 * size_t(t) + k] = NBR(c / 3, (c % 3 + 2) % 3);
         continue;
       }
-      const uint32_t inf = f + pos[a];  // (b, a, INF): its edge 2 is b -> a
-      s.nbrs[3 * t + k] = NBR(inf, 2u);
+      const uint32_t inf = f + pos[a];  // (b, a, INF): its edge 2 is b -> a; one finite edge each
+      s.nbrs[3 * size_t(t) + k] = NBR(inf, 2u);
       s.nbrs[3 * size_t(inf) + 2] = NBR(t, k);
     }
+  });
   for (uint32_t i = 0; i < h; ++i) {
     const uint32_t inf = f + i;
     s.verts[3 * size_t(inf)] = cycle[(i + 1) % h];
@@ -205,13 +426,17 @@ StartSlots slots_of(const Mesh& m, const std::vector<uint32_t>& cycle, size_t po
     s.nbrs[3 * size_t(inf)] = NBR(f + (i + h - 1) % h, 1u);  // a -> INF meets INF -> a of the edge before
     s.nbrs[3 * size_t(inf) + 1] = NBR(f + (i + 1) % h, 0u);
   }
+  s.slot_of.resize(points);
+  each(points, [&](size_t v) {  // the last finite slot at v, as a serial pass in slot order would leave
+    s.slot_of[v] = m.first[v + 1] > m.first[v] ? m.corners[m.first[v + 1] - 1] / 3 : kNone;
+  });
   return s;
 }
 
 }  // namespace
 
-std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<Triangle> tris,
-                                        std::vector<uint32_t>& offenders) {
+std::optional<StartSlots> dual_to_slots(std::span<const double> xy, RawVector<Triangle> tris,
+                                        std::vector<uint32_t>& offenders, bool oriented) {
   const size_t points = xy.size() / 2;
   offenders.clear();
   Checker ck{Geometry{xy}, points, offenders};
@@ -220,26 +445,30 @@ std::optional<StartSlots> dual_to_slots(std::span<const double> xy, std::vector<
     offenders.erase(std::unique(offenders.begin(), offenders.end()), offenders.end());
     return std::nullopt;
   };
-  normalise(tris);
-  for (const Triangle& t : tris)
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || ck.g.orient(t[0], t[1], t[2]) <= 0)
-      offenders.insert(offenders.end(), t.begin(), t.end());
+  tris = normalise(std::move(tris), points);
+  Blame blame;
+  each(tris.size(), [&](size_t i) {
+    const Triangle& t = tris[i];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || (!oriented && ck.g.orient(t[0], t[1], t[2]) <= 0))
+      for (uint32_t v : t) blame.add(v);
+  });
+  blame.into(offenders);
   if (!offenders.empty() || tris.empty()) return fail();
   Mesh m;
   m.tris = std::move(tris);
   m.index(points);
-  std::vector<uint32_t> cycle, next;
+  std::vector<uint32_t> cycle;
+  Array next;
   if (!ck.boundary(m, cycle, next)) return fail();
+  const size_t before = m.tris.size();
   if (ck.fill(m, cycle)) {  // fill triangles are counter-clockwise by construction (a reflex turn reversed)
-    normalise(m.tris);
-    m.index(points);
-    if (!ck.boundary(m, cycle, next)) return fail();
+    m.reindex(before, points);
+    if (!ck.reboundary(m, cycle, next)) return fail();
   }
   ck.fans(m, next);
   ck.convex(cycle);
   if (!offenders.empty()) return fail();
-  uint64_t vertices = 0;
-  for (uint32_t v = 0; v < points; ++v) vertices += m.degree(v) > 0;
+  const uint64_t vertices = count_if(points, [&](size_t v) { return m.degree(uint32_t(v)) > 0; });
   const uint64_t f = m.tris.size(), edges = (3 * f + cycle.size()) / 2;
   if (vertices + f != edges + 1) return fail();  // Euler: a disc (no repair known)
   return slots_of(m, cycle, points);

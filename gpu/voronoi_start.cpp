@@ -2,10 +2,17 @@
 // floods again until the dual is valid or the repairs run out. What and why: docs/gpu-delaunay.md.
 #include "gpu/voronoi_start.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <functional>
 
 #include "gpu/profiler.hpp"
 #include "shaders/layout_dt.h"
@@ -21,6 +28,7 @@ namespace {
 constexpr uint64_t kMaxCells = uint64_t(1) << 24;
 constexpr uint32_t kMaxSide = 1u << 15;
 constexpr uint32_t kNone = UINT32_MAX;
+constexpr uint32_t kGrain = 1 << 14;
 
 uint64_t groups(uint64_t n) { return (n + VD_WG - 1) / VD_WG; }
 
@@ -39,13 +47,19 @@ void add_ms(std::vector<std::pair<std::string, double>>& stages, const std::stri
 // Square cells over the bounding box, about cells_per_point per point: with 4, a uniform input loses ~12% of
 // its points to shared cells (1 - (1 - e^-1/4) * 4), and the grid costs 8 bytes per cell while it floods.
 VdGridPush grid_for(std::span<const double> xy, uint32_t n, double cells_per_point) {
-  double x0 = xy[0], x1 = xy[0], y0 = xy[1], y1 = xy[1];
-  for (uint32_t i = 0; i < n; ++i) {
-    x0 = std::min(x0, xy[2 * i]);
-    x1 = std::max(x1, xy[2 * i]);
-    y0 = std::min(y0, xy[2 * i + 1]);
-    y1 = std::max(y1, xy[2 * i + 1]);
-  }
+  using Box = std::array<double, 4>;  // x0, y0, x1, y1
+  const Box box = tbb::parallel_reduce(
+      tbb::blocked_range<uint32_t>(0, n, kGrain), Box{xy[0], xy[1], xy[0], xy[1]},
+      [&](const tbb::blocked_range<uint32_t>& r, Box b) {
+        for (uint32_t i = r.begin(); i < r.end(); ++i)
+          b = {std::min(b[0], xy[2 * i]), std::min(b[1], xy[2 * i + 1]), std::max(b[2], xy[2 * i]),
+               std::max(b[3], xy[2 * i + 1])};
+        return b;
+      },
+      [](const Box& a, const Box& b) {
+        return Box{std::min(a[0], b[0]), std::min(a[1], b[1]), std::max(a[2], b[2]), std::max(a[3], b[3])};
+      });
+  const double x0 = box[0], y0 = box[1], x1 = box[2], y1 = box[3];
   const double w = x1 - x0, h = y1 - y0;
   const double cells = std::min(double(kMaxCells), std::max(16.0, cells_per_point * n));
   double cell = std::sqrt(w * h / cells);
@@ -69,9 +83,10 @@ VdGridPush grid_for(std::span<const double> xy, uint32_t n, double cells_per_poi
 
 VoronoiStarter::VoronoiStarter(const Context& ctx)
     : ctx_(ctx),
-      seed_(create_pass(ctx, {"vd_seed", 4, sizeof(VdGridPush)})),
-      flood_(create_pass(ctx, {"vd_flood", 3, sizeof(VdGridPush)})),
-      dual_(create_pass(ctx, {"vd_dual", 3, sizeof(VdGridPush)})) {}
+      seed_(create_pass(ctx, {"vd_seed", 6, sizeof(VdGridPush)})),
+      clear_(create_pass(ctx, {"vd_clear", 3, sizeof(VdGridPush)})),
+      flood_(create_pass(ctx, {"vd_flood", 4, sizeof(VdGridPush)})),
+      dual_(create_pass(ctx, {"vd_dual", 6, sizeof(VdGridPush)})) {}
 
 // Discretise, flood, dual on the GPU; check on the host; on failure demote the blamed sites and go again.
 std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& points, uint32_t n, bool timed,
@@ -84,13 +99,19 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   stats.grid_height = grid.height;
   const uint64_t cells = uint64_t(grid.width) * grid.height;
   // Distinct dual triangles number at most 2 per site; duplicates from neighbouring grid corners come on top.
-  const uint32_t capacity = 3 * n + 64;
-  stats.device_bytes = uint64_t(n) * 8 + cells * 8 + uint64_t(capacity) * 12 + 8;
+  // Within the device's binding limit (lavapipe: 128 MiB, 11M triangles; above ~5M points on it the dual may
+  // overflow, which gives up like any overflow).
+  const uint32_t capacity =
+      uint32_t(std::min<uint64_t>(3 * uint64_t(n) + 64, ctx_.props.limits.maxStorageBufferRange / 12));
+  stats.device_bytes = uint64_t(n) * 24 + cells * 8 + uint64_t(capacity) * 12 + VD_COUNT_WORDS * 4;
   Buffer demoted = create_buffer(ctx_, uint64_t(n) * 4, "vd demoted");
   Buffer cell_of = create_buffer(ctx_, uint64_t(n) * 4, "vd cell of point");
+  Buffer sites = create_buffer(ctx_, uint64_t(n) * 8, "vd site positions");
+  Buffer blamed = create_buffer(ctx_, uint64_t(n) * 4, "vd blamed");
+  Buffer blame_list = create_buffer(ctx_, uint64_t(n) * 4, "vd blame list");
   Buffer grids[2] = {create_buffer(ctx_, cells * 4, "vd grid a"), create_buffer(ctx_, cells * 4, "vd grid b")};
   Buffer tris = create_buffer(ctx_, uint64_t(capacity) * 12, "vd dual triangles");
-  Buffer count = create_buffer(ctx_, 8, "vd dual count");
+  Buffer count = create_buffer(ctx_, VD_COUNT_WORDS * 4, "vd counts");
   std::vector<uint32_t> demoted_host(n, 0);
   std::optional<Profiler> prof;
   if (timed) prof.emplace(ctx_, 64);
@@ -102,71 +123,117 @@ std::optional<VoronoiStart> VoronoiStarter::run(Recorder& rec, const Buffer& poi
   };
   std::optional<VoronoiStart> result;
   host_ms += ms_since(t0);
-  for (uint32_t attempt = 0; attempt <= max_repairs && !result; ++attempt) {
-    t0 = std::chrono::steady_clock::now();
-    if (attempt > 0) upload(ctx_, demoted, demoted_host.data(), uint64_t(n) * 4);
-    host_ms += ms_since(t0);
+  const uint64_t tiles = uint64_t((grid.width + VD_TILE - 1) / VD_TILE) * ((grid.height + VD_TILE - 1) / VD_TILE);
+  uint32_t cur = 0;  // the grid copy the last flood ended in
+  // One flood and its dual, submitted; returns the counter words. A repair starts from the last flood's grid
+  // with the demoted sites' cells emptied and reseeded. Jumps `top` .. 1, then 1 again (JFA+1: fixes most of
+  // the plain flood's errors).
+  const uint32_t full = std::bit_floor(std::max({grid.width, grid.height, 2u}) - 1);
+  auto flood = [&](bool repair, uint32_t top) {
     begin("vd discretise");
-    if (attempt == 0) rec.fill(demoted, 0);
-    rec.fill(grids[0], VD_NONE);
-    grid.n = n;
-    rec.dispatch_groups(seed_, {points, demoted, grids[0], cell_of}, grid, groups(n));
+    rec.fill(count, 0);
+    rec.fill(blamed, 0);
+    VdGridPush seed = grid;
+    seed.n = n;
+    seed.step = repair ? 1 : 0;
+    if (repair) {
+      rec.dispatch_groups(clear_, {demoted, grids[cur], grids[1 - cur]}, grid, groups(cells));
+      cur = 1 - cur;
+    } else {
+      cur = 0;
+      rec.fill(grids[0], VD_NONE);
+    }
+    rec.dispatch_groups(seed_, {points, demoted, grids[cur], cell_of, sites, grids[1 - cur]}, seed, groups(n));
     end();
     begin("vd flood");
-    // Jumps W/2 .. 1 (powers of two), then 1 again (JFA+1: fixes most of the plain flood's errors).
     std::vector<uint32_t> steps;
-    for (uint32_t s = std::bit_floor(std::max({grid.width, grid.height, 2u}) - 1); s >= 1; s /= 2) steps.push_back(s);
+    for (uint32_t s = top; s >= 1; s /= 2) steps.push_back(s);
     steps.push_back(1);
-    uint32_t cur = 0;
-    for (uint32_t s : steps) {
-      grid.step = s;
-      rec.dispatch_groups(flood_, {points, grids[cur], grids[1 - cur]}, grid, groups(cells));
+    for (size_t i = 0; i < steps.size(); ++i) {
+      VdGridPush pass = grid;
+      pass.step = steps[i];
+      pass.n = i + 1 == steps.size();
+      rec.dispatch_groups(flood_, {sites, grids[cur], grids[1 - cur], count}, pass, tiles);
       cur = 1 - cur;
     }
     end();
     begin("vd dual");
-    rec.fill(count, 0);
     VdGridPush dual = grid;
     dual.n = capacity;
-    rec.dispatch_groups(dual_, {grids[cur], tris, count}, dual, groups(cells));
+    rec.dispatch_groups(dual_, {grids[cur], tris, count, points, blamed, blame_list}, dual, groups(cells));
     end();
     rec.submit();
     if (prof) {
       for (const StageTime& s : prof->results()) add_ms(stats.stage_ms, s.name, s.ms);
       prof->reset();
     }
-
+    std::array<uint32_t, VD_COUNT_WORDS> counts;
+    download(ctx_, count, counts.data(), sizeof(counts));
+    return counts;
+  };
+  for (uint32_t attempt = 0; attempt <= max_repairs && !result; ++attempt) {
     t0 = std::chrono::steady_clock::now();
-    uint32_t counts[2];
-    download(ctx_, count, counts, sizeof(counts));
+    if (attempt > 0) upload(ctx_, demoted, demoted_host.data(), uint64_t(n) * 4);
+    host_ms += ms_since(t0);
+    if (attempt == 0) rec.fill(demoted, 0);
+    // Short jumps first (a dense seed grid, or a repair's holes, need no long ones); cells they leave empty
+    // (sparse regions, wide holes) send the attempt to a full flood.
+    const uint32_t top = short_jump ? std::min(full, std::bit_floor(short_jump)) : full;
+    std::array<uint32_t, VD_COUNT_WORDS> counts = flood(attempt > 0 && short_jump > 0, top);
+    if (top < full && counts[VD_COUNT_EMPTY] != 0) {
+      ++stats.full_floods;
+      counts = flood(false, full);
+    }
+    t0 = std::chrono::steady_clock::now();
     if (counts[VD_COUNT_OVERFLOW] != 0) {  // never seen; a start is an optimisation, so give up rather than grow
       host_ms += ms_since(t0);
       break;
     }
-    std::vector<Triangle> dual_tris(counts[VD_COUNT_TRIS]);
-    if (!dual_tris.empty()) download(ctx_, tris, dual_tris.data(), dual_tris.size() * 12);
     std::vector<uint32_t> offenders;
-    std::optional<StartSlots> slots = dual_to_slots(xy, std::move(dual_tris), offenders);
-    const std::vector<uint32_t> owner = download_vector<uint32_t>(ctx_, grids[cur], cells);
-    std::vector<char> site(n, 0);
-    for (uint32_t s : owner)
-      if (s != VD_NONE) site[s] = 1;
-    stats.sites = uint32_t(std::count(site.begin(), site.end(), 1));
+    std::optional<StartSlots> slots;
+    if (counts[VD_COUNT_BLAMED] != 0) {  // dual_to_slots would fail its first check, blaming these
+      offenders.resize(counts[VD_COUNT_BLAMED]);
+      download(ctx_, blame_list, offenders.data(), offenders.size() * 4);
+      std::sort(offenders.begin(), offenders.end());
+    } else {
+      RawVector<Triangle> dual_tris(counts[VD_COUNT_TRIS]);  // not zeroed: the download writes it
+      if (!dual_tris.empty()) download(ctx_, tris, dual_tris.data(), dual_tris.size() * 12);
+      slots = dual_to_slots(xy, std::move(dual_tris), offenders, counts[VD_COUNT_UNDECIDED] == 0);
+    }
+    // The flooded grid: only for the start's loc codes and the last attempt's site count.
+    RawVector<uint32_t> owner;
+    if (slots || offenders.empty() || attempt == max_repairs) {
+      owner.resize(cells);
+      download(ctx_, grids[cur], owner.data(), cells * 4);
+      std::vector<uint8_t> site(n, 0);
+      tbb::parallel_for(tbb::blocked_range<uint64_t>(0, cells, kGrain), [&](const tbb::blocked_range<uint64_t>& r) {
+        for (uint64_t c = r.begin(); c < r.end(); ++c)
+          if (owner[c] != VD_NONE) std::atomic_ref<uint8_t>(site[owner[c]]).store(1, std::memory_order_relaxed);
+      });
+      stats.sites = tbb::parallel_reduce(
+          tbb::blocked_range<uint32_t>(0, n, kGrain), 0u,
+          [&](const tbb::blocked_range<uint32_t>& r, uint32_t sum) {
+            for (uint32_t i = r.begin(); i < r.end(); ++i) sum += site[i];
+            return sum;
+          },
+          std::plus<uint32_t>());
+    }
     if (slots) {
       VoronoiStart v;
       // A vertex's loc names a slot it is a corner of; a lost point's, a slot at the site owning its cell (its
       // first walk is then short), else the first.
-      std::vector<uint32_t> slot_of(n, kNone);
-      for (uint32_t t = 0; t < slots->finite; ++t)
-        for (uint32_t k = 0; k < 3; ++k) slot_of[slots->verts[3 * t + k]] = t;
-      const std::vector<uint32_t> cell = download_vector<uint32_t>(ctx_, cell_of, n);
+      const RawVector<uint32_t>& slot_of = slots->slot_of;
+      RawVector<uint32_t> cell(n);
+      download(ctx_, cell_of, cell.data(), uint64_t(n) * 4);
       v.loc.resize(n);
-      for (uint32_t i = 0; i < n; ++i) {
-        const uint32_t o = owner[cell[i]];
-        v.loc[i] = slot_of[i] != kNone                    ? DT_INSERTED | NBR(slot_of[i], DT_INSIDE)
-                   : o != VD_NONE && slot_of[o] != kNone ? NBR(slot_of[o], DT_INSIDE)
-                                                          : NBR(0u, DT_INSIDE);
-      }
+      tbb::parallel_for(tbb::blocked_range<uint32_t>(0, n, kGrain), [&](const tbb::blocked_range<uint32_t>& r) {
+        for (uint32_t i = r.begin(); i < r.end(); ++i) {
+          const uint32_t o = owner[cell[i]];
+          v.loc[i] = slot_of[i] != kNone                    ? DT_INSERTED | NBR(slot_of[i], DT_INSIDE)
+                     : o != VD_NONE && slot_of[o] != kNone ? NBR(slot_of[o], DT_INSIDE)
+                                                            : NBR(0u, DT_INSIDE);
+        }
+      });
       for (uint32_t k = 0; k < 3; ++k) {
         v.corners[2 * k] = xy[2 * size_t(slots->verts[k])];
         v.corners[2 * k + 1] = xy[2 * size_t(slots->verts[k]) + 1];

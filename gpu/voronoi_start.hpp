@@ -32,6 +32,7 @@ struct VoronoiStats {
   uint32_t lost = 0;     // points the rounds inserted (several in a cell, vanished regions, demoted sites)
   uint32_t repairs = 0;  // floods again after demoting sites
   uint32_t demoted = 0;
+  uint32_t full_floods = 0;  // short floods that left cells empty, flooded again in full
   uint64_t flips = 0;        // flips that made the start Delaunay
   uint32_t flip_passes = 0;  // and their dispatched passes
   uint64_t device_bytes = 0;  // the stage's own buffers (grids, dual, per-point flags), on top of the build's
@@ -44,7 +45,7 @@ struct VoronoiStats {
 // the point to start its first walk from).
 struct VoronoiStart {
   StartSlots slots;
-  std::vector<uint32_t> loc;
+  RawVector<uint32_t> loc;
   double corners[6] = {};  // a finite triangle of the start (the relocation's cone centre)
 };
 
@@ -58,12 +59,16 @@ class VoronoiStarter {
 
   // Floods again after demoting the sites the checks blamed, at most this often.
   uint32_t max_repairs = 4;
+  // Floods jump at most this far (then halve to 1, and 1 again); a repair's starts from the last grid with the
+  // demoted sites' cells emptied. A flood that leaves cells empty (regions wider than ~2 short_jump cells) is
+  // done again in full, from the seeds. 0: every flood from the seeds, with jumps from max(W, H) / 2.
+  uint32_t short_jump = 16;
   // Grid cells per point (fewer for the largest inputs: the grid stays within kMaxCells).
   double cells_per_point = 4;
 
  private:
   const Context& ctx_;
-  Pass seed_, flood_, dual_;
+  Pass seed_, clear_, flood_, dual_;
 };
 
 }  // namespace cdtgpu::gpu

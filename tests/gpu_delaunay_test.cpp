@@ -161,9 +161,10 @@ DelaunayStats expect_cgal(const std::string& name, const std::vector<double>& xy
     stages.append(" ").append(stage).append("=").append(std::to_string(ms).substr(0, 7));
   if (stats.voronoi.used) {
     const VoronoiStats& v = stats.voronoi;
-    std::printf("[ vd ] %-22s grid=%ux%u sites=%u kept=%u lost=%u repairs=%u demoted=%u fallback=%d flips=%llu\n",
+    std::printf("[ vd ] %-22s grid=%ux%u sites=%u kept=%u lost=%u repairs=%u demoted=%u full=%u fallback=%d "
+                "flips=%llu\n",
                 name.c_str(), v.grid_width, v.grid_height, v.sites, v.kept, v.lost, v.repairs, v.demoted,
-                int(v.fallback), (unsigned long long)v.flips);
+                v.full_floods, int(v.fallback), (unsigned long long)v.flips);
   }
   std::printf(
       "[ dt ] %-22s n=%zu triangles=%zu rounds=%u flip_passes=%u flips=%llu exact walks/checks=%llu/%llu "
@@ -583,9 +584,10 @@ TEST(GpuDelaunay, Bench) {
       stats.tail_passes, passes.c_str());
   if (stats.voronoi.used) {
     const VoronoiStats& v = stats.voronoi;
-    std::printf("[ dt bench ] voronoi start: grid %ux%u, sites %u, kept %u, lost %u, repairs %u (%u demoted), "
-                "fallback %d, start flips %llu in %u passes, %.1f extra bytes/point\n",
-                v.grid_width, v.grid_height, v.sites, v.kept, v.lost, v.repairs, v.demoted, int(v.fallback),
+    std::printf("[ dt bench ] voronoi start: grid %ux%u, sites %u, kept %u, lost %u, repairs %u (%u demoted, %u "
+                "flooded in full), fallback %d, start flips %llu in %u passes, %.1f extra bytes/point\n",
+                v.grid_width, v.grid_height, v.sites, v.kept, v.lost, v.repairs, v.demoted, v.full_floods,
+                int(v.fallback),
                 (unsigned long long)v.flips, v.flip_passes, double(v.device_bytes) / double(xy.size() / 2));
   }
   for (size_t r = 0; r < stats.round_log.size(); ++r)
