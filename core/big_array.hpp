@@ -67,29 +67,4 @@ class BigArray {
   size_t size_ = 0;
 };
 
-// RawVector: a std::vector whose resize leaves new elements default-initialised (integers: not written), for
-// growable working buffers that a parallel pass fills: the first touch of their pages then happens on all
-// cores, not in one serial zeroing.
-template <class T>
-struct DefaultInit : std::allocator<T> {
-  template <class U>
-  struct rebind {
-    using other = DefaultInit<U>;
-  };
-  DefaultInit() = default;
-  template <class U>
-  DefaultInit(const DefaultInit<U>&) noexcept {}
-  template <class U>
-  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
-    ::new (static_cast<void*>(p)) U;
-  }
-  template <class U, class... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
-
-template <class T>
-using RawVector = std::vector<T, DefaultInit<T>>;
-
 }  // namespace cdtgpu

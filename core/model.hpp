@@ -17,7 +17,7 @@ struct Point3 {
 };
 
 // Loose vertices as read: resize() leaves the new ones for the reader to write.
-using Points = std::vector<Point3, UninitAllocator<Point3>>;
+using Points = RawVector<Point3>;
 
 // A constraint polyline as read: a contour (open) or a ring such as a building footprint (closed; the
 // closing edge from the last point back to the first is implied, the first point is not repeated).

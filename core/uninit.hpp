@@ -1,8 +1,9 @@
-// UninitAllocator: std::vector storage whose resize() leaves new elements unwritten.
+// UninitAllocator and RawVector: std::vector storage whose resize() leaves new elements unwritten.
 #pragma once
 #include <memory>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 namespace cdtgpu {
 
@@ -24,6 +25,11 @@ struct UninitAllocator : std::allocator<T> {
     if constexpr (sizeof...(Args) > 0) ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
   }
 };
+
+// RawVector: growable buffers (points, working arrays of the parallel passes) that the caller fills after a
+// resize, on all cores: the first touch of their pages then happens there, not in one serial zeroing.
+template <class T>
+using RawVector = std::vector<T, UninitAllocator<T>>;
 
 template <class A>
 inline constexpr bool is_uninit_allocator = false;
