@@ -60,6 +60,7 @@ struct Job {
   std::vector<std::string> input_paths;  // the inputs without their :key=value options
   std::vector<std::string> outputs;      // every file the run writes (checked against the inputs)
   RunStats stats;
+  std::optional<uint64_t> estimated_points;  // from the files' sizes and headers, made once (stages.cpp)
 
   // read_job, prepare_job
   InputSet in;

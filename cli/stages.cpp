@@ -251,11 +251,20 @@ void check_job(Job& job) {
   check_outputs_spare_inputs(job.input_paths, job.outputs);
 }
 
+// About how many points the files hold (estimate_input_points), asked for by start_gpu_early and read_job and
+// made once: it opens every input.
+namespace {
+uint64_t estimated_points(Job& job) {
+  if (!job.estimated_points) job.estimated_points = estimate_input_points(job.input_paths);
+  return *job.estimated_points;
+}
+}  // namespace
+
 // The GPU starts on its own thread while the inputs are read: forced, or when auto may pick it (the files are
 // large enough to hold gpus.auto_min_points points).
 void start_gpu_early(Job& job, GpuStarts& gpus) {
   const TriangulateOptions& options = job.options;
-  const uint64_t estimate = options.backend != "cgal" ? estimate_input_points(job.input_paths) : 0;
+  const uint64_t estimate = estimated_points(job);
   spdlog::debug("about {} input points in the files", estimate);
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= gpus.auto_min_points))
     job.start = &gpus.start(options.device, hardware_only(options), estimate);
@@ -269,7 +278,7 @@ void read_job(Job& job) {
                          return s.role == Role::boundary || s.role == Role::hole;
                        });
   const uint64_t bytes = regions ? kHostBytesPerPointRegions : kHostBytesPerPoint;
-  check_host_memory(estimate_input_points(job.input_paths), bytes, "estimated from the input files");
+  check_host_memory(estimated_points(job), bytes, "estimated from the input files");
   timed(job, "read", [&] { job.parts = read_inputs(specs, job.options.input.read, job.in); });
   check_host_memory(point_count(job.in), bytes, "read");
   job.crs = choose_crs(job.in, job.options.input.crs);
