@@ -13,8 +13,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-#include <tbb/parallel_scan.h>
 #include <tbb/parallel_sort.h>
 #include <spdlog/spdlog.h>
 
@@ -32,6 +30,7 @@
 #include "core/big_array.hpp"
 #include "core/compact.hpp"
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 
 namespace cdtgpu {
 
@@ -47,33 +46,10 @@ uint64_t key(uint32_t a, uint32_t b) { return uint64_t(a) << 32 | b; }
 
 bool xy_less(const Point3& a, const Point3& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; }
 
-template <class T>
-std::atomic_ref<T> shared(T& x) {
-  return std::atomic_ref<T>(x);
-}
-
 // Index of the vertex at (x, y) in vertices sorted by (x, y), or kNone.
 uint32_t find_vertex(const std::vector<Point3>& vs, const Point3& p) {
   auto it = std::lower_bound(vs.begin(), vs.end(), p, xy_less);
   return it != vs.end() && it->x == p.x && it->y == p.y ? uint32_t(it - vs.begin()) : kNone;
-}
-
-template <class F>
-void each(size_t n, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) f(i);
-  });
-}
-
-template <class F>
-uint64_t count_if(size_t n, F&& f) {
-  return tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, n, kGrain), uint64_t(0),
-      [&](const tbb::blocked_range<size_t>& r, uint64_t sum) {
-        for (size_t i = r.begin(); i < r.end(); ++i) sum += f(i) ? 1 : 0;
-        return sum;
-      },
-      std::plus<uint64_t>());
 }
 
 // Half-edge h = 3 t + k runs from triangle t's vertex k to vertex k + 1.
@@ -107,16 +83,7 @@ HalfEdges half_edges(const Mesh& mesh) {
     shared(e.corner[a]).store(uint32_t(h), std::memory_order_relaxed);  // any one will do
     if (a > to(h)) shared(first[a + 1]).fetch_add(1, std::memory_order_relaxed);
   });
-  tbb::parallel_scan(
-      tbb::blocked_range<size_t>(1, size_t(V) + 1, kGrain), uint32_t(0),
-      [&](const tbb::blocked_range<size_t>& r, uint32_t sum, bool final) {
-        for (size_t v = r.begin(); v < r.end(); ++v) {
-          sum += first[v];
-          if (final) first[v] = sum;
-        }
-        return sum;
-      },
-      std::plus<uint32_t>());
+  prefix_sums(first);
   BigArray<uint32_t> cursor(V);
   each(V, [&](size_t v) { cursor[v] = first[v]; });
   BigArray<Out> down(first[V]);

@@ -11,7 +11,6 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_scan.h>
 
 #include <algorithm>
 #include <atomic>
@@ -20,6 +19,7 @@
 #include <unordered_set>
 #include <utility>
 
+#include "core/parallel.hpp"
 #include "core/predicates.hpp"
 #include "shaders/layout.h"
 
@@ -30,32 +30,7 @@ using namespace layout;
 namespace {
 
 constexpr uint32_t kNone = UINT32_MAX;
-constexpr size_t kGrain = 1 << 13;
 
-template <class T>
-std::atomic_ref<T> shared(T& x) {
-  return std::atomic_ref<T>(x);
-}
-
-template <class F>
-void each(size_t n, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, kGrain), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) f(i);
-  });
-}
-
-template <class F>
-uint64_t count_if(size_t n, F&& f) {
-  return tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, n, kGrain), uint64_t(0),
-      [&](const tbb::blocked_range<size_t>& r, uint64_t sum) {
-        for (size_t i = r.begin(); i < r.end(); ++i) sum += f(i) ? 1 : 0;
-        return sum;
-      },
-      std::plus<uint64_t>());
-}
-
-// first[0] = 0 and first[i + 1] a count for i: afterwards first[i] is the sum of the counts before i.
 using Array = RawVector<uint32_t>;
 
 // Every element of `a` set to `value`, on all cores.
@@ -64,26 +39,13 @@ void set_all(Array& a, size_t size, uint32_t value) {
   each(size, [&](size_t i) { a[i] = value; });
 }
 
-void scan(Array& first) {
-  tbb::parallel_scan(
-      tbb::blocked_range<size_t>(1, first.size(), kGrain), uint32_t(0),
-      [&](const tbb::blocked_range<size_t>& r, uint32_t sum, bool final) {
-        for (size_t i = r.begin(); i < r.end(); ++i) {
-          sum += first[i];
-          if (final) first[i] = sum;
-        }
-        return sum;
-      },
-      std::plus<uint32_t>());
-}
-
 // Items 0 .. m - 1 grouped by key(i) < buckets: group b is items[first[b] .. first[b + 1]), ascending (the
 // order a serial counting sort gives).
 template <class Key>
 void group(size_t m, size_t buckets, Key&& key, Array& first, Array& items) {
   set_all(first, buckets + 1, 0);
   each(m, [&](size_t i) { shared(first[key(i) + 1]).fetch_add(1, std::memory_order_relaxed); });
-  scan(first);
+  prefix_sums(first);
   Array cursor(buckets);
   each(buckets, [&](size_t b) { cursor[b] = first[b]; });
   items.resize(m);
@@ -140,7 +102,7 @@ RawVector<Triangle> normalise(RawVector<Triangle> tris, size_t points) {
     e = std::unique(b, e, [&](uint32_t i, uint32_t j) { return tris[i] == tris[j]; });
     kept[v + 1] = uint32_t(e - b);
   });
-  scan(kept);
+  prefix_sums(kept);
   RawVector<Triangle> out(kept[points]);
   each(points, [&](size_t v) {
     for (uint32_t k = 0; k < kept[v + 1] - kept[v]; ++k) out[kept[v] + k] = tris[items[first[v] + k]];
@@ -230,7 +192,7 @@ struct Checker {
     });
     // The smallest used vertex in (x, y) order, the smaller index among equal points (as a serial scan).
     const uint32_t lowest = tbb::parallel_reduce(
-        tbb::blocked_range<size_t>(0, points, kGrain), kNone,
+        tbb::blocked_range<size_t>(0, points, kParallelGrain), kNone,
         [&](const tbb::blocked_range<size_t>& r, uint32_t best) {
           for (size_t v = r.begin(); v < r.end(); ++v)
             if (m.degree(uint32_t(v)) && (best == kNone || g.less(uint32_t(v), best))) best = uint32_t(v);

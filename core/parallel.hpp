@@ -1,0 +1,63 @@
+// Small loops over an index range on all cores, for the passes of core/regions and gpu/voronoi_check.
+//
+//   each(n, [&](size_t i) { ... });                       // f(i) for every i < n
+//   uint64_t k = count_if(n, [&](size_t i) { return keep[i]; });
+//   prefix_sums(first);                                   // counts in first[1..] -> offsets
+//   shared(x).fetch_add(1, std::memory_order_relaxed);    // an element written by several threads
+#pragma once
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_scan.h>
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <type_traits>
+
+namespace cdtgpu {
+
+inline constexpr size_t kParallelGrain = 1 << 14;
+
+template <class T>
+std::atomic_ref<T> shared(T& x) {
+  return std::atomic_ref<T>(x);
+}
+
+template <class F>
+void each(size_t n, F&& f, size_t grain = kParallelGrain) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) f(i);
+  });
+}
+
+template <class F>
+uint64_t count_if(size_t n, F&& f, size_t grain = kParallelGrain) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, grain), uint64_t(0),
+      [&](const tbb::blocked_range<size_t>& r, uint64_t sum) {
+        for (size_t i = r.begin(); i < r.end(); ++i) sum += f(i) ? 1 : 0;
+        return sum;
+      },
+      std::plus<uint64_t>());
+}
+
+// first[0] = 0 and first[i + 1] a count for item i: afterwards first[i] is the sum of the counts before i (so
+// item i's range is [first[i], first[i + 1])).
+template <class Array>
+void prefix_sums(Array& first, size_t grain = kParallelGrain) {
+  using T = std::remove_reference_t<decltype(first[0])>;
+  tbb::parallel_scan(
+      tbb::blocked_range<size_t>(1, first.size(), grain), T(0),
+      [&](const tbb::blocked_range<size_t>& r, T sum, bool final) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          sum += first[i];
+          if (final) first[i] = sum;
+        }
+        return sum;
+      },
+      std::plus<T>());
+}
+
+}  // namespace cdtgpu
