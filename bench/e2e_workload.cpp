@@ -74,6 +74,15 @@ class TextFile {
 
 uint64_t size_of(const std::string& path) { return fs::file_size(path); }
 
+// Files the readers read, all of them: inputs, files and bytes.
+E2eFiles inputs_of(std::vector<std::string> paths) {
+  E2eFiles files;
+  for (const std::string& p : paths) files.bytes += size_of(p);
+  files.inputs = std::move(paths);
+  files.files = files.inputs;
+  return files;
+}
+
 // shapelib writes a record with several small seeks, reads and writes (7 system calls per point: 12 s for 1M
 // points here); these hooks give it files in memory, read at open and written out at close.
 struct MemoryFile {
@@ -228,7 +237,6 @@ E2eWorkload e2e_workload(uint64_t n, uint64_t m, uint64_t seed) {
 }
 
 E2eFiles write_e2e_text(const E2eWorkload& w, const std::string& dir) {
-  E2eFiles files;
   const std::string xyz = path_in(dir, "points.xyz"), wkt = path_in(dir, "contours.wkt");
   TextFile p(xyz);
   for (const Point3& q : w.input.points) {
@@ -237,10 +245,7 @@ E2eFiles write_e2e_text(const E2eWorkload& w, const std::string& dir) {
   }
   p.close();
   write_contours(w, wkt);
-  files.inputs = {xyz, wkt};
-  files.files = files.inputs;
-  files.bytes = size_of(xyz) + size_of(wkt);
-  return files;
+  return inputs_of({xyz, wkt});
 }
 
 E2eFiles write_e2e_shapefiles(const E2eWorkload& w, const std::string& dir) {
@@ -286,11 +291,7 @@ E2eFiles write_e2e_las(const E2eWorkload& w, const std::string& dir) {
     if (!out.flush()) throw std::runtime_error("cannot write " + las);
   }
   write_contours(w, wkt);
-  E2eFiles files;
-  files.inputs = {las, wkt};
-  files.files = files.inputs;
-  files.bytes = size_of(las) + size_of(wkt);
-  return files;
+  return inputs_of({las, wkt});
 }
 
 Raster e2e_dem(uint64_t n) {
@@ -317,11 +318,7 @@ E2eFiles write_e2e_grid(const E2eWorkload& w, const Raster& dem, bool geotiff, c
   else
     write_ascii_grid_file(dem, Crs{}, grid);
   write_contours(w, wkt);
-  E2eFiles files;
-  files.inputs = {grid, wkt};
-  files.files = files.inputs;
-  files.bytes = size_of(grid) + size_of(wkt);
-  return files;
+  return inputs_of({grid, wkt});
 }
 
 }  // namespace cdtgpu
