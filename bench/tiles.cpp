@@ -71,13 +71,14 @@ Row time_row(const std::string& mode, const std::string& backend, int runs, F&& 
 }
 
 void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangulator& tri, Row& out,
-                unsigned in_flight = 0) {
+                unsigned in_flight = 0, const TileFinalizer& finalize = {}) {
   const auto t = Clock::now();
   ResolvedInput in = resolve_constraints(p);
   out.resolve_ms.push_back(ms_since(t));
   TileOptions opt;
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
+  opt.finalize = finalize;
   out.tile_points = tile_points;
   out.mesh = triangulate_tiled(std::move(in), opt, tri, &out.tiles).mesh;
 }
@@ -203,11 +204,11 @@ int run_tiles(const BenchOptions& o) {
       const uint64_t gpu_tile = o.tile_points ? o.tile_points
                                               : std::min(devices.max_tile_points(), p.vertices.size() / (4 * users.size()) + 1);
       gpu::GpuCdtStats sum;
-      const TileTriangulator tri = gpu::gpu_tile_triangulator(users, &sum);
+      const gpu::GpuTiles tri = gpu::gpu_tiles(users, &sum);
       const std::string backend = users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size());
       results.push_back(time_row("tiled", backend, o.runs, [&](Row& r) {
         sum = gpu::GpuCdtStats{};
-        tiled_once(p, gpu_tile, tri, r, unsigned(2 * users.size()));
+        tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(2 * users.size()), tri.finalize);
       }));
       std::string parts;
       for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
@@ -245,10 +246,11 @@ int run_tiles(const BenchOptions& o) {
                                : "NO");
       if (tiled)
         std::printf(
-            "%9s last run: plan %s ms, tile CDTs %s ms and the tiles' other work %s ms (thread sums), merge "
-            "input %s ms, keeping the merge's triangles %s ms, canonical order %s ms\n",
+            "%9s last run: plan %s ms, tile CDTs %s ms and the tiles' other work %s ms (thread sums; gather %s, "
+            "final test and border %s), merge input %s ms, keeping the merge's triangles %s ms, canonical order %s ms\n",
             "", fmt(r.tiles.plan_ms).c_str(), fmt(r.tiles.tile_cdt_thread_ms).c_str(),
-            fmt(r.tiles.tile_other_thread_ms).c_str(), fmt(r.tiles.merge_input_ms).c_str(),
+            fmt(r.tiles.tile_other_thread_ms).c_str(), fmt(r.tiles.tile_gather_thread_ms).c_str(),
+            fmt(r.tiles.tile_final_thread_ms).c_str(), fmt(r.tiles.merge_input_ms).c_str(),
             fmt(r.tiles.keep_ms).c_str(), fmt(r.tiles.order_ms).c_str());
       std::fflush(stdout);
       rows.push_back({{"points", n},
@@ -274,6 +276,8 @@ int run_tiles(const BenchOptions& o) {
                        {{"plan", r.tiles.plan_ms},
                         {"tile_cdt_thread_sum", r.tiles.tile_cdt_thread_ms},
                         {"tile_other_thread_sum", r.tiles.tile_other_thread_ms},
+                        {"tile_gather_thread_sum", r.tiles.tile_gather_thread_ms},
+                        {"tile_final_thread_sum", r.tiles.tile_final_thread_ms},
                         {"merge_input", r.tiles.merge_input_ms},
                         {"keep", r.tiles.keep_ms},
                         {"canonical_order", r.tiles.order_ms}}}});

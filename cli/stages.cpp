@@ -70,9 +70,12 @@ std::string gpu_refused(const gpu::DeviceError& e) {
 
 // The tiled CDT (core/tiles) of a resolved input, its figures in the stats.
 // in_flight: tiles worked on at once (0: as many as the cores take; a device's: 2, core/tiles.hpp).
+// finalize: the tiles' own (the GPU's, core/tiles.hpp); empty: the host's test.
 CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
-                               const TileTriangulator& triangulate, unsigned in_flight = 0) {
+                               const TileTriangulator& triangulate, unsigned in_flight = 0,
+                               TileFinalizer finalize = {}) {
   TileOptions opt;
+  opt.finalize = std::move(finalize);
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
   opt.sharing = job.options.sharing;
@@ -175,8 +178,9 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     try {
       const gpu::TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
       const uint64_t tile_here = options.max_tile_points >= 0 ? tile : std::min(tile, devices.max_tile_points());
-      return triangulate_in_tiles(job, std::move(in), tile_here, gpu::gpu_tile_triangulator(devices.cdts()),
-                                  unsigned(2 * devices.cdts().size()));
+      gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
+      return triangulate_in_tiles(job, std::move(in), tile_here, tiles.triangulate,
+                                  unsigned(2 * devices.cdts().size()), std::move(tiles.finalize));
     } catch (const gpu::DeviceError& e) {
       return on_cpu_instead(e);
     }

@@ -44,9 +44,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // A tile's closed rectangle; ±inf on the outside of the data. Its vertices may lie on its border (shared with
 // a neighbour, each vertex in one of them); every vertex strictly inside it is one of its own.
-struct Rect {
-  double x0 = -kInf, x1 = kInf, y0 = -kInf, y1 = kInf;
-};
+using Rect = TileRect;
 
 struct Node {
   Rect rect;
@@ -389,12 +387,73 @@ struct TileResult {
   std::vector<Triangle> final_triangles;
   std::vector<Edge> border;
   double cdt_ms = 0, other_ms = 0;
+  // Parts of other_ms: the tile's input, the host's final test and border, the results in the whole's ids.
+  double gather_ms = 0, final_ms = 0, output_ms = 0;
 };
+
+// A tile's final triangles and border, timed into r: its CDT from the finalizer.
+TileFinal finalize_tile(const TileFinalizer& finalize, const TileJob& job, TileResult& r) {
+  const auto t = Clock::now();
+  TileFinal f = finalize(job);
+  r.cdt_ms = ms_since(t);
+  return f;
+}
+
+// The same from the triangulator's whole CDT of the tile, tested here.
+TileFinal final_on_host(const std::vector<Point3>& v, std::span<const uint32_t> ids,
+                        const std::vector<Edge>& segments, const Rect& rect, const TileTriangulator& triangulate,
+                        const std::string& name, TileResult& r) {
+  auto t = Clock::now();
+  std::vector<Point3> local;
+  resize_touched(local, ids.size());
+  tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) { local[i] = v[ids[i]]; });
+  r.gather_ms += ms_since(t);
+  t = Clock::now();
+  TileMesh mesh = triangulate(local, segments, name);
+  r.cdt_ms = ms_since(t);
+  t = Clock::now();
+  const std::vector<Triangle>& triangles = mesh.triangles;
+  const size_t nt = triangles.size();
+  // Bit 3: final; bit k < 3: its edge k is on the final region's border.
+  std::vector<uint8_t> final_mask(nt, 0);
+  tbb::parallel_for(size_t(0), nt, [&](size_t i) {
+    const Triangle& tr = triangles[i];
+    final_mask[i] = disk_inside(local[tr[0]], local[tr[1]], local[tr[2]], rect) ? 8 : 0;
+  });
+  if (!mesh.neighbours.empty()) {
+    tbb::parallel_for(size_t(0), nt, [&](size_t i) {
+      if (!final_mask[i]) return;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t nb = mesh.neighbours[3 * i + k];
+        if (nb == UINT32_MAX || !final_mask[nb]) final_mask[i] |= uint8_t(1 << k);
+      }
+    });
+  } else {
+    mark_border(triangles, local, final_mask);
+  }
+  r.final_ms = ms_since(t);
+  TileFinal f;
+  f.triangles = compact<Triangle>(
+      nt, [&](size_t i) { return final_mask[i] ? 1 : 0; },
+      [&](size_t i, Triangle* at) {
+        if (final_mask[i]) *at++ = triangles[i];
+        return at;
+      });
+  f.border = compact<Edge>(
+      nt, [&](size_t i) { return std::popcount(unsigned(final_mask[i] & 7)); },
+      [&](size_t i, Edge* at) {
+        for (int k = 0; k < 3; ++k)
+          if (final_mask[i] & (1 << k)) *at++ = {triangles[i][k], triangles[i][(k + 1) % 3]};
+        return at;
+      });
+  canonicalize_triangles(f.triangles);  // a GPU tile's come sorted already
+  return f;
+}
 
 TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segments, const Plan& plan,
                     const Node& node, std::span<const uint32_t> tile_segments,
-                    const TileTriangulator& triangulate, const std::string& name,
-                    std::vector<uint8_t>& in_final) {
+                    const TileTriangulator& triangulate, const TileFinalizer& finalize,
+                    const std::string& name, std::vector<uint8_t>& in_final) {
   const auto t0 = Clock::now();
   // The tile's vertex ids, sorted: its own lie in its column's id range (a column is a range of the (x, y)
   // order), marked in a byte map and read back in order; the segments' endpoints outside that range (few) are
@@ -431,16 +490,19 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
         return at;
       });
   const size_t below = size_t(std::lower_bound(outside.begin(), outside.end(), c0) - outside.begin());
-  std::vector<uint32_t> ids(outside.begin(), outside.begin() + below);
-  ids.insert(ids.end(), own.begin(), own.end());
-  ids.insert(ids.end(), outside.begin() + below, outside.end());
+  // Outside ids below the column, the column's, those above: copied on all cores into unwritten memory.
+  RawVector<uint32_t> ids;
+  ids.resize(outside.size() + own.size());
+  advise_huge_pages(ids.data(), ids.size() * sizeof(uint32_t));
+  std::copy(outside.begin(), outside.begin() + below, ids.begin());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, own.size(), 1 << 20), [&](const tbb::blocked_range<size_t>& r) {
+    std::copy(own.begin() + r.begin(), own.begin() + r.end(), ids.begin() + below + r.begin());
+  });
+  std::copy(outside.begin() + below, outside.end(), ids.begin() + below + own.size());
   const size_t nl = ids.size();
   std::unique_ptr<uint32_t[]> rank(
       new uint32_t[span]);  // set, and read, only at the tile's ids in the column
-  std::vector<Point3> local;
-  resize_touched(local, nl);
   tbb::parallel_for(size_t(0), nl, [&](size_t i) {
-    local[i] = v[ids[i]];
     if (inside(ids[i])) rank[ids[i] - c0] = uint32_t(i);
   });
   auto local_of = [&](uint32_t id) {
@@ -453,47 +515,26 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   tbb::parallel_sort(local_segments.begin(), local_segments.end());
 
   TileResult r;
-  const auto t1 = Clock::now();
-  TileMesh mesh = triangulate(local, local_segments, name);
-  r.cdt_ms = ms_since(t1);
-  const std::vector<Triangle>& triangles = mesh.triangles;
-  const size_t nt = triangles.size();
-  // Bit 3: final; bit k < 3: its edge k is on the final region's border.
-  std::vector<uint8_t> final_mask(nt, 0);
-  tbb::parallel_for(size_t(0), nt, [&](size_t i) {
-    const Triangle& t = triangles[i];
-    final_mask[i] = disk_inside(local[t[0]], local[t[1]], local[t[2]], node.rect) ? 8 : 0;
+  r.gather_ms = ms_since(t0);
+  TileFinal f = finalize ? finalize_tile(finalize, TileJob{v, ids, local_segments, node.rect, name}, r)
+                         : final_on_host(v, ids, local_segments, node.rect, triangulate, name, r);
+  const auto t3 = Clock::now();
+  // Back to the whole's ids, in place (a fresh 1.5 GB array for a 64M-point tile was zeroed on one core):
+  // sorted ids keep a canonical list canonical.
+  r.final_triangles = std::move(f.triangles);
+  tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
+    for (uint32_t& v : r.final_triangles[i]) v = ids[v];
   });
-  if (!mesh.neighbours.empty()) {
-    tbb::parallel_for(size_t(0), nt, [&](size_t i) {
-      if (!final_mask[i]) return;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t nb = mesh.neighbours[3 * i + k];
-        if (nb == UINT32_MAX || !final_mask[nb]) final_mask[i] |= uint8_t(1 << k);
-      }
-    });
-  } else {
-    mark_border(triangles, local, final_mask);
-  }
-  r.final_triangles = compact<Triangle>(
-      nt, [&](size_t i) { return final_mask[i] ? 1 : 0; },
-      [&](size_t i, Triangle* at) {
-        if (final_mask[i]) *at++ = {ids[triangles[i][0]], ids[triangles[i][1]], ids[triangles[i][2]]};
-        return at;
-      });
-  r.border = compact<Edge>(
-      nt, [&](size_t i) { return std::popcount(unsigned(final_mask[i] & 7)); },
-      [&](size_t i, Edge* at) {
-        for (int k = 0; k < 3; ++k)
-          if (final_mask[i] & (1 << k)) *at++ = {ids[triangles[i][k]], ids[triangles[i][(k + 1) % 3]]};
-        return at;
-      });
-  canonicalize_triangles(r.final_triangles);  // a GPU tile's come sorted: sorted ids keep their order
+  r.border = std::move(f.border);
+  tbb::parallel_for(size_t(0), r.border.size(), [&](size_t i) {
+    for (uint32_t& v : r.border[i]) v = ids[v];
+  });
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
   tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
     for (uint32_t id : r.final_triangles[i])
       std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
   });
+  r.output_ms = ms_since(t3);
   r.other_ms = ms_since(t0) - r.cdt_ms;
   return r;
 }
@@ -648,7 +689,8 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
     // Isolated: a thread waiting in this tile's own parallel loops takes no other tile (whose GPU call would
     // make it wait for the device as well).
     tbb::this_task_arena::isolate([&] {
-      results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, name, in_final);
+      results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, options.finalize, name,
+                            in_final);
     });
   };
   // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's).
@@ -720,6 +762,8 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   for (size_t t = 0; t < tiles; ++t) {
     s.tile_cdt_thread_ms += results[t].cdt_ms;
     s.tile_other_thread_ms += results[t].other_ms;
+    s.tile_gather_thread_ms += results[t].gather_ms;
+    s.tile_final_thread_ms += results[t].final_ms;
     final_count += results[t].final_triangles.size();
     runs[t] = std::move(results[t].final_triangles);
     border.insert(border.end(), results[t].border.begin(), results[t].border.end());

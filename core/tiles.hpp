@@ -19,6 +19,8 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <limits>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -45,6 +47,33 @@ using TileTriangulator = std::function<TileMesh(const std::vector<Point3>& verti
 // CGAL's constrained Delaunay triangulation (core/cdt_cgal.hpp, cdt_of_graph).
 TileTriangulator cgal_tile_triangulator();
 
+// A tile's closed rectangle; ±inf on the outside of the plan.
+struct TileRect {
+  double x0 = -std::numeric_limits<double>::infinity(), x1 = std::numeric_limits<double>::infinity();
+  double y0 = -std::numeric_limits<double>::infinity(), y1 = std::numeric_limits<double>::infinity();
+};
+
+// A tile as a TileFinalizer takes it: its vertices are all[ids[i]] (ids sorted), its segments in those local
+// indices (sorted).
+struct TileJob {
+  const std::vector<Point3>& all;
+  std::span<const uint32_t> ids;
+  const std::vector<Edge>& segments;
+  TileRect rect;
+  std::string_view what;
+};
+// What a tile gives the merge, in local indices: its final triangles (closed circumdisk certainly inside the
+// open rectangle; canonical order) and the final region's border within it (final triangles' edges not shared
+// with another final triangle, directed with the final triangle on their left; any order).
+struct TileFinal {
+  std::vector<Triangle> triangles;
+  std::vector<Edge> border;
+};
+// A triangulator that finds a tile's final triangles and border itself (the GPU's, next to its neighbours),
+// instead of handing back the whole tile for the host to test. It may take fewer triangles as final than
+// circumdisk_inside (a stricter test only makes the merge larger), never more.
+using TileFinalizer = std::function<TileFinal(const TileJob&)>;
+
 // The first level's tiles shared among processes (issue 29: MPI ranks, cli/mpi.cpp): rank r triangulates the
 // tiles t with t % ranks == r and hands their results, packed, to `gather`, which returns every rank's packs
 // (ranks 0, 1, ...) at rank 0 and nothing elsewhere. Rank 0 merges them as if it had made them all; the other
@@ -63,6 +92,9 @@ struct TileOptions {
   // once (one on the device, the next gathered meanwhile) bound host memory by the tile size.
   unsigned tiles_in_flight = 0;
   const TileSharing* sharing = nullptr;  // null: every tile here
+  // Tiles (of every level) through this instead of the triangulator plus the host's final test; the merges
+  // still take the triangulator. Empty: the host's test.
+  TileFinalizer finalize;
 };
 
 struct TileStats {
@@ -77,6 +109,7 @@ struct TileStats {
   // calls and the rest of their work (summed over threads), building the merge input and keeping its
   // triangles (wall).
   double plan_ms = 0, tile_cdt_thread_ms = 0, tile_other_thread_ms = 0, merge_input_ms = 0, keep_ms = 0;
+  double tile_gather_thread_ms = 0, tile_final_thread_ms = 0;  // of tile_other: the input, the final test + border
   double order_ms = 0;  // the tiles' and the merge's sorted runs merged into canonical order (wall)
 };
 

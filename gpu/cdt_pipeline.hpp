@@ -23,12 +23,14 @@
 #include "core/cdt_cgal.hpp"
 #include "core/prepare.hpp"
 #include "core/resolve.hpp"
+#include "core/tiles.hpp"
 #include "gpu/canonical.hpp"
 #include "gpu/constraints.hpp"
 #include "gpu/context.hpp"
 #include "gpu/dedupe.hpp"
 #include "gpu/delaunay.hpp"
 #include "gpu/primitives.hpp"
+#include "gpu/tile_final.hpp"
 
 namespace cdtgpu::gpu {
 
@@ -68,6 +70,9 @@ class GpuCdt {
   std::vector<Triangle> triangulate_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
                                           GpuCdtStats* stats = nullptr) const;
 
+  // A tile of core/tiles (a resolved graph too, its vertices job.all[job.ids[i]]): stages 2-3, then its final
+  // triangles and their border found on the device (gpu/tile_final) and only those downloaded, sorted.
+  TileFinal finalize_tile(const TileJob& job, GpuCdtStats* stats = nullptr) const;
   // Duplicate merging on the GPU for prepare(in, cdt.merger()); the same answer as the CPU's merge_points.
   PointMerger merger() const;
 
@@ -84,11 +89,12 @@ class GpuCdt {
   const Primitives& primitives() const { return prims_; }
 
  private:
-  // Upload and Delaunay build of `vertices`, their stages added to `s`.
-  GpuTriangulation delaunay_of(const std::vector<Point3>& vertices, GpuCdtStats& s) const;
-  // Stages 3 and 4: the constraints inserted, the triangles downloaded in canonical order into `storage`.
-  std::vector<Triangle> constrain_and_download(GpuTriangulation& tri, const std::vector<Edge>& constraints,
-                                               GpuCdtStats& s, std::vector<Triangle> storage) const;
+  // Upload and Delaunay build of all[ids[i]] (of all, when ids is empty), their stages added to `s`.
+  GpuTriangulation delaunay_of(std::span<const Point3> all, std::span<const uint32_t> ids, GpuCdtStats& s) const;
+  // Stage 3: the constraints inserted.
+  void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s) const;
+  // Stage 4: the triangles downloaded in canonical order into `storage`.
+  std::vector<Triangle> download_sorted(GpuTriangulation& tri, GpuCdtStats& s, std::vector<Triangle> storage) const;
 
   const Context& ctx_;
   // One scratch cache for the stages, which run one after another: the Delaunay build's per-slot buffers are
@@ -99,6 +105,7 @@ class GpuCdt {
   ConstraintInserter inserter_;
   TriangleSorter sorter_;
   PointDeduper deduper_;
+  TileFinalPasses finals_;
 };
 
 }  // namespace cdtgpu::gpu

@@ -60,41 +60,74 @@ TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum) {
 }
 
 TileTriangulator gpu_tile_triangulator(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
-  auto pool = std::make_shared<DevicePool>(cdts.size());
-  auto sum_lock = std::make_shared<std::mutex>();
-  return [cdts = std::move(cdts), sum, pool, sum_lock](const std::vector<Point3>& vertices,
-                                                      const std::vector<Edge>& segments, std::string_view what) {
-    // A tile is a resolved graph already: no resolve stage, no copies.
+  return gpu_tiles(std::move(cdts), sum).triangulate;
+}
+
+namespace {
+
+// Runs work(cdt, stats) on a free device: its stats added to `sum`, a DeviceError given the call's name.
+class OnDevice {
+ public:
+  OnDevice(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) : cdts_(std::move(cdts)), sum_(sum), pool_(cdts_.size()) {}
+
+  template <class Work>
+  auto operator()(std::string_view what, size_t vertices, size_t segments, Work&& work) {
     // Isolated: a thread waiting inside the pipeline's own parallel loops must not pick up another tile,
     // which would wait for a device it holds.
     return tbb::this_task_arena::isolate([&] {
-      const size_t d = pool->take();
+      const size_t d = pool_.take();
       struct Give {
         DevicePool& pool;
         size_t d;
         ~Give() { pool.give(d); }
-      } give{*pool, d};
+      } give{pool_, d};
       try {
         GpuCdtStats one;
-        TileMesh mesh{cdts[d]->triangulate_graph(vertices, segments, &one), {}};
-        if (sum) {
-          std::lock_guard<std::mutex> lock(*sum_lock);
-          add(sum->wall_ms, one.wall_ms);
-          add(sum->gpu_ms, one.gpu_ms);
-          sum->gpu_total_ms += one.gpu_total_ms;
-          sum->wall_total_ms += one.wall_total_ms;
-          sum->peak_device_bytes = std::max(sum->peak_device_bytes, one.peak_device_bytes);
-        }
-        return mesh;
+        auto result = work(*cdts_[d], one);
+        if (sum_) add_up(one);
+        return result;
       } catch (const DeviceError& e) {
-        const std::string on = cdts.size() > 1 ? " on device " + std::to_string(cdts[d]->context().info.index) +
-                                                     " (" + cdts[d]->context().info.name + ")"
-                                               : "";
-        throw DeviceError(std::string(what) + " (" + std::to_string(vertices.size()) + " vertices, " +
-                          std::to_string(segments.size()) + " segments)" + on + ": " + e.what());
+        const std::string on = cdts_.size() > 1 ? " on device " + std::to_string(cdts_[d]->context().info.index) +
+                                                      " (" + cdts_[d]->context().info.name + ")"
+                                                : "";
+        throw DeviceError(std::string(what) + " (" + std::to_string(vertices) + " vertices, " +
+                          std::to_string(segments) + " segments)" + on + ": " + e.what());
       }
     });
+  }
+
+ private:
+  void add_up(const GpuCdtStats& one) {
+    std::lock_guard<std::mutex> lock(sum_lock_);
+    add(sum_->wall_ms, one.wall_ms);
+    add(sum_->gpu_ms, one.gpu_ms);
+    sum_->gpu_total_ms += one.gpu_total_ms;
+    sum_->wall_total_ms += one.wall_total_ms;
+    sum_->peak_device_bytes = std::max(sum_->peak_device_bytes, one.peak_device_bytes);
+  }
+
+  std::vector<const GpuCdt*> cdts_;
+  GpuCdtStats* sum_;
+  DevicePool pool_;
+  std::mutex sum_lock_;
+};
+
+}  // namespace
+
+GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
+  auto on = std::make_shared<OnDevice>(std::move(cdts), sum);
+  GpuTiles g;
+  // A tile is a resolved graph already: no resolve stage, no copies.
+  g.triangulate = [on](const std::vector<Point3>& vertices, const std::vector<Edge>& segments, std::string_view what) {
+    return (*on)(what, vertices.size(), segments.size(), [&](const GpuCdt& cdt, GpuCdtStats& one) {
+      return TileMesh{cdt.triangulate_graph(vertices, segments, &one), {}};
+    });
   };
+  g.finalize = [on](const TileJob& job) {
+    return (*on)(job.what, job.ids.size(), job.segments.size(),
+                 [&](const GpuCdt& cdt, GpuCdtStats& one) { return cdt.finalize_tile(job, &one); });
+  };
+  return g;
 }
 
 void TileDevices::borrow(const GpuCdt& cdt) { cdts_.push_back(&cdt); }

@@ -20,6 +20,14 @@ TileTriangulator gpu_tile_triangulator(const GpuCdt& cdt, GpuCdtStats* sum = nul
 // device, so the result does not depend on which device took which tile. A DeviceError names the device too.
 TileTriangulator gpu_tile_triangulator(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum = nullptr);
 
+// Both ways a tiled run uses the devices, sharing them: tiles through `finalize` (their final triangles and
+// border found on the device, TileOptions::finalize), merges through `triangulate`.
+struct GpuTiles {
+  TileTriangulator triangulate;
+  TileFinalizer finalize;
+};
+GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum = nullptr);
+
 // The devices a tiled run spreads over, each with a context and a GpuCdt: borrowed (a device started already)
 // or opened here, all at once (gpu/devices.hpp).
 //

@@ -110,6 +110,22 @@ struct SegmentRecord {
   double px, py, qx, qy;  // from point, to point
 };
 
+// A tile's final triangles (gpu/tile_final.cpp, core/tiles.hpp): tile_final flags the slots whose closed
+// circumdisk certainly lies in the open rectangle, tile_border lists the final region's border and unlists the
+// other slots for the canonical sort. Doubles first, so std430 and C++ agree.
+#define TILE_WG 256
+#define TILE_SIDE_X0 1u  // the sides that are finite (the plan's outer sides are at infinity)
+#define TILE_SIDE_X1 2u
+#define TILE_SIDE_Y0 4u
+#define TILE_SIDE_Y1 8u
+struct TileFinalPush {
+  double x0, x1, y0, y1;
+  uint num_slots;
+  uint sides;     // TILE_SIDE_* bits
+  uint capacity;  // border edges the buffer holds (tile_border)
+  uint pad;
+};
+
 #ifdef __cplusplus
 }  // namespace cdtgpu::gpu::layout
 #endif

@@ -3,16 +3,22 @@
 // tile; --devices lists are checked; a device that fails a tile is named.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <limits>
+#include <set>
 
+#include "core/canonical.hpp"
 #include "core/cdt_cgal.hpp"
 #include "core/prepare.hpp"
 #include "core/resolve.hpp"
 #include "core/tiles.hpp"
 #include "core/workloads.hpp"
 #include "gpu/check.hpp"
+#include "gpu/cdt_pipeline.hpp"
 #include "gpu/devices.hpp"
 #include "gpu/tile_triangulator.hpp"
+#include "tests/tile_layouts.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -27,18 +33,85 @@ TEST(GpuTiles, TwoDevicesGiveTheSingleRunsBytes) {
   const size_t d = test_device();
   const auto ctxs = gpu::create_contexts({d, d}, gpu::ContextOptions{});
   const gpu::GpuCdt a(*ctxs[0]), b(*ctxs[1]);
-  for (unsigned in_flight : {2u, 4u}) {
-    TileOptions opt;
-    opt.max_tile_points = 2500;
-    opt.tiles_in_flight = in_flight;
-    TileStats ts;
-    gpu::GpuCdtStats sum;
-    const CdtResult tiled =
-        triangulate_tiled(resolve_constraints(p), opt, gpu::gpu_tile_triangulator({&a, &b}, &sum), &ts);
-    EXPECT_GE(ts.tiles, 8u);
-    EXPECT_GT(sum.wall_total_ms, 0.0);
-    EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << in_flight << " in flight";
-    EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << in_flight << " in flight";
+  for (bool on_device : {false, true})
+    for (unsigned in_flight : {2u, 4u}) {
+      TileOptions opt;
+      opt.max_tile_points = 2500;
+      opt.tiles_in_flight = in_flight;
+      TileStats ts;
+      gpu::GpuCdtStats sum;
+      gpu::GpuTiles tiles = gpu::gpu_tiles({&a, &b}, &sum);
+      if (on_device) opt.finalize = tiles.finalize;
+      const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate, &ts);
+      const std::string what = std::to_string(in_flight) + " in flight, final test on the " + (on_device ? "device" : "host");
+      EXPECT_GE(ts.tiles, 8u);
+      EXPECT_GT(sum.wall_total_ms, 0.0);
+      EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << what;
+      EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << what;
+    }
+}
+
+// The device's final triangles of one tile against the host's test on the same CDT: never one the host does not
+// take (its test is checked against exact rationals in tiles_test), nearly all of them, and the border the
+// final set has. Grid points with the rectangle's sides on grid lines put many circles exactly on a side.
+void expect_final_within_host(const gpu::GpuCdt& cdt, const std::vector<Point3>& all, const std::vector<Edge>& segments,
+                              const TileRect& rect, const std::string& what) {
+  std::vector<uint32_t> ids(all.size());
+  for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
+  const TileFinal f = cdt.finalize_tile(TileJob{all, ids, segments, rect, what});
+  std::vector<Triangle> cdt_all = cdt_of_graph(all, segments);
+  canonicalize_triangles(cdt_all);
+  std::vector<Triangle> host;
+  for (const Triangle& t : cdt_all)
+    if (circumdisk_inside(all[t[0]], all[t[1]], all[t[2]], rect.x0, rect.x1, rect.y0, rect.y1)) host.push_back(t);
+  ASSERT_TRUE(std::is_sorted(f.triangles.begin(), f.triangles.end())) << what;
+  EXPECT_TRUE(std::includes(host.begin(), host.end(), f.triangles.begin(), f.triangles.end())) << what;
+  EXPECT_GE(f.triangles.size(), host.size() * 95 / 100) << what;
+  EXPECT_GT(f.triangles.size(), 0u) << what;
+  std::set<Edge> edges, border;
+  for (const Triangle& t : f.triangles)
+    for (int k = 0; k < 3; ++k) edges.insert({t[k], t[(k + 1) % 3]});
+  for (const Edge& e : edges)
+    if (!edges.count({e[1], e[0]})) border.insert(e);
+  EXPECT_EQ(std::vector<Edge>(border.begin(), border.end()), f.border) << what;
+}
+
+TEST(GpuTiles, DeviceFinalTestIsWithinTheHostsTest) {
+  const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
+  const gpu::GpuCdt cdt(ctx);
+  InputSet in = uniform_points(6000, 11);
+  add_dt_edge_constraints(in, 1500, 0.5, 11);
+  const ResolvedInput r = resolve_constraints(prepare(in));
+  double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+  for (const Point3& v : r.vertices) x0 = std::min(x0, v.x), x1 = std::max(x1, v.x), y0 = std::min(y0, v.y), y1 = std::max(y1, v.y);
+  const double w = x1 - x0, h = y1 - y0;
+  expect_final_within_host(cdt, r.vertices, r.constraints, TileRect{x0 + w / 4, x1 - w / 4, y0 + h / 5, y1 - h / 3}, "uniform, inner");
+  expect_final_within_host(cdt, r.vertices, r.constraints, TileRect{-std::numeric_limits<double>::infinity(), x0 + w / 2, y0 + h / 2, std::numeric_limits<double>::infinity()}, "uniform, a corner tile");
+  InputSet grid;
+  for (int i = 0; i < 60; ++i)
+    for (int j = 0; j < 60; ++j) grid.points.push_back({double(i), double(j), 0.0});
+  const ResolvedInput g = resolve_constraints(prepare(grid));
+  expect_final_within_host(cdt, g.vertices, g.constraints, TileRect{10, 40, 5, 50}, "grid, sides on grid lines");
+}
+
+// Every hard layout in tiles of 16, 50 and 500 points with the device's final test: the single run's mesh.
+TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
+  const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
+  const gpu::GpuCdt cdt(ctx);
+  const gpu::GpuTiles tiles = gpu::gpu_tiles({&cdt});
+  for (const auto& [name, in] : tile_layouts::all()) {
+    const PreparedInput p = prepare(in);
+    const CdtResult single = triangulate_cgal(p);
+    for (uint64_t tp : {16, 50, 500}) {
+      TileOptions opt;
+      opt.max_tile_points = tp;
+      opt.finalize = tiles.finalize;
+      TileStats ts;
+      const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate, &ts);
+      EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << name << ", tiles of " << tp;
+      EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << name << ", tiles of " << tp;
+      if (p.vertices.size() > tp) EXPECT_GE(ts.tiles, 2u) << name << ", tiles of " << tp;
+    }
   }
 }
 

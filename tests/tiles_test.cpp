@@ -17,18 +17,15 @@
 #include "core/workloads.hpp"
 #include "io/readers.hpp"
 #include "tests/peer_inputs.hpp"
+#include "tests/tile_layouts.hpp"
 
 namespace cdtgpu {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-Polyline line(std::vector<Point3> pts, bool closed = false) {
-  Polyline l;
-  l.points = std::move(pts);
-  l.closed = closed;
-  return l;
-}
+using tile_layouts::line;
+using tile_layouts::random_points;
 
 // CGAL's triangles without their neighbours, as the GPU gives them: the tiles find their border themselves.
 TileTriangulator without_neighbours() {
@@ -65,14 +62,6 @@ TileStats expect_same_as_single_run(const InputSet& in, std::vector<uint64_t> ti
   return smallest;
 }
 
-InputSet random_points(size_t n, uint64_t seed, double side = 1000) {
-  std::mt19937_64 rng(seed);
-  InputSet in;
-  for (size_t i = 0; i < n; ++i)
-    in.points.push_back({unit_double(rng) * side, unit_double(rng) * side, double(i)});
-  return in;
-}
-
 TEST(Tiles, UniformPointsWithoutConstraints) {
   const TileStats ts = expect_same_as_single_run(random_points(3000, 1));
   EXPECT_GT(ts.final_triangles, 0u);
@@ -84,87 +73,31 @@ TEST(Tiles, UniformWithDelaunayEdgeConstraints) {
   expect_same_as_single_run(in);
 }
 
-TEST(Tiles, CrossingConstraintsResolvedFirst) {
-  InputSet in = random_points(1500, 2);
-  std::mt19937_64 rng(5);
-  for (int i = 0; i < 60; ++i)
-    in.lines.push_back(line({{unit_double(rng) * 1000, unit_double(rng) * 1000, 1},
-                             {unit_double(rng) * 1000, unit_double(rng) * 1000, 2}}));
-  expect_same_as_single_run(in);
-}
+TEST(Tiles, CrossingConstraintsResolvedFirst) { expect_same_as_single_run(tile_layouts::crossing_constraints()); }
 
 TEST(Tiles, OneConstraintCrossesEveryTile) {
-  InputSet in = random_points(2000, 3);
-  in.lines.push_back(line({{-1, -1, 0}, {1001, 1001, 0}}));
-  in.lines.push_back(line({{-1, 1001, 0}, {1001, -1, 0}}));  // and crosses the first
-  in.lines.push_back(line({{-5, 500, 0}, {1005, 500.25, 0}}));
-  expect_same_as_single_run(in);
+  expect_same_as_single_run(tile_layouts::constraints_across_every_tile());
 }
 
 TEST(Tiles, LongConstraintsWhoseCirclesSpanManyTiles) {
-  InputSet in = random_points(2000, 4);
-  for (int i = 0; i < 10; ++i)  // nearly parallel long lines: thin triangles with huge circumcircles
-    in.lines.push_back(line({{0, 100.0 * i + 3, 0}, {1000, 100.0 * i + 3.5, 0}}));
-  expect_same_as_single_run(in);
+  expect_same_as_single_run(tile_layouts::long_nearly_parallel_constraints());
 }
 
-TEST(Tiles, DemGridCoCircularEverywhere) {
-  InputSet in;
-  for (int i = 0; i < 40; ++i)
-    for (int j = 0; j < 40; ++j) in.points.push_back({double(i), double(j), double((i * 7 + j * 3) % 11)});
-  expect_same_as_single_run(in, {16, 40, 100, 400});
-}
+TEST(Tiles, DemGridCoCircularEverywhere) { expect_same_as_single_run(tile_layouts::dem_grid(), {16, 40, 100, 400}); }
 
 TEST(Tiles, GridWithContoursAndBordersOnGridLines) {
-  TerrainOptions o;
-  o.grid = 48;
-  o.levels = 8;
-  expect_same_as_single_run(terrain_workload(o), {16, 64, 500});
+  expect_same_as_single_run(tile_layouts::terrain_with_contours(), {16, 64, 500});
 }
 
-TEST(Tiles, DuplicatesOnBothSidesOfABorder) {
-  InputSet in;
-  for (int i = 0; i < 30; ++i)
-    for (int j = 0; j < 30; ++j) {
-      in.points.push_back({double(i), double(j) * 0.5, 1});
-      in.points.push_back({double(i), double(j) * 0.5, 2});  // a duplicate, merged by prepare
-    }
-  in.lines.push_back(line({{0, 0, 0}, {29, 14.5, 0}}));
-  expect_same_as_single_run(in);
-}
+TEST(Tiles, DuplicatesOnBothSidesOfABorder) { expect_same_as_single_run(tile_layouts::duplicates_on_both_sides()); }
 
-TEST(Tiles, ClusteredPoints) {
-  std::mt19937_64 rng(9);
-  InputSet in;
-  for (int c = 0; c < 5; ++c) {
-    const double cx = unit_double(rng) * 1e5, cy = unit_double(rng) * 1e5;
-    for (int i = 0; i < 400; ++i) in.points.push_back({cx + unit_double(rng), cy + unit_double(rng), 0});
-  }
-  expect_same_as_single_run(in);
-}
+TEST(Tiles, ClusteredPoints) { expect_same_as_single_run(tile_layouts::clustered_points()); }
 
-TEST(Tiles, CollinearAndNearlyCollinearRows) {
-  InputSet in;
-  for (int i = 0; i < 300; ++i) in.points.push_back({double(i), 0, 0});  // one row: flat triangles beside it
-  for (int i = 0; i < 300; ++i) in.points.push_back({double(i) + 0.5, 1e-9 * (i % 3), 0});
-  for (int i = 0; i < 50; ++i) in.points.push_back({double(i * 6), 50, 0});
-  expect_same_as_single_run(in);
-}
+TEST(Tiles, CollinearAndNearlyCollinearRows) { expect_same_as_single_run(tile_layouts::collinear_rows()); }
 
-TEST(Tiles, AllCollinearGivesNoTriangles) {
-  InputSet in;
-  for (int i = 0; i < 100; ++i) in.points.push_back({double(i), 2.0 * i, 0});
-  expect_same_as_single_run(in);
-}
+TEST(Tiles, AllCollinearGivesNoTriangles) { expect_same_as_single_run(tile_layouts::all_collinear()); }
 
-TEST(Tiles, FootprintRingsAcrossTiles) {
-  InputSet in = random_points(1500, 11);
-  for (int k = 0; k < 12; ++k) {
-    const double x = 80.0 * k + 10, y = 70.0 * k + 20;
-    in.lines.push_back(line({{x, y, 0}, {x + 120, y, 0}, {x + 120, y + 90, 0}, {x, y + 90, 0}}, true));
-  }
-  expect_same_as_single_run(in);
-}
+TEST(Tiles, FootprintRingsAcrossTiles) { expect_same_as_single_run(tile_layouts::footprint_rings()); }
 
 TEST(Tiles, SingleTileIsTheUntiledRun) {
   InputSet in = random_points(200, 12);
