@@ -58,49 +58,73 @@ uint32_t prev_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 2) % 3; }
 uint32_t from_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][h % 3]; }
 uint32_t to_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][(h % 3 + 1) % 3]; }
 
-struct Out {
-  uint32_t to, h;
-};
 struct HalfEdges {
   BigArray<uint32_t> twin;    // kNone on the hull
+  BigArray<uint32_t> start;   // per vertex v: the triangles starting at v are [start[v], start[v + 1])
   BigArray<uint32_t> corner;  // per vertex: one half-edge leaving it (the fan around it is walked by twins)
 };
 
-// Twins through per-vertex lists of the half-edges that run down (to a smaller vertex): the twin of an
-// upward half-edge a -> b is the one b -> a in b's list (about three). Each pair is found once, from its
-// upward half.
+// start[] of a canonical list, and corner[v] = v's first triangle's first half-edge where v starts one (kNone
+// elsewhere, until half_edges finds one). A list out of canonical order is a logic_error: the twins rely on it.
+void starts(const std::vector<Triangle>& ts, uint32_t V, HalfEdges& e) {
+  const size_t T = ts.size();
+  e.start = BigArray<uint32_t>(size_t(V) + 1);
+  e.corner = BigArray<uint32_t>(V);
+  std::atomic<bool> canonical{true};
+  each(T + 1, [&](size_t t) {
+    const uint32_t lo = t == 0 ? 0 : ts[t - 1][0] + 1, hi = t == T ? V : ts[t][0];
+    if (t < T && (ts[t][1] <= ts[t][0] || ts[t][2] <= ts[t][0] || (t > 0 && ts[t] <= ts[t - 1])))
+      canonical.store(false, std::memory_order_relaxed);
+    for (uint32_t v = lo; v <= hi; ++v) e.start[v] = uint32_t(t);
+    for (uint32_t v = lo; v < std::min(hi, V); ++v) e.corner[v] = kNone;
+    if (t < T && lo <= hi) e.corner[hi] = uint32_t(3 * t);
+  });
+  if (!canonical) throw std::logic_error("regions: the mesh is not in canonical order");
+}
+
+// The triangle in [start[v], start[v + 1]) whose corner k is w (half-edges between v and w), or kNone.
+uint32_t find_in_range(const std::vector<Triangle>& ts, const HalfEdges& e, uint32_t v, int k, uint32_t w) {
+  for (uint32_t s = e.start[v]; s < e.start[v + 1]; ++s)
+    if (ts[s][k] == w) return s;
+  return kNone;
+}
+
+// Twins from the canonical order. In triangle (a, b, c), a the smallest, the twin of a -> b (b -> a) can only
+// be the last half-edge of a triangle (a, x, b) or the middle one of a triangle starting below a; that of
+// c -> a is the first of (a, c, x) or again a middle one. So each pair is found once: a -> b looks for its
+// twin among a's triangles, a middle half-edge b -> c among min(b, c)'s, and the middle-to-middle pairs left
+// (an edge whose two triangles both start elsewhere) meet in a sort by edge.
 HalfEdges half_edges(const Mesh& mesh) {
   const std::vector<Triangle>& ts = mesh.triangles;
   const uint32_t V = uint32_t(mesh.vertices.size());
-  const size_t H = ts.size() * 3;
-  auto from = [&](size_t h) { return ts[h / 3][h % 3]; };
-  auto to = [&](size_t h) { return ts[h / 3][(h % 3 + 1) % 3]; };
+  const size_t T = ts.size();
   HalfEdges e;
-  e.corner = BigArray<uint32_t>(V);
-  BigArray<uint32_t> first(size_t(V) + 1, 0);
-  each(H, [&](size_t h) {
-    const uint32_t a = from(h);
-    shared(e.corner[a]).store(uint32_t(h), std::memory_order_relaxed);  // any one will do
-    if (a > to(h)) shared(first[a + 1]).fetch_add(1, std::memory_order_relaxed);
+  starts(ts, V, e);
+  e.twin = BigArray<uint32_t>(3 * T, kNone);
+  auto pair = [&](uint32_t h, uint32_t g) { e.twin[h] = g, e.twin[g] = h; };
+  tbb::enumerable_thread_specific<std::vector<std::pair<uint64_t, uint32_t>>> left_local;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+    auto& left = left_local.local();
+    for (size_t t = r.begin(); t < r.end(); ++t) {
+      const uint32_t a = ts[t][0], b = ts[t][1], c = ts[t][2], h = uint32_t(3 * t);
+      if (const uint32_t s = find_in_range(ts, e, a, 2, b); s != kNone) pair(h, 3 * s + 2);
+      const uint32_t lo = std::min(b, c), hi = std::max(b, c);
+      // A vertex that starts no triangle gets its corner here (any one will do).
+      if (e.start[lo] == e.start[lo + 1])
+        shared(e.corner[lo]).store(b < c ? h + 1 : h + 2, std::memory_order_relaxed);
+      if (e.start[hi] == e.start[hi + 1])
+        shared(e.corner[hi]).store(b < c ? h + 2 : h + 1, std::memory_order_relaxed);
+      if (const uint32_t s = find_in_range(ts, e, lo, b < c ? 2 : 1, hi); s != kNone)
+        pair(h + 1, 3 * s + (b < c ? 2 : 0));
+      else
+        left.push_back({key(lo, hi), h + 1});
+    }
   });
-  prefix_sums(first);
-  BigArray<uint32_t> cursor(V);
-  each(V, [&](size_t v) { cursor[v] = first[v]; });
-  BigArray<Out> down(first[V]);
-  each(H, [&](size_t h) {
-    const uint32_t a = from(h), b = to(h);
-    if (a > b) down[shared(cursor[a]).fetch_add(1, std::memory_order_relaxed)] = {b, uint32_t(h)};
-  });
-  e.twin = BigArray<uint32_t>(H, kNone);
-  each(H, [&](size_t h) {
-    const uint32_t a = from(h), b = to(h);
-    if (a > b) return;
-    for (uint32_t i = first[b]; i < first[b + 1]; ++i)
-      if (down[i].to == a) {
-        e.twin[h] = down[i].h;
-        e.twin[down[i].h] = uint32_t(h);
-        return;
-      }
+  std::vector<std::pair<uint64_t, uint32_t>> left;
+  for (auto& v : left_local) left.insert(left.end(), v.begin(), v.end());
+  tbb::parallel_sort(left.begin(), left.end());
+  each(left.size(), [&](size_t i) {
+    if (i + 1 < left.size() && left[i].first == left[i + 1].first) pair(left[i].second, left[i + 1].second);
   });
   return e;
 }
@@ -331,6 +355,48 @@ BigArray<uint8_t> trimmed(const Mesh& mesh, const HalfEdges& e, const BigArray<u
   return gone;
 }
 
+// Whether some triangle around vertex v is kept: v's own triangles (contiguous), then its fan.
+bool in_kept(const HalfEdges& e, const BigArray<uint8_t>& keep, uint32_t v) {
+  for (uint32_t s = e.start[v]; s < e.start[v + 1]; ++s)
+    if (keep[s]) return true;
+  const uint32_t h0 = e.corner[v];
+  if (h0 == kNone) return false;  // in no triangle
+  // Turn one way through the twins of the half-edges entering v; at the hull, the other way from h0.
+  for (uint32_t h = h0;;) {
+    if (keep[h / 3]) return true;
+    h = e.twin[prev_of(h)];
+    if (h == h0) return false;
+    if (h == kNone) break;
+  }
+  for (uint32_t g = e.twin[h0]; g != kNone; g = e.twin[next_of(g)])
+    if (keep[g / 3]) return true;
+  return false;
+}
+
+// The vertices in some kept triangle, in order, and renumber[v], each one's new index (kNone for the others).
+// Each vertex is decided from its fan by one thread: marks written from the triangles' corners would share
+// cache lines between threads.
+std::vector<Point3> kept_vertices(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& keep,
+                                  BigArray<uint32_t>& renumber) {
+  constexpr size_t kBlock = 1 << 16;
+  const size_t V = mesh.vertices.size(), blocks = (V + kBlock - 1) / kBlock;
+  auto end = [&](size_t b) { return std::min(V, (b + 1) * kBlock); };
+  std::vector<uint32_t> first(blocks + 1, 0);  // first[b + 1]: block b's count, then the offsets
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    uint32_t n = 0;
+    for (size_t v = b * kBlock; v < end(b); ++v) renumber[v] = in_kept(e, keep, uint32_t(v)) ? n++ : kNone;
+    first[b + 1] = n;
+  });
+  for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
+  std::vector<Point3> out;
+  resize_touched(out, first[blocks]);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    for (size_t v = b * kBlock; v < end(b); ++v)
+      if (renumber[v] != kNone) out[renumber[v] += first[b]] = mesh.vertices[v];
+  });
+  return out;
+}
+
 }  // namespace
 
 std::vector<uint8_t> region_constraints(const PreparedInput& prepared, const std::vector<Polyline>& rings) {
@@ -421,26 +487,10 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
     lap("trim");
   }
 
-  // Compaction: kept triangles, then the vertices still used. The renumbering keeps the order of vertices,
-  // so triangles stay sorted and start at their smallest index: the mesh stays canonical.
-  BigArray<uint8_t> used(V, 0);
-  each(T, [&](size_t t) {
-    if (keep[t])
-      for (uint32_t v : mesh.triangles[t]) shared(used[v]).store(1, std::memory_order_relaxed);
-  });
-  const std::vector<uint32_t> kept_ids = compact<uint32_t>(
-      V, [&](size_t v) { return used[v]; },
-      [&](size_t v, uint32_t* at) {
-        if (used[v]) *at++ = uint32_t(v);
-        return at;
-      });
+  // Compaction: the vertices still used, then the kept triangles. The renumbering keeps the order of
+  // vertices, so triangles stay sorted and start at their smallest index: the mesh stays canonical.
   BigArray<uint32_t> renumber(V);
-  std::vector<Point3> vertices;
-  resize_touched(vertices, kept_ids.size());
-  each(kept_ids.size(), [&](size_t k) {
-    renumber[kept_ids[k]] = uint32_t(k);
-    vertices[k] = mesh.vertices[kept_ids[k]];
-  });
+  std::vector<Point3> vertices = kept_vertices(mesh, e, keep, renumber);
   std::vector<Triangle> kept = compact<Triangle>(
       T, [&](size_t t) { return keep[t]; },
       [&](size_t t, Triangle* at) {
