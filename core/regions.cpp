@@ -64,7 +64,7 @@ struct HalfEdges {
   BigArray<uint32_t> corner;  // per vertex: one half-edge leaving it (the fan around it is walked by twins)
 };
 
-// start[] of a canonical list, and corner[v] = v's first triangle's first half-edge where v starts one (kNone
+// start[] of a canonical list, and corner[v] = v's last triangle's first half-edge where v starts one (kNone
 // elsewhere, until half_edges finds one). A list out of canonical order is a logic_error: the twins rely on it.
 void starts(const std::vector<Triangle>& ts, uint32_t V, HalfEdges& e) {
   const size_t T = ts.size();
@@ -77,7 +77,7 @@ void starts(const std::vector<Triangle>& ts, uint32_t V, HalfEdges& e) {
       canonical.store(false, std::memory_order_relaxed);
     for (uint32_t v = lo; v <= hi; ++v) e.start[v] = uint32_t(t);
     for (uint32_t v = lo; v < std::min(hi, V); ++v) e.corner[v] = kNone;
-    if (t < T && lo <= hi) e.corner[hi] = uint32_t(3 * t);
+    if (t > 0 && lo <= hi) e.corner[lo - 1] = uint32_t(3 * (t - 1));
   });
   if (!canonical) throw std::logic_error("regions: the mesh is not in canonical order");
 }
@@ -237,8 +237,10 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
 // the smaller one), so the sets and their roots do not depend on the order of the unions.
 class Forest {
  public:
-  explicit Forest(size_t n) : parent_(n) {
-    each(n, [&](size_t i) { parent_[i] = uint32_t(i); });
+  explicit Forest(size_t n) : parent_(n) {}
+  // Makes [begin, end) singletons: every element is set by some init before the unions.
+  void init(size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) parent_[i] = uint32_t(i);
   }
   uint32_t find(uint32_t x) {
     for (;;) {
@@ -258,33 +260,56 @@ class Forest {
       if (shared(parent_[a]).compare_exchange_weak(expected, b, std::memory_order_relaxed)) return;
     }
   }
-  // Every member's root, once the unions are done.
-  BigArray<uint32_t> roots() {
-    BigArray<uint32_t> r(parent_.size());
-    each(r.size(), [&](size_t i) { r[i] = find(uint32_t(i)); });
-    return r;
+  // unite for a block of elements that only one thread touches for now: plain loads and stores.
+  void unite_alone(uint32_t a, uint32_t b) {
+    a = find_alone(a), b = find_alone(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+  // Every member's root, once the unions are done, in place of the links (a root is an ancestor too).
+  BigArray<uint32_t> roots() && {
+    each(parent_.size(), [&](size_t i) { shared(parent_[i]).store(find(uint32_t(i)), std::memory_order_relaxed); });
+    return std::move(parent_);
   }
 
  private:
+  uint32_t find_alone(uint32_t x) {
+    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
+    return x;
+  }
   BigArray<uint32_t> parent_;
 };
 
-// Roots of the triangles joined across the half-edges h with joined(h).
-template <class F>
-BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined) {
+// Roots of the triangles joined across the half-edges h with joined(h); hull(h) is called for each hull
+// half-edge. Blocks of triangles are joined inside on one thread each, without atomics: most pairs are,
+// neighbours being near in the canonical order. The pairs across blocks then join on all cores.
+template <class F, class G>
+BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined, G&& hull) {
+  constexpr size_t kBlock = 1 << 16;
   Forest forest(T);
-  each(T, [&](size_t t) {
-    for (size_t h = 3 * t; h < 3 * t + 3; ++h)
-      if (e.twin[h] != kNone && e.twin[h] / 3 > t && joined(h)) forest.unite(uint32_t(t), e.twin[h] / 3);
+  tbb::enumerable_thread_specific<std::vector<uint64_t>> across_local;
+  tbb::parallel_for(size_t(0), (T + kBlock - 1) / kBlock, [&](size_t b) {
+    const size_t t0 = b * kBlock, t1 = std::min(T, t0 + kBlock);
+    forest.init(t0, t1);
+    auto& across = across_local.local();
+    for (size_t t = t0; t < t1; ++t)
+      for (size_t h = 3 * t; h < 3 * t + 3; ++h) {
+        const uint32_t u = e.twin[h] == kNone ? kNone : e.twin[h] / 3;
+        if (u == kNone)
+          hull(h);
+        else if (u > t && joined(h))
+          u < t1 ? forest.unite_alone(uint32_t(t), u) : across.push_back(key(uint32_t(t), u));
+      }
   });
-  return forest.roots();
+  for (auto& v : across_local)
+    each(v.size(), [&](size_t i) { forest.unite(uint32_t(v[i] >> 32), uint32_t(v[i])); });
+  return std::move(forest).roots();
 }
 
 // Nesting level of every triangle: 0 for those reached from beyond the hull without crossing a region edge,
 // +1 for each region edge crossed (CGAL's mark_domains). Triangles joined by other edges share their level,
 // so the breadth-first search runs over the components only.
 BigArray<uint32_t> nesting_levels(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag) {
-  const BigArray<uint32_t> root = components(e, T, [&](size_t h) { return !(flag[h] & kRegion); });
+  BigArray<uint32_t> root = components(e, T, [&](size_t h) { return !(flag[h] & kRegion); }, [](size_t) {});
   // Crossings between components, both ways, and the hull's entries: (component, 1) across a region edge,
   // (component, 0) otherwise.
   tbb::enumerable_thread_specific<std::vector<uint64_t>> cross_local, entry_local;
@@ -306,8 +331,11 @@ BigArray<uint32_t> nesting_levels(const HalfEdges& e, size_t T, const BigArray<u
   tbb::parallel_sort(cross.begin(), cross.end());
   std::sort(entry.begin(), entry.end());
 
-  // 0-1 breadth-first search from the outside, by component root.
-  BigArray<uint32_t> level_of_root(T, kNone);
+  // 0-1 breadth-first search from the outside, by component root. Every root is in an entry or a crossing
+  // (the mesh is connected): only those elements are set, and read.
+  BigArray<uint32_t> level_of_root(T);
+  for (uint64_t k : entry) level_of_root[k >> 32] = kNone;
+  for (uint64_t k : cross) level_of_root[k >> 32] = kNone;
   std::deque<uint32_t> queue;
   for (uint64_t k : entry) {
     const uint32_t a = uint32_t(k >> 32), L = uint32_t(k & 1);
@@ -327,15 +355,14 @@ BigArray<uint32_t> nesting_levels(const HalfEdges& e, size_t T, const BigArray<u
       }
     }
   }
-  BigArray<uint32_t> level(T);
-  each(T, [&](size_t t) { level[t] = level_of_root[root[t]]; });
-  return level;
+  each(T, [&](size_t t) { root[t] = level_of_root[root[t]]; });
+  return root;
 }
 
-// Triangles reached from beyond the hull across unconstrained edges longer than max_edge: the components,
-// joined by such edges, of the triangles with such an edge on the hull.
-BigArray<uint8_t> trimmed(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& flag,
-                             double max_edge) {
+// Drops from keep the triangles reached from beyond the hull across unconstrained edges longer than max_edge
+// (the components, joined by such edges, of the triangles with such an edge on the hull); returns how many.
+uint64_t trim(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& flag, double max_edge,
+              BigArray<uint8_t>& keep) {
   const size_t T = mesh.triangles.size();
   const double limit2 = max_edge * max_edge;
   auto long_open = [&](size_t h) {
@@ -345,46 +372,50 @@ BigArray<uint8_t> trimmed(const Mesh& mesh, const HalfEdges& e, const BigArray<u
     const double dx = b.x - a.x, dy = b.y - a.y;
     return dx * dx + dy * dy > limit2;
   };
-  const BigArray<uint32_t> root = components(e, T, long_open);
-  BigArray<uint8_t> seed(T, 0);
-  each(3 * T, [&](size_t h) {
-    if (e.twin[h] == kNone && long_open(h)) shared(seed[root[h / 3]]).store(1, std::memory_order_relaxed);
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> seeds;
+  const BigArray<uint32_t> root = components(e, T, long_open, [&](size_t h) {
+    if (long_open(h)) seeds.local().push_back(uint32_t(h / 3));
   });
-  BigArray<uint8_t> gone(T);
-  each(T, [&](size_t t) { gone[t] = seed[root[t]]; });
-  return gone;
+  BigArray<uint8_t> seed(T, 0);
+  for (const auto& v : seeds)
+    for (uint32_t t : v) seed[root[t]] = 1;
+  return count_if(T, [&](size_t t) {
+    const bool drop = keep[t] && seed[root[t]];
+    if (drop) keep[t] = 0;
+    return drop;
+  });
 }
 
-// Whether some triangle around vertex v is kept: v's own triangles (contiguous), then its fan.
-bool in_kept(const HalfEdges& e, const BigArray<uint8_t>& keep, uint32_t v) {
-  for (uint32_t s = e.start[v]; s < e.start[v + 1]; ++s)
-    if (keep[s]) return true;
-  const uint32_t h0 = e.corner[v];
-  if (h0 == kNone) return false;  // in no triangle
-  // Turn one way through the twins of the half-edges entering v; at the hull, the other way from h0.
-  for (uint32_t h = h0;;) {
-    if (keep[h / 3]) return true;
-    h = e.twin[prev_of(h)];
-    if (h == h0) return false;
-    if (h == kNone) break;
-  }
-  for (uint32_t g = e.twin[h0]; g != kNone; g = e.twin[next_of(g)])
-    if (keep[g / 3]) return true;
-  return false;
+// used[v]: whether v is a corner of a kept triangle. Each vertex is written by one thread, or marks from
+// every thread would share cache lines: the triangles starting in a block of vertices mark their corners in
+// that block (a corner is never below the start) and leave the few beyond it to a second pass.
+BigArray<uint8_t> used_vertices(const std::vector<Triangle>& ts, const HalfEdges& e, const BigArray<uint8_t>& keep) {
+  constexpr size_t kBlock = 1 << 16;
+  const size_t V = e.start.size() - 1;
+  BigArray<uint8_t> used(V);
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> beyond_local;
+  tbb::parallel_for(size_t(0), (V + kBlock - 1) / kBlock, [&](size_t b) {
+    const size_t v0 = b * kBlock, v1 = std::min(V, v0 + kBlock);
+    std::fill(used.begin() + v0, used.begin() + v1, 0);
+    auto& beyond = beyond_local.local();
+    for (size_t t = e.start[v0]; t < e.start[v1]; ++t)
+      if (keep[t])
+        for (uint32_t v : ts[t]) v < v1 ? void(used[v] = 1) : beyond.push_back(v);
+  });
+  for (const auto& v : beyond_local)
+    each(v.size(), [&](size_t i) { shared(used[v[i]]).store(1, std::memory_order_relaxed); });
+  return used;
 }
 
-// The vertices in some kept triangle, in order, and renumber[v], each one's new index (kNone for the others).
-// Each vertex is decided from its fan by one thread: marks written from the triangles' corners would share
-// cache lines between threads.
-std::vector<Point3> kept_vertices(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& keep,
-                                  BigArray<uint32_t>& renumber) {
+// The used vertices, in order, and renumber[v], each one's new index (kNone for the others).
+std::vector<Point3> kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& used, BigArray<uint32_t>& renumber) {
   constexpr size_t kBlock = 1 << 16;
   const size_t V = mesh.vertices.size(), blocks = (V + kBlock - 1) / kBlock;
   auto end = [&](size_t b) { return std::min(V, (b + 1) * kBlock); };
   std::vector<uint32_t> first(blocks + 1, 0);  // first[b + 1]: block b's count, then the offsets
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     uint32_t n = 0;
-    for (size_t v = b * kBlock; v < end(b); ++v) renumber[v] = in_kept(e, keep, uint32_t(v)) ? n++ : kNone;
+    for (size_t v = b * kBlock; v < end(b); ++v) renumber[v] = used[v] ? n++ : kNone;
     first[b + 1] = n;
   });
   for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
@@ -472,25 +503,25 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
   mark_constraints(mesh, prepared, rules.region_edge, rules.max_edge > 0, e, flag);
   lap("constraints");
 
-  BigArray<uint8_t> keep(T, 1);
+  BigArray<uint8_t> keep = regions ? BigArray<uint8_t>(T) : BigArray<uint8_t>(T, 1);
   if (regions) {
     const BigArray<uint32_t> level = nesting_levels(e, T, flag);
-    // Every triangle is reached (the mesh is connected); kNone would count as odd.
-    each(T, [&](size_t t) { keep[t] = (level[t] % 2 == 1) != rules.outside_kept; });
-    stats.triangles_outside = count_if(T, [&](size_t t) { return !keep[t]; });
+    // Every triangle is reached (the mesh is connected); kNone would count as odd. Counted as written.
+    stats.triangles_outside = count_if(T, [&](size_t t) {
+      keep[t] = (level[t] % 2 == 1) != rules.outside_kept;
+      return !keep[t];
+    });
     lap("levels");
   }
   if (rules.max_edge > 0) {
-    const BigArray<uint8_t> gone = trimmed(mesh, e, flag, rules.max_edge);
-    stats.triangles_trimmed = count_if(T, [&](size_t t) { return gone[t] && keep[t]; });
-    each(T, [&](size_t t) { keep[t] &= !gone[t]; });
+    stats.triangles_trimmed = trim(mesh, e, flag, rules.max_edge, keep);
     lap("trim");
   }
 
   // Compaction: the vertices still used, then the kept triangles. The renumbering keeps the order of
   // vertices, so triangles stay sorted and start at their smallest index: the mesh stays canonical.
   BigArray<uint32_t> renumber(V);
-  std::vector<Point3> vertices = kept_vertices(mesh, e, keep, renumber);
+  std::vector<Point3> vertices = kept_vertices(mesh, used_vertices(mesh.triangles, e, keep), renumber);
   std::vector<Triangle> kept = compact<Triangle>(
       T, [&](size_t t) { return keep[t]; },
       [&](size_t t, Triangle* at) {
