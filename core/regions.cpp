@@ -89,6 +89,12 @@ uint32_t find_in_range(const std::vector<Triangle>& ts, const HalfEdges& e, uint
   return kNone;
 }
 
+struct Open {  // a middle half-edge h whose twin is not found yet, by its edge (smaller vertex first)
+  uint64_t edge;
+  uint32_t h;
+  bool operator<(const Open& o) const { return edge != o.edge ? edge < o.edge : h < o.h; }
+};
+
 // Twins from the canonical order. In triangle (a, b, c), a the smallest, the twin of a -> b (b -> a) can only
 // be the last half-edge of a triangle (a, x, b) or the middle one of a triangle starting below a; that of
 // c -> a is the first of (a, c, x) or again a middle one. So each pair is found once: a -> b looks for its
@@ -102,10 +108,16 @@ HalfEdges half_edges(const Mesh& mesh) {
   starts(ts, V, e);
   e.twin = BigArray<uint32_t>(3 * T, kNone);
   auto pair = [&](uint32_t h, uint32_t g) { e.twin[h] = g, e.twin[g] = h; };
-  tbb::enumerable_thread_specific<std::vector<std::pair<uint64_t, uint32_t>>> left_local;
+  // The middle half-edges left, by edge: each block appends its own at once (one slot per triangle at most,
+  // pages touched only where written).
+  BigArray<Open> left(T);
+  std::atomic<size_t> n_left{0};
+  tbb::enumerable_thread_specific<std::vector<Open>> block_left;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
-    auto& left = left_local.local();
-    for (size_t t = r.begin(); t < r.end(); ++t) {
+    auto& mine = block_left.local();
+    mine.clear();
+    // Backwards: min(b, c)'s triangles come after t, so they were just visited and are still in cache.
+    for (size_t t = r.end(); t-- > r.begin();) {
       const uint32_t a = ts[t][0], b = ts[t][1], c = ts[t][2], h = uint32_t(3 * t);
       if (const uint32_t s = find_in_range(ts, e, a, 2, b); s != kNone) pair(h, 3 * s + 2);
       const uint32_t lo = std::min(b, c), hi = std::max(b, c);
@@ -117,14 +129,14 @@ HalfEdges half_edges(const Mesh& mesh) {
       if (const uint32_t s = find_in_range(ts, e, lo, b < c ? 2 : 1, hi); s != kNone)
         pair(h + 1, 3 * s + (b < c ? 2 : 0));
       else
-        left.push_back({key(lo, hi), h + 1});
+        mine.push_back({key(lo, hi), h + 1});
     }
+    std::copy(mine.begin(), mine.end(), left.begin() + n_left.fetch_add(mine.size()));
   });
-  std::vector<std::pair<uint64_t, uint32_t>> left;
-  for (auto& v : left_local) left.insert(left.end(), v.begin(), v.end());
-  tbb::parallel_sort(left.begin(), left.end());
-  each(left.size(), [&](size_t i) {
-    if (i + 1 < left.size() && left[i].first == left[i + 1].first) pair(left[i].second, left[i + 1].second);
+  const size_t n = n_left;
+  tbb::parallel_sort(left.begin(), left.begin() + n);
+  each(n, [&](size_t i) {
+    if (i + 1 < n && left[i].edge == left[i + 1].edge) pair(left[i].h, left[i + 1].h);
   });
   return e;
 }
