@@ -28,7 +28,6 @@
 #include <string>
 
 #include "core/big_array.hpp"
-#include "core/compact.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 
@@ -64,8 +63,9 @@ struct HalfEdges {
   BigArray<uint32_t> corner;  // per vertex: one half-edge leaving it (the fan around it is walked by twins)
 };
 
-// start[] of a canonical list, and corner[v] = v's last triangle's first half-edge where v starts one (kNone
-// elsewhere, until half_edges finds one). A list out of canonical order is a logic_error: the twins rely on it.
+// start[] of a canonical list, and corner[v] = v's last triangle's first half-edge where v starts one
+// (kNone elsewhere, until half_edges finds one). A list out of canonical order is a logic_error: the twins
+// rely on it.
 void starts(const std::vector<Triangle>& ts, uint32_t V, HalfEdges& e) {
   const size_t T = ts.size();
   e.start = BigArray<uint32_t>(size_t(V) + 1);
@@ -279,7 +279,8 @@ class Forest {
   }
   // Every member's root, once the unions are done, in place of the links (a root is an ancestor too).
   BigArray<uint32_t> roots() && {
-    each(parent_.size(), [&](size_t i) { shared(parent_[i]).store(find(uint32_t(i)), std::memory_order_relaxed); });
+    each(parent_.size(),
+         [&](size_t i) { shared(parent_[i]).store(find(uint32_t(i)), std::memory_order_relaxed); });
     return std::move(parent_);
   }
 
@@ -317,11 +318,15 @@ BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined, G&& hull
   return std::move(forest).roots();
 }
 
-// Nesting level of every triangle: 0 for those reached from beyond the hull without crossing a region edge,
-// +1 for each region edge crossed (CGAL's mark_domains). Triangles joined by other edges share their level,
-// so the breadth-first search runs over the components only.
-BigArray<uint32_t> nesting_levels(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag) {
-  BigArray<uint32_t> root = components(e, T, [&](size_t h) { return !(flag[h] & kRegion); }, [](size_t) {});
+// Nesting levels: 0 for the triangles reached from beyond the hull without crossing a region edge, +1 for
+// each region edge crossed (CGAL's mark_domains). Triangles joined by other edges share their level, so the
+// breadth-first search runs over the components only: triangle t's level is level_of_root[root[t]].
+struct Levels {
+  BigArray<uint32_t> root, level_of_root;
+};
+Levels nesting_levels(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag) {
+  auto open = [&](size_t h) { return !(flag[h] & kRegion); };
+  BigArray<uint32_t> root = components(e, T, open, [](size_t) {});
   // Crossings between components, both ways, and the hull's entries: (component, 1) across a region edge,
   // (component, 0) otherwise.
   tbb::enumerable_thread_specific<std::vector<uint64_t>> cross_local, entry_local;
@@ -367,8 +372,19 @@ BigArray<uint32_t> nesting_levels(const HalfEdges& e, size_t T, const BigArray<u
       }
     }
   }
-  each(T, [&](size_t t) { root[t] = level_of_root[root[t]]; });
-  return root;
+  return {std::move(root), std::move(level_of_root)};
+}
+
+// keep[t] for every triangle by its nesting level: odd levels are inside, or even ones if outside_kept.
+// Returns how many are not kept.
+uint64_t keep_inside(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag, bool outside_kept,
+                     BigArray<uint8_t>& keep) {
+  const Levels l = nesting_levels(e, T, flag);
+  // Every triangle is reached (the mesh is connected); kNone would count as odd.
+  return count_if(T, [&](size_t t) {
+    keep[t] = (l.level_of_root[l.root[t]] % 2 == 1) != outside_kept;
+    return !keep[t];
+  });
 }
 
 // Drops from keep the triangles reached from beyond the hull across unconstrained edges longer than max_edge
@@ -401,7 +417,8 @@ uint64_t trim(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& fla
 // used[v]: whether v is a corner of a kept triangle. Each vertex is written by one thread, or marks from
 // every thread would share cache lines: the triangles starting in a block of vertices mark their corners in
 // that block (a corner is never below the start) and leave the few beyond it to a second pass.
-BigArray<uint8_t> used_vertices(const std::vector<Triangle>& ts, const HalfEdges& e, const BigArray<uint8_t>& keep) {
+BigArray<uint8_t> used_vertices(const std::vector<Triangle>& ts, const HalfEdges& e,
+                                const BigArray<uint8_t>& keep) {
   constexpr size_t kBlock = 1 << 16;
   const size_t V = e.start.size() - 1;
   BigArray<uint8_t> used(V);
@@ -420,7 +437,8 @@ BigArray<uint8_t> used_vertices(const std::vector<Triangle>& ts, const HalfEdges
 }
 
 // The used vertices, in order, and renumber[v], each one's new index (kNone for the others).
-std::vector<Point3> kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& used, BigArray<uint32_t>& renumber) {
+std::vector<Point3> kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& used,
+                                  BigArray<uint32_t>& renumber) {
   constexpr size_t kBlock = 1 << 16;
   const size_t V = mesh.vertices.size(), blocks = (V + kBlock - 1) / kBlock;
   auto end = [&](size_t b) { return std::min(V, (b + 1) * kBlock); };
@@ -438,6 +456,31 @@ std::vector<Point3> kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& use
       if (renumber[v] != kNone) out[renumber[v] += first[b]] = mesh.vertices[v];
   });
   return out;
+}
+
+// Keeps the triangles with keep[t], renumbered, at the front of `ts`, and drops the rest. They go through
+// `scratch` (3 per triangle: the twins' pages, faulted already) and back into ts' own pages: a fresh list
+// would fault its pages, and freeing the old one unmap them.
+void keep_triangles(std::vector<Triangle>& ts, const BigArray<uint8_t>& keep,
+                    const BigArray<uint32_t>& renumber, BigArray<uint32_t>& scratch) {
+  constexpr size_t kBlock = 1 << 16;
+  const size_t T = ts.size(), blocks = (T + kBlock - 1) / kBlock;
+  auto end = [&](size_t b) { return std::min(T, (b + 1) * kBlock); };
+  std::vector<size_t> first(blocks + 1, 0);  // first[b + 1]: block b's count, then the offsets
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    size_t n = 0;
+    for (size_t t = b * kBlock; t < end(b); ++t) n += keep[t];
+    first[b + 1] = n;
+  });
+  for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    uint32_t* at = scratch.begin() + 3 * first[b];
+    for (size_t t = b * kBlock; t < end(b); ++t)
+      if (keep[t])
+        for (uint32_t v : ts[t]) *at++ = renumber[v];
+  });
+  each(first[blocks], [&](size_t k) { ts[k] = {scratch[3 * k], scratch[3 * k + 1], scratch[3 * k + 2]}; });
+  ts.resize(first[blocks]);
 }
 
 }  // namespace
@@ -509,7 +552,7 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
     passes += fmt::format(" {} {:.1f} ms", name, std::chrono::duration<double, std::milli>(t - t0).count());
     t0 = t;
   };
-  const HalfEdges e = half_edges(mesh);
+  HalfEdges e = half_edges(mesh);
   lap("half-edges");
   BigArray<uint8_t> flag(3 * T, 0);
   mark_constraints(mesh, prepared, rules.region_edge, rules.max_edge > 0, e, flag);
@@ -517,12 +560,7 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
 
   BigArray<uint8_t> keep = regions ? BigArray<uint8_t>(T) : BigArray<uint8_t>(T, 1);
   if (regions) {
-    const BigArray<uint32_t> level = nesting_levels(e, T, flag);
-    // Every triangle is reached (the mesh is connected); kNone would count as odd. Counted as written.
-    stats.triangles_outside = count_if(T, [&](size_t t) {
-      keep[t] = (level[t] % 2 == 1) != rules.outside_kept;
-      return !keep[t];
-    });
+    stats.triangles_outside = keep_inside(e, T, flag, rules.outside_kept, keep);
     lap("levels");
   }
   if (rules.max_edge > 0) {
@@ -534,18 +572,9 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
   // vertices, so triangles stay sorted and start at their smallest index: the mesh stays canonical.
   BigArray<uint32_t> renumber(V);
   std::vector<Point3> vertices = kept_vertices(mesh, used_vertices(mesh.triangles, e, keep), renumber);
-  std::vector<Triangle> kept = compact<Triangle>(
-      T, [&](size_t t) { return keep[t]; },
-      [&](size_t t, Triangle* at) {
-        if (keep[t]) {
-          const Triangle& tri = mesh.triangles[t];
-          *at++ = {renumber[tri[0]], renumber[tri[1]], renumber[tri[2]]};
-        }
-        return at;
-      });
+  keep_triangles(mesh.triangles, keep, renumber, e.twin);
   stats.vertices_removed = V - vertices.size();
   mesh.vertices = std::move(vertices);
-  mesh.triangles = std::move(kept);
   lap("compaction");
   spdlog::debug("regions:{}", passes);
   return stats;
