@@ -293,10 +293,11 @@ class Forest {
 };
 
 // Roots of the triangles joined across the half-edges h with joined(h); hull(h) is called for each hull
-// half-edge. Blocks of triangles are joined inside on one thread each, without atomics: most pairs are,
-// neighbours being near in the canonical order. The pairs across blocks then join on all cores.
-template <class F, class G>
-BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined, G&& hull) {
+// half-edge, apart(h) for each edge not joined (once, from its smaller triangle). Blocks of triangles are
+// joined inside on one thread each, without atomics: most pairs are, neighbours being near in the canonical
+// order. The pairs across blocks then join on all cores.
+template <class F, class G, class A>
+BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined, G&& hull, A&& apart) {
   constexpr size_t kBlock = 1 << 16;
   Forest forest(T);
   tbb::enumerable_thread_specific<std::vector<uint64_t>> across_local;
@@ -309,7 +310,9 @@ BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined, G&& hull
         const uint32_t u = e.twin[h] == kNone ? kNone : e.twin[h] / 3;
         if (u == kNone)
           hull(h);
-        else if (u > t && joined(h))
+        else if (u > t && !joined(h))
+          apart(h);
+        else if (u > t)
           u < t1 ? forest.unite_alone(uint32_t(t), u) : across.push_back(key(uint32_t(t), u));
       }
   });
@@ -325,26 +328,23 @@ struct Levels {
   BigArray<uint32_t> root, level_of_root;
 };
 Levels nesting_levels(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag) {
-  auto open = [&](size_t h) { return !(flag[h] & kRegion); };
-  BigArray<uint32_t> root = components(e, T, open, [](size_t) {});
+  // The hull's half-edges and the region edges (few), by triangle, as the components are found.
+  tbb::enumerable_thread_specific<std::vector<uint64_t>> hull_local, region_local;
+  BigArray<uint32_t> root = components(
+      e, T, [&](size_t h) { return !(flag[h] & kRegion); },
+      [&](size_t h) { hull_local.local().push_back(key(uint32_t(h / 3), (flag[h] & kRegion) != 0)); },
+      [&](size_t h) { region_local.local().push_back(key(uint32_t(h / 3), e.twin[h] / 3)); });
   // Crossings between components, both ways, and the hull's entries: (component, 1) across a region edge,
   // (component, 0) otherwise.
-  tbb::enumerable_thread_specific<std::vector<uint64_t>> cross_local, entry_local;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, 3 * T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
-    auto& cross = cross_local.local();
-    auto& entry = entry_local.local();
-    for (size_t h = r.begin(); h < r.end(); ++h) {
-      const uint32_t a = root[h / 3];
-      const bool crossing = flag[h] & kRegion;
-      if (e.twin[h] == kNone)
-        entry.push_back(key(a, crossing));
-      else if (crossing && root[e.twin[h] / 3] != a)
-        cross.push_back(key(a, root[e.twin[h] / 3]));
-    }
-  });
   std::vector<uint64_t> cross, entry;
-  for (auto& v : cross_local) cross.insert(cross.end(), v.begin(), v.end());
-  for (auto& v : entry_local) entry.insert(entry.end(), v.begin(), v.end());
+  for (const auto& v : hull_local)
+    for (uint64_t k : v) entry.push_back(key(root[k >> 32], uint32_t(k)));
+  for (const auto& v : region_local)
+    for (uint64_t k : v)
+      if (const uint32_t a = root[k >> 32], b = root[uint32_t(k)]; a != b) {
+        cross.push_back(key(a, b));
+        cross.push_back(key(b, a));
+      }
   tbb::parallel_sort(cross.begin(), cross.end());
   std::sort(entry.begin(), entry.end());
 
@@ -401,9 +401,10 @@ uint64_t trim(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& fla
     return dx * dx + dy * dy > limit2;
   };
   tbb::enumerable_thread_specific<std::vector<uint32_t>> seeds;
-  const BigArray<uint32_t> root = components(e, T, long_open, [&](size_t h) {
+  auto seed_of = [&](size_t h) {
     if (long_open(h)) seeds.local().push_back(uint32_t(h / 3));
-  });
+  };
+  const BigArray<uint32_t> root = components(e, T, long_open, seed_of, [](size_t) {});
   BigArray<uint8_t> seed(T, 0);
   for (const auto& v : seeds)
     for (uint32_t t : v) seed[root[t]] = 1;
