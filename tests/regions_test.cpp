@@ -388,13 +388,14 @@ TEST(Regions, MeshOutOfCanonicalOrderIsRefused) {
   EXPECT_NO_THROW(apply_regions(same, p, rules));
 }
 
-// Many parcels at a size where every parallel pass of apply_regions splits its work: a boundary of adjacent
-// parcels (their shared edges are no region edges), holes in some of them, islands in the holes, breaklines.
-// With `bay`, no boundary (the hull is the domain) and a bay empty of points cut into it from the left, which
-// max-edge trims. The CDT restricted to the domain, and the same bytes on 1 and 2 threads.
+// Many parcels at a size where every parallel pass of apply_regions splits its work (over 65536 vertices and
+// triangles: several blocks, corners beyond their block): a boundary of adjacent parcels (their shared edges
+// are no region edges), holes in some of them, islands in the holes, breaklines. With `bay`, no boundary (the
+// hull is the domain) and a bay empty of points cut into it from the left, which max-edge trims. The CDT
+// restricted to the domain, and the same bytes on 1 and 2 threads.
 std::vector<Layer> parcels(bool bay) {
   std::vector<Point3> pts;
-  for (const Point3& q : scatter(60000, -10, -10, 410, 410, 21))
+  for (const Point3& q : scatter(70000, -10, -10, 410, 410, 21))
     if (!bay || q.x > 120 || std::abs(q.y - 200) > 30) pts.push_back(q);
   std::vector<Layer> layers;
   layers.push_back({Role::vertices, pts, {}, {}});
