@@ -28,7 +28,6 @@
 #include <string>
 
 #include "core/big_array.hpp"
-#include "core/compact.hpp"
 #include "core/error.hpp"
 #include "core/parallel.hpp"
 
@@ -58,49 +57,86 @@ uint32_t prev_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 2) % 3; }
 uint32_t from_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][h % 3]; }
 uint32_t to_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][(h % 3 + 1) % 3]; }
 
-struct Out {
-  uint32_t to, h;
-};
 struct HalfEdges {
   BigArray<uint32_t> twin;    // kNone on the hull
+  BigArray<uint32_t> start;   // per vertex v: the triangles starting at v are [start[v], start[v + 1])
   BigArray<uint32_t> corner;  // per vertex: one half-edge leaving it (the fan around it is walked by twins)
 };
 
-// Twins through per-vertex lists of the half-edges that run down (to a smaller vertex): the twin of an
-// upward half-edge a -> b is the one b -> a in b's list (about three). Each pair is found once, from its
-// upward half.
+// start[] of a canonical list, and corner[v] = v's last triangle's first half-edge where v starts one
+// (kNone elsewhere, until half_edges finds one). A list out of canonical order is a logic_error: the twins
+// rely on it.
+void starts(const std::vector<Triangle>& ts, uint32_t V, HalfEdges& e) {
+  const size_t T = ts.size();
+  e.start = BigArray<uint32_t>(size_t(V) + 1);
+  e.corner = BigArray<uint32_t>(V);
+  std::atomic<bool> canonical{true};
+  each(T + 1, [&](size_t t) {
+    const uint32_t lo = t == 0 ? 0 : ts[t - 1][0] + 1, hi = t == T ? V : ts[t][0];
+    if (t < T && (ts[t][1] <= ts[t][0] || ts[t][2] <= ts[t][0] || (t > 0 && ts[t] <= ts[t - 1])))
+      canonical.store(false, std::memory_order_relaxed);
+    for (uint32_t v = lo; v <= hi; ++v) e.start[v] = uint32_t(t);
+    for (uint32_t v = lo; v < std::min(hi, V); ++v) e.corner[v] = kNone;
+    if (t > 0 && lo <= hi) e.corner[lo - 1] = uint32_t(3 * (t - 1));
+  });
+  if (!canonical) throw std::logic_error("regions: the mesh is not in canonical order");
+}
+
+// The triangle in [start[v], start[v + 1]) whose corner k is w (half-edges between v and w), or kNone.
+uint32_t find_in_range(const std::vector<Triangle>& ts, const HalfEdges& e, uint32_t v, int k, uint32_t w) {
+  for (uint32_t s = e.start[v]; s < e.start[v + 1]; ++s)
+    if (ts[s][k] == w) return s;
+  return kNone;
+}
+
+struct Open {  // a middle half-edge h whose twin is not found yet, by its edge (smaller vertex first)
+  uint64_t edge;
+  uint32_t h;
+  bool operator<(const Open& o) const { return edge != o.edge ? edge < o.edge : h < o.h; }
+};
+
+// Twins from the canonical order. In triangle (a, b, c), a the smallest, the twin of a -> b (b -> a) can only
+// be the last half-edge of a triangle (a, x, b) or the middle one of a triangle starting below a; that of
+// c -> a is the first of (a, c, x) or again a middle one. So each pair is found once: a -> b looks for its
+// twin among a's triangles, a middle half-edge b -> c among min(b, c)'s, and the middle-to-middle pairs left
+// (an edge whose two triangles both start elsewhere) meet in a sort by edge.
 HalfEdges half_edges(const Mesh& mesh) {
   const std::vector<Triangle>& ts = mesh.triangles;
   const uint32_t V = uint32_t(mesh.vertices.size());
-  const size_t H = ts.size() * 3;
-  auto from = [&](size_t h) { return ts[h / 3][h % 3]; };
-  auto to = [&](size_t h) { return ts[h / 3][(h % 3 + 1) % 3]; };
+  const size_t T = ts.size();
   HalfEdges e;
-  e.corner = BigArray<uint32_t>(V);
-  BigArray<uint32_t> first(size_t(V) + 1, 0);
-  each(H, [&](size_t h) {
-    const uint32_t a = from(h);
-    shared(e.corner[a]).store(uint32_t(h), std::memory_order_relaxed);  // any one will do
-    if (a > to(h)) shared(first[a + 1]).fetch_add(1, std::memory_order_relaxed);
+  starts(ts, V, e);
+  e.twin = BigArray<uint32_t>(3 * T, kNone);
+  auto pair = [&](uint32_t h, uint32_t g) { e.twin[h] = g, e.twin[g] = h; };
+  // The middle half-edges left, by edge: each block appends its own at once (one slot per triangle at most,
+  // pages touched only where written).
+  BigArray<Open> left(T);
+  std::atomic<size_t> n_left{0};
+  tbb::enumerable_thread_specific<std::vector<Open>> block_left;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+    auto& mine = block_left.local();
+    mine.clear();
+    // Backwards: min(b, c)'s triangles come after t, so they were just visited and are still in cache.
+    for (size_t t = r.end(); t-- > r.begin();) {
+      const uint32_t a = ts[t][0], b = ts[t][1], c = ts[t][2], h = uint32_t(3 * t);
+      if (const uint32_t s = find_in_range(ts, e, a, 2, b); s != kNone) pair(h, 3 * s + 2);
+      const uint32_t lo = std::min(b, c), hi = std::max(b, c);
+      // A vertex that starts no triangle gets its corner here (any one will do).
+      if (e.start[lo] == e.start[lo + 1])
+        shared(e.corner[lo]).store(b < c ? h + 1 : h + 2, std::memory_order_relaxed);
+      if (e.start[hi] == e.start[hi + 1])
+        shared(e.corner[hi]).store(b < c ? h + 2 : h + 1, std::memory_order_relaxed);
+      if (const uint32_t s = find_in_range(ts, e, lo, b < c ? 2 : 1, hi); s != kNone)
+        pair(h + 1, 3 * s + (b < c ? 2 : 0));
+      else
+        mine.push_back({key(lo, hi), h + 1});
+    }
+    std::copy(mine.begin(), mine.end(), left.begin() + n_left.fetch_add(mine.size()));
   });
-  prefix_sums(first);
-  BigArray<uint32_t> cursor(V);
-  each(V, [&](size_t v) { cursor[v] = first[v]; });
-  BigArray<Out> down(first[V]);
-  each(H, [&](size_t h) {
-    const uint32_t a = from(h), b = to(h);
-    if (a > b) down[shared(cursor[a]).fetch_add(1, std::memory_order_relaxed)] = {b, uint32_t(h)};
-  });
-  e.twin = BigArray<uint32_t>(H, kNone);
-  each(H, [&](size_t h) {
-    const uint32_t a = from(h), b = to(h);
-    if (a > b) return;
-    for (uint32_t i = first[b]; i < first[b + 1]; ++i)
-      if (down[i].to == a) {
-        e.twin[h] = down[i].h;
-        e.twin[down[i].h] = uint32_t(h);
-        return;
-      }
+  const size_t n = n_left;
+  tbb::parallel_sort(left.begin(), left.begin() + n);
+  each(n, [&](size_t i) {
+    if (i + 1 < n && left[i].edge == left[i + 1].edge) pair(left[i].h, left[i + 1].h);
   });
   return e;
 }
@@ -213,8 +249,10 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
 // the smaller one), so the sets and their roots do not depend on the order of the unions.
 class Forest {
  public:
-  explicit Forest(size_t n) : parent_(n) {
-    each(n, [&](size_t i) { parent_[i] = uint32_t(i); });
+  explicit Forest(size_t n) : parent_(n) {}
+  // Makes [begin, end) singletons: every element is set by some init before the unions.
+  void init(size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) parent_[i] = uint32_t(i);
   }
   uint32_t find(uint32_t x) {
     for (;;) {
@@ -234,56 +272,87 @@ class Forest {
       if (shared(parent_[a]).compare_exchange_weak(expected, b, std::memory_order_relaxed)) return;
     }
   }
-  // Every member's root, once the unions are done.
-  BigArray<uint32_t> roots() {
-    BigArray<uint32_t> r(parent_.size());
-    each(r.size(), [&](size_t i) { r[i] = find(uint32_t(i)); });
-    return r;
+  // unite for a block of elements that only one thread touches for now: plain loads and stores.
+  void unite_alone(uint32_t a, uint32_t b) {
+    a = find_alone(a), b = find_alone(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+  // Every member's root, once the unions are done, in place of the links (a root is an ancestor too).
+  BigArray<uint32_t> roots() && {
+    each(parent_.size(),
+         [&](size_t i) { shared(parent_[i]).store(find(uint32_t(i)), std::memory_order_relaxed); });
+    return std::move(parent_);
   }
 
  private:
+  uint32_t find_alone(uint32_t x) {
+    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
+    return x;
+  }
   BigArray<uint32_t> parent_;
 };
 
-// Roots of the triangles joined across the half-edges h with joined(h).
-template <class F>
-BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined) {
+// Roots of the triangles joined across the half-edges h with joined(h); hull(h) is called for each hull
+// half-edge, apart(h) for each edge not joined (once, from its smaller triangle). Blocks of triangles are
+// joined inside on one thread each, without atomics: most pairs are, neighbours being near in the canonical
+// order. The pairs across blocks then join on all cores.
+template <class F, class G, class A>
+BigArray<uint32_t> components(const HalfEdges& e, size_t T, F&& joined, G&& hull, A&& apart) {
+  constexpr size_t kBlock = 1 << 16;
   Forest forest(T);
-  each(T, [&](size_t t) {
-    for (size_t h = 3 * t; h < 3 * t + 3; ++h)
-      if (e.twin[h] != kNone && e.twin[h] / 3 > t && joined(h)) forest.unite(uint32_t(t), e.twin[h] / 3);
+  tbb::enumerable_thread_specific<std::vector<uint64_t>> across_local;
+  tbb::parallel_for(size_t(0), (T + kBlock - 1) / kBlock, [&](size_t b) {
+    const size_t t0 = b * kBlock, t1 = std::min(T, t0 + kBlock);
+    forest.init(t0, t1);
+    auto& across = across_local.local();
+    for (size_t t = t0; t < t1; ++t)
+      for (size_t h = 3 * t; h < 3 * t + 3; ++h) {
+        const uint32_t u = e.twin[h] == kNone ? kNone : e.twin[h] / 3;
+        if (u == kNone)
+          hull(h);
+        else if (u > t && !joined(h))
+          apart(h);
+        else if (u > t)
+          u < t1 ? forest.unite_alone(uint32_t(t), u) : across.push_back(key(uint32_t(t), u));
+      }
   });
-  return forest.roots();
+  for (auto& v : across_local)
+    each(v.size(), [&](size_t i) { forest.unite(uint32_t(v[i] >> 32), uint32_t(v[i])); });
+  return std::move(forest).roots();
 }
 
-// Nesting level of every triangle: 0 for those reached from beyond the hull without crossing a region edge,
-// +1 for each region edge crossed (CGAL's mark_domains). Triangles joined by other edges share their level,
-// so the breadth-first search runs over the components only.
-BigArray<uint32_t> nesting_levels(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag) {
-  const BigArray<uint32_t> root = components(e, T, [&](size_t h) { return !(flag[h] & kRegion); });
+// Nesting levels: 0 for the triangles reached from beyond the hull without crossing a region edge, +1 for
+// each region edge crossed (CGAL's mark_domains). Triangles joined by other edges share their level, so the
+// breadth-first search runs over the components only: triangle t's level is level_of_root[root[t]].
+struct Levels {
+  BigArray<uint32_t> root, level_of_root;
+};
+Levels nesting_levels(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag) {
+  // The hull's half-edges and the region edges (few), by triangle, as the components are found.
+  tbb::enumerable_thread_specific<std::vector<uint64_t>> hull_local, region_local;
+  BigArray<uint32_t> root = components(
+      e, T, [&](size_t h) { return !(flag[h] & kRegion); },
+      [&](size_t h) { hull_local.local().push_back(key(uint32_t(h / 3), (flag[h] & kRegion) != 0)); },
+      [&](size_t h) { region_local.local().push_back(key(uint32_t(h / 3), e.twin[h] / 3)); });
   // Crossings between components, both ways, and the hull's entries: (component, 1) across a region edge,
   // (component, 0) otherwise.
-  tbb::enumerable_thread_specific<std::vector<uint64_t>> cross_local, entry_local;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, 3 * T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
-    auto& cross = cross_local.local();
-    auto& entry = entry_local.local();
-    for (size_t h = r.begin(); h < r.end(); ++h) {
-      const uint32_t a = root[h / 3];
-      const bool crossing = flag[h] & kRegion;
-      if (e.twin[h] == kNone)
-        entry.push_back(key(a, crossing));
-      else if (crossing && root[e.twin[h] / 3] != a)
-        cross.push_back(key(a, root[e.twin[h] / 3]));
-    }
-  });
   std::vector<uint64_t> cross, entry;
-  for (auto& v : cross_local) cross.insert(cross.end(), v.begin(), v.end());
-  for (auto& v : entry_local) entry.insert(entry.end(), v.begin(), v.end());
+  for (const auto& v : hull_local)
+    for (uint64_t k : v) entry.push_back(key(root[k >> 32], uint32_t(k)));
+  for (const auto& v : region_local)
+    for (uint64_t k : v)
+      if (const uint32_t a = root[k >> 32], b = root[uint32_t(k)]; a != b) {
+        cross.push_back(key(a, b));
+        cross.push_back(key(b, a));
+      }
   tbb::parallel_sort(cross.begin(), cross.end());
   std::sort(entry.begin(), entry.end());
 
-  // 0-1 breadth-first search from the outside, by component root.
-  BigArray<uint32_t> level_of_root(T, kNone);
+  // 0-1 breadth-first search from the outside, by component root. Every root is in an entry or a crossing
+  // (the mesh is connected): only those elements are set, and read.
+  BigArray<uint32_t> level_of_root(T);
+  for (uint64_t k : entry) level_of_root[k >> 32] = kNone;
+  for (uint64_t k : cross) level_of_root[k >> 32] = kNone;
   std::deque<uint32_t> queue;
   for (uint64_t k : entry) {
     const uint32_t a = uint32_t(k >> 32), L = uint32_t(k & 1);
@@ -303,15 +372,25 @@ BigArray<uint32_t> nesting_levels(const HalfEdges& e, size_t T, const BigArray<u
       }
     }
   }
-  BigArray<uint32_t> level(T);
-  each(T, [&](size_t t) { level[t] = level_of_root[root[t]]; });
-  return level;
+  return {std::move(root), std::move(level_of_root)};
 }
 
-// Triangles reached from beyond the hull across unconstrained edges longer than max_edge: the components,
-// joined by such edges, of the triangles with such an edge on the hull.
-BigArray<uint8_t> trimmed(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& flag,
-                             double max_edge) {
+// keep[t] for every triangle by its nesting level: odd levels are inside, or even ones if outside_kept.
+// Returns how many are not kept.
+uint64_t keep_inside(const HalfEdges& e, size_t T, const BigArray<uint8_t>& flag, bool outside_kept,
+                     BigArray<uint8_t>& keep) {
+  const Levels l = nesting_levels(e, T, flag);
+  // Every triangle is reached (the mesh is connected); kNone would count as odd.
+  return count_if(T, [&](size_t t) {
+    keep[t] = (l.level_of_root[l.root[t]] % 2 == 1) != outside_kept;
+    return !keep[t];
+  });
+}
+
+// Drops from keep the triangles reached from beyond the hull across unconstrained edges longer than max_edge
+// (the components, joined by such edges, of the triangles with such an edge on the hull); returns how many.
+uint64_t trim(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& flag, double max_edge,
+              BigArray<uint8_t>& keep) {
   const size_t T = mesh.triangles.size();
   const double limit2 = max_edge * max_edge;
   auto long_open = [&](size_t h) {
@@ -321,14 +400,88 @@ BigArray<uint8_t> trimmed(const Mesh& mesh, const HalfEdges& e, const BigArray<u
     const double dx = b.x - a.x, dy = b.y - a.y;
     return dx * dx + dy * dy > limit2;
   };
-  const BigArray<uint32_t> root = components(e, T, long_open);
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> seeds;
+  auto seed_of = [&](size_t h) {
+    if (long_open(h)) seeds.local().push_back(uint32_t(h / 3));
+  };
+  const BigArray<uint32_t> root = components(e, T, long_open, seed_of, [](size_t) {});
   BigArray<uint8_t> seed(T, 0);
-  each(3 * T, [&](size_t h) {
-    if (e.twin[h] == kNone && long_open(h)) shared(seed[root[h / 3]]).store(1, std::memory_order_relaxed);
+  for (const auto& v : seeds)
+    for (uint32_t t : v) seed[root[t]] = 1;
+  return count_if(T, [&](size_t t) {
+    const bool drop = keep[t] && seed[root[t]];
+    if (drop) keep[t] = 0;
+    return drop;
   });
-  BigArray<uint8_t> gone(T);
-  each(T, [&](size_t t) { gone[t] = seed[root[t]]; });
-  return gone;
+}
+
+// used[v]: whether v is a corner of a kept triangle. Each vertex is written by one thread, or marks from
+// every thread would share cache lines: the triangles starting in a block of vertices mark their corners in
+// that block (a corner is never below the start) and leave the few beyond it to a second pass.
+BigArray<uint8_t> used_vertices(const std::vector<Triangle>& ts, const HalfEdges& e,
+                                const BigArray<uint8_t>& keep) {
+  constexpr size_t kBlock = 1 << 16;
+  const size_t V = e.start.size() - 1;
+  BigArray<uint8_t> used(V);
+  tbb::enumerable_thread_specific<std::vector<uint32_t>> beyond_local;
+  tbb::parallel_for(size_t(0), (V + kBlock - 1) / kBlock, [&](size_t b) {
+    const size_t v0 = b * kBlock, v1 = std::min(V, v0 + kBlock);
+    std::fill(used.begin() + v0, used.begin() + v1, 0);
+    auto& beyond = beyond_local.local();
+    for (size_t t = e.start[v0]; t < e.start[v1]; ++t)
+      if (keep[t])
+        for (uint32_t v : ts[t]) v < v1 ? void(used[v] = 1) : beyond.push_back(v);
+  });
+  for (const auto& v : beyond_local)
+    each(v.size(), [&](size_t i) { shared(used[v[i]]).store(1, std::memory_order_relaxed); });
+  return used;
+}
+
+// The used vertices, in order, and renumber[v], each one's new index (kNone for the others).
+std::vector<Point3> kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& used,
+                                  BigArray<uint32_t>& renumber) {
+  constexpr size_t kBlock = 1 << 16;
+  const size_t V = mesh.vertices.size(), blocks = (V + kBlock - 1) / kBlock;
+  auto end = [&](size_t b) { return std::min(V, (b + 1) * kBlock); };
+  std::vector<uint32_t> first(blocks + 1, 0);  // first[b + 1]: block b's count, then the offsets
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    uint32_t n = 0;
+    for (size_t v = b * kBlock; v < end(b); ++v) renumber[v] = used[v] ? n++ : kNone;
+    first[b + 1] = n;
+  });
+  for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
+  std::vector<Point3> out;
+  resize_touched(out, first[blocks]);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    for (size_t v = b * kBlock; v < end(b); ++v)
+      if (renumber[v] != kNone) out[renumber[v] += first[b]] = mesh.vertices[v];
+  });
+  return out;
+}
+
+// Keeps the triangles with keep[t], renumbered, at the front of `ts`, and drops the rest. They go through
+// `scratch` (3 per triangle: the twins' pages, faulted already) and back into ts' own pages: a fresh list
+// would fault its pages, and freeing the old one unmap them.
+void keep_triangles(std::vector<Triangle>& ts, const BigArray<uint8_t>& keep,
+                    const BigArray<uint32_t>& renumber, BigArray<uint32_t>& scratch) {
+  constexpr size_t kBlock = 1 << 16;
+  const size_t T = ts.size(), blocks = (T + kBlock - 1) / kBlock;
+  auto end = [&](size_t b) { return std::min(T, (b + 1) * kBlock); };
+  std::vector<size_t> first(blocks + 1, 0);  // first[b + 1]: block b's count, then the offsets
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    size_t n = 0;
+    for (size_t t = b * kBlock; t < end(b); ++t) n += keep[t];
+    first[b + 1] = n;
+  });
+  for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
+  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+    uint32_t* at = scratch.begin() + 3 * first[b];
+    for (size_t t = b * kBlock; t < end(b); ++t)
+      if (keep[t])
+        for (uint32_t v : ts[t]) *at++ = renumber[v];
+  });
+  each(first[blocks], [&](size_t k) { ts[k] = {scratch[3 * k], scratch[3 * k + 1], scratch[3 * k + 2]}; });
+  ts.resize(first[blocks]);
 }
 
 }  // namespace
@@ -400,59 +553,29 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
     passes += fmt::format(" {} {:.1f} ms", name, std::chrono::duration<double, std::milli>(t - t0).count());
     t0 = t;
   };
-  const HalfEdges e = half_edges(mesh);
+  HalfEdges e = half_edges(mesh);
   lap("half-edges");
   BigArray<uint8_t> flag(3 * T, 0);
   mark_constraints(mesh, prepared, rules.region_edge, rules.max_edge > 0, e, flag);
   lap("constraints");
 
-  BigArray<uint8_t> keep(T, 1);
+  BigArray<uint8_t> keep = regions ? BigArray<uint8_t>(T) : BigArray<uint8_t>(T, 1);
   if (regions) {
-    const BigArray<uint32_t> level = nesting_levels(e, T, flag);
-    // Every triangle is reached (the mesh is connected); kNone would count as odd.
-    each(T, [&](size_t t) { keep[t] = (level[t] % 2 == 1) != rules.outside_kept; });
-    stats.triangles_outside = count_if(T, [&](size_t t) { return !keep[t]; });
+    stats.triangles_outside = keep_inside(e, T, flag, rules.outside_kept, keep);
     lap("levels");
   }
   if (rules.max_edge > 0) {
-    const BigArray<uint8_t> gone = trimmed(mesh, e, flag, rules.max_edge);
-    stats.triangles_trimmed = count_if(T, [&](size_t t) { return gone[t] && keep[t]; });
-    each(T, [&](size_t t) { keep[t] &= !gone[t]; });
+    stats.triangles_trimmed = trim(mesh, e, flag, rules.max_edge, keep);
     lap("trim");
   }
 
-  // Compaction: kept triangles, then the vertices still used. The renumbering keeps the order of vertices,
-  // so triangles stay sorted and start at their smallest index: the mesh stays canonical.
-  BigArray<uint8_t> used(V, 0);
-  each(T, [&](size_t t) {
-    if (keep[t])
-      for (uint32_t v : mesh.triangles[t]) shared(used[v]).store(1, std::memory_order_relaxed);
-  });
-  const std::vector<uint32_t> kept_ids = compact<uint32_t>(
-      V, [&](size_t v) { return used[v]; },
-      [&](size_t v, uint32_t* at) {
-        if (used[v]) *at++ = uint32_t(v);
-        return at;
-      });
+  // Compaction: the vertices still used, then the kept triangles. The renumbering keeps the order of
+  // vertices, so triangles stay sorted and start at their smallest index: the mesh stays canonical.
   BigArray<uint32_t> renumber(V);
-  std::vector<Point3> vertices;
-  resize_touched(vertices, kept_ids.size());
-  each(kept_ids.size(), [&](size_t k) {
-    renumber[kept_ids[k]] = uint32_t(k);
-    vertices[k] = mesh.vertices[kept_ids[k]];
-  });
-  std::vector<Triangle> kept = compact<Triangle>(
-      T, [&](size_t t) { return keep[t]; },
-      [&](size_t t, Triangle* at) {
-        if (keep[t]) {
-          const Triangle& tri = mesh.triangles[t];
-          *at++ = {renumber[tri[0]], renumber[tri[1]], renumber[tri[2]]};
-        }
-        return at;
-      });
+  std::vector<Point3> vertices = kept_vertices(mesh, used_vertices(mesh.triangles, e, keep), renumber);
+  keep_triangles(mesh.triangles, keep, renumber, e.twin);
   stats.vertices_removed = V - vertices.size();
   mesh.vertices = std::move(vertices);
-  mesh.triangles = std::move(kept);
   lap("compaction");
   spdlog::debug("regions:{}", passes);
   return stats;

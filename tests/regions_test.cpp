@@ -372,13 +372,30 @@ TEST(Regions, CanonicalOrderKept) {
   EXPECT_EQ(c.triangles, m.triangles);
 }
 
-// Many parcels at a size where every parallel pass of apply_regions splits its work: a boundary of adjacent
-// parcels (their shared edges are no region edges), holes in some of them, islands in the holes, breaklines.
-// With `bay`, no boundary (the hull is the domain) and a bay empty of points cut into it from the left, which
-// max-edge trims. The CDT restricted to the domain, and the same bytes on 1 and 2 threads.
+// apply_regions finds twins through the canonical order (triangles starting at a vertex are contiguous): a
+// mesh out of that order is refused, not misread.
+TEST(Regions, MeshOutOfCanonicalOrderIsRefused) {
+  Built b = build(lake_with_island());
+  PreparedInput p = prepare(b.in);
+  const CdtResult r = triangulate_cgal(p);
+  const RegionRules rules = region_rules(b.in, b.parts, p, 0);
+  Mesh rotated = r.mesh, swapped = r.mesh, same = r.mesh;
+  Triangle& t = rotated.triangles[5];
+  t = {t[1], t[2], t[0]};  // no longer starting at its smallest vertex
+  std::swap(swapped.triangles[3], swapped.triangles[40]);
+  EXPECT_THROW(apply_regions(rotated, p, rules), std::logic_error);
+  EXPECT_THROW(apply_regions(swapped, p, rules), std::logic_error);
+  EXPECT_NO_THROW(apply_regions(same, p, rules));
+}
+
+// Many parcels at a size where every parallel pass of apply_regions splits its work (over 65536 vertices and
+// triangles: several blocks, corners beyond their block): a boundary of adjacent parcels (their shared edges
+// are no region edges), holes in some of them, islands in the holes, breaklines. With `bay`, no boundary (the
+// hull is the domain) and a bay empty of points cut into it from the left, which max-edge trims. The CDT
+// restricted to the domain, and the same bytes on 1 and 2 threads.
 std::vector<Layer> parcels(bool bay) {
   std::vector<Point3> pts;
-  for (const Point3& q : scatter(60000, -10, -10, 410, 410, 21))
+  for (const Point3& q : scatter(70000, -10, -10, 410, 410, 21))
     if (!bay || q.x > 120 || std::abs(q.y - 200) > 30) pts.push_back(q);
   std::vector<Layer> layers;
   layers.push_back({Role::vertices, pts, {}, {}});
