@@ -339,6 +339,8 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
                   "tiles: tiles of at most this many points (default: the CPU's auto size; the GPU: a quarter of the "
                   "input, or what the device holds)");
   cmd->add_flag("--points-only", o.points_only, "tiles: uniform points without constraint segments");
+  cmd->add_option("--tiles-in-flight", o.tiles_in_flight, "tiles: GPU tiles worked on at once, per device (cdtgpu triangulate: 2)")
+      ->check(CLI::Range(1, 16));
   cmd->add_option("--devices", o.devices,
                   "tiles: also GPU tiled rows on several devices, 2, 4, ... up to all of these (all, or indices "
                   "0,1,... as `cdtgpu devices` lists them)");

@@ -208,7 +208,7 @@ int run_tiles(const BenchOptions& o) {
       const std::string backend = users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size());
       results.push_back(time_row("tiled", backend, o.runs, [&](Row& r) {
         sum = gpu::GpuCdtStats{};
-        tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(2 * users.size()), tri.finalize);
+        tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(o.tiles_in_flight * users.size()), tri.finalize);
       }));
       std::string parts;
       for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
