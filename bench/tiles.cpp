@@ -206,6 +206,7 @@ int run_tiles(const BenchOptions& o) {
       gpu::GpuCdtStats sum;
       const gpu::GpuTiles tri = gpu::gpu_tiles(users, &sum);
       const std::string backend = users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size());
+      const double memory_before = gpu::memory_ms();
       results.push_back(time_row("tiled", backend, o.runs, [&](Row& r) {
         sum = gpu::GpuCdtStats{};
         tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(o.tiles_in_flight * users.size()), tri.finalize);
@@ -213,9 +214,10 @@ int run_tiles(const BenchOptions& o) {
       std::string parts;
       for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
       std::printf(
-          "%9s last tiled %s run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB\n", "",
+          "%9s last tiled %s run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB; device "
+          "buffers allocated and freed in %s ms (all runs, all threads)\n", "",
           backend.c_str(), fmt(sum.gpu_total_ms).c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
-          fmt(double(sum.peak_device_bytes) / 1e6).c_str());
+          fmt(double(sum.peak_device_bytes) / 1e6).c_str(), fmt(gpu::memory_ms() - memory_before).c_str());
     }
     if (results.empty()) continue;
     const Mesh& reference = results.front().mesh;

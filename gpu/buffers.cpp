@@ -272,6 +272,16 @@ Buffer BufferCache::take(const Context& ctx, const std::string& key, VkDeviceSiz
   return std::move(buffers_[key]);
 }
 
+Buffer BufferCache::take_addressed(const Context& ctx, const std::string& key, VkDeviceSize bytes,
+                                   const std::string& label) {
+  Buffer& b = buffers_[key];
+  if (!b.buffer || b.size < bytes) {
+    b = Buffer();
+    b = create_addressed_buffer(ctx, bytes, label);
+  }
+  return std::move(b);
+}
+
 void BufferCache::give(const std::string& key, Buffer b) {
   if (b.buffer) buffers_[key] = std::move(b);
 }

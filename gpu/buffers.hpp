@@ -67,6 +67,8 @@ class BufferCache {
   const Buffer& get(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label = "");
   // The same, taken out of the cache for a caller that holds buffers by value; give() puts it back.
   Buffer take(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label = "");
+  // take() of a buffer made by create_addressed_buffer (keys of their own: a key holds one kind).
+  Buffer take_addressed(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label);
   void give(const std::string& key, Buffer b);
   // Device bytes the cache holds.
   uint64_t bytes() const;

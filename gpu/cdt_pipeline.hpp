@@ -90,7 +90,9 @@ class GpuCdt {
 
  private:
   // Upload and Delaunay build of all[ids[i]] (of all, when ids is empty), their stages added to `s`.
-  GpuTriangulation delaunay_of(std::span<const Point3> all, std::span<const uint32_t> ids, GpuCdtStats& s) const;
+  // `keep`: the tiles' cache (DelaunayBuilder::build).
+  GpuTriangulation delaunay_of(std::span<const Point3> all, std::span<const uint32_t> ids, GpuCdtStats& s,
+                               BufferCache* keep = nullptr) const;
   // Stage 3: the constraints inserted.
   void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s) const;
   // Stage 4: the triangles downloaded in canonical order into `storage`.
@@ -100,6 +102,8 @@ class GpuCdt {
   // One scratch cache for the stages, which run one after another: the Delaunay build's per-slot buffers are
   // the inserter's and the canonical sort's (gpu/buffers.hpp, shared keys), allocated once and kept.
   mutable BufferCache cache_;
+  // Tiles: the triangulation's own buffers and the build's numbering, kept from one tile to the next.
+  mutable BufferCache tile_cache_;
   Primitives prims_;
   DelaunayBuilder delaunay_;
   ConstraintInserter inserter_;

@@ -112,6 +112,7 @@ struct DelaunayBuilder::State {
   // The points in build numbering (Morton order, dt_renumber), and the canonical id of each; tri.points is
   // released while the build runs and rewritten at the end (dt_number_back).
   Buffer pts, perm;
+  BufferCache* keep = nullptr;  // build(keep): where the slots and the numbering come from
   Buffer loc, list, loc2, list2;  // per list position: a point's slot code, its id; compaction targets
   Buffer pick, claim, partner, flip[2];
   Buffer bids;     // the slots with a bid this round
@@ -231,13 +232,14 @@ GpuTriangulation DelaunayBuilder::build(std::span<const double> xy, DelaunayStat
   return build(upload_new(ctx_, xy.subspan(0, size_t(n) * 2), "points"), n, stats);
 }
 
-GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats* stats) const {
+GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats* stats, BufferCache* keep) const {
   if (n > DT_MAX_SLOTS / 2)
     throw DeviceError("delaunay: " + std::to_string(n) + " points; at most " +
                       std::to_string(DT_MAX_SLOTS / 2));
   State st(ctx_);
   st.n = n;
   st.stats = stats;
+  st.keep = keep;
   st.tri.points = std::move(points);
   st.tri.num_points = n;
   if (stats) {
@@ -348,8 +350,12 @@ uint64_t DelaunayBuilder::peak_bytes(uint32_t n) {
 void DelaunayBuilder::start(State& st) const {
   const uint32_t n = st.n, slots = slot_capacity(n);
   st.tri.capacity = slots;
-  st.tri.verts = create_addressed_buffer(ctx_, uint64_t(slots) * 12, "tri_verts");
-  st.tri.nbrs = create_addressed_buffer(ctx_, uint64_t(slots) * 12, "tri_nbrs");
+  auto slots_buffer = [&](const char* name) {
+    return st.keep ? st.keep->take_addressed(ctx_, name, uint64_t(slots) * 12, name)
+                   : create_addressed_buffer(ctx_, uint64_t(slots) * 12, name);
+  };
+  st.tri.verts = slots_buffer("tri_verts");
+  st.tri.nbrs = slots_buffer("tri_nbrs");
   st.loc = scratch(kPoints4[0], uint64_t(n) * 4, "dt loc");
   st.list = scratch(kPoints4[1], uint64_t(n) * 4, "dt list");
   st.flip[0] = scratch(kSlots4[1], uint64_t(slots) * 4, "dt flip list 0");
@@ -363,8 +369,10 @@ void DelaunayBuilder::start(State& st) const {
   prims_.radix_sort(st.rec, st.flip[0], st.list, n, 32, sort_bits);
   // Not from the cache: kept there, they would add 20 B/pt to the later stages' peak (the constraint
   // inserter, the canonical sort).
-  st.pts = create_buffer(ctx_, uint64_t(n) * 16, "dt points (build numbering)");
-  st.perm = create_buffer(ctx_, uint64_t(n) * 4, "dt canonical ids");
+  st.pts = st.keep ? st.keep->take(ctx_, "dt pts", uint64_t(n) * 16, "dt points (build numbering)")
+                   : create_buffer(ctx_, uint64_t(n) * 16, "dt points (build numbering)");
+  st.perm = st.keep ? st.keep->take(ctx_, "dt perm", uint64_t(n) * 4, "dt canonical ids")
+                    : create_buffer(ctx_, uint64_t(n) * 4, "dt canonical ids");
   st.rec.dispatch_groups(renumber_, {st.tri.points, st.list, st.loc, st.pts, st.perm, st.tri.verts}, init,
                          groups(n));
   st.end();
@@ -648,6 +656,10 @@ void DelaunayBuilder::number_back(State& st) const {
                          groups(std::max<uint64_t>(n, uint64_t(st.used) * 3)));
   st.end();
   submit(st, false);
+  if (st.keep) {
+    st.keep->give("dt pts", std::move(st.pts));
+    st.keep->give("dt perm", std::move(st.perm));
+  }
   st.pts = Buffer{};
   st.perm = Buffer{};
 }

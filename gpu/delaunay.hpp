@@ -71,7 +71,10 @@ class DelaunayBuilder {
   // Uploads the points and builds; the result owns them.
   GpuTriangulation build(std::span<const double> xy, DelaunayStats* stats = nullptr) const;
   // Builds on points already on the GPU (n canonical dvec2); takes the buffer over as the result's points.
-  GpuTriangulation build(Buffer points, uint32_t n, DelaunayStats* stats = nullptr) const;
+  // `keep`: the triangulation's slots and the build's numbering taken from there (a caller gives the slots
+  // back when done; tiles: one allocation a device instead of one a tile, whose driver calls serialise across
+  // devices). Null: allocated here and freed with the result, the lower peak for one large run.
+  GpuTriangulation build(Buffer points, uint32_t n, DelaunayStats* stats = nullptr, BufferCache* keep = nullptr) const;
 
   // Device bytes a build of n points holds at its peak (the same count as DelaunayStats::peak_device_bytes).
   static uint64_t peak_bytes(uint32_t n);
