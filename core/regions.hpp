@@ -10,7 +10,7 @@
 // then a flood fill over triangle adjacency counts the region edges crossed from the outside (CGAL's nesting
 // levels, as in its polygon-triangulation example). It runs on all CPU cores after either backend, so both
 // give the same bytes, whatever the thread count: 2M points + 500K segments with a boundary and a hole take
-// ~110 ms on 16 threads (docs/performance.md, "Regions").
+// about 60 ms on the 16-thread H100 machine (docs/performance.md, "Regions").
 #pragma once
 #include <cstdint>
 #include <vector>
