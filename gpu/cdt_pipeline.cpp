@@ -170,6 +170,7 @@ TileFinal GpuCdt::finalize_tile(const TileJob& job, GpuCdtStats* stats) const {
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
   std::future<std::vector<Triangle>> storage = triangle_storage(job.ids.size());
+  cache_.grow_by = tile_cache_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &tile_cache_);
   constrain(tri, job.segments, s);
   auto t = Clock::now();
