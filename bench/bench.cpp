@@ -376,7 +376,16 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_option("--rows", o.rows, "peer: POINTS+SEGMENTS rows (default 2M,8M,2M+500K,2M+1M,4M+1M)")->delimiter(',');
   cmd->add_option("--cgal-max", o.cgal_max_points,
                   "no CGAL run (so no comparison) above this many points, where CGAL takes minutes (default 10M)")
-      ->transform([](std::string s) { return std::to_string(parse_bench_size(s)); });
+      ->transform([](std::string s) {
+        if (s == "0") return s;  // no CGAL run at all
+        try {
+          return std::to_string(parse_bench_size(s));
+        } catch (const UsageError& e) {  // a message and exit 2, not an uncaught exception
+          std::string m = e.what();
+          if (m.rfind("--sizes: ", 0) == 0) m = m.substr(9);
+          throw CLI::ValidationError(m);
+        }
+      });
   cmd->add_option("--keep", o.keep_dir, "e2e: write inputs, outputs, stats and logs into this folder and keep them");
   cmd->add_option("--grid-cells", o.grid_cells,
                   "grid: cells on the grid's long side (default 10000, a 10000 x 10000 grid; --quick: 1000)");

@@ -1,6 +1,7 @@
 // Tests of the end-to-end bench: its workload (bench/e2e_workload.hpp) and `cdtgpu bench --table e2e` run
 // with cdtgpu as the child (bench/e2e.hpp).
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -237,4 +238,15 @@ TEST_F(E2eDir, ABackendTheChildRejectsFailsItsRowAndTheOthersStillRun) {
   EXPECT_TRUE(cells[1]["ok"].get<bool>());
   EXPECT_TRUE(cells[1]["bytes_equal"].get<bool>());
   EXPECT_TRUE(cells[1].contains("first_run"));  // cgal's first run: no pipelines to compile
+}
+
+// A bad --cgal-max is a usage message and exit 2, not an uncaught exception (it was "terminate called").
+TEST(BenchOptions, ABadCgalMaxIsAUsageError) {
+  const std::string err = testing::TempDir() + "/bench_cgal_max.txt";
+  const int status = std::system((std::string(CDTGPU_BINARY) + " bench --table tiles --cgal-max 2x 2>" + err).c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  std::ifstream in(err);
+  const std::string message((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(message.find("--cgal-max: unknown suffix in '2x'"), std::string::npos) << message;
 }
