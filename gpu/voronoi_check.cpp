@@ -151,6 +151,19 @@ struct Mesh {
   void twins(uint32_t v) {
     for (uint32_t i = first[v]; i < first[v + 1]; ++i) twin[corners[i]] = edge(heads[i], v);
   }
+  // The boundary edges out of a (corners without a twin, twins(a) done): next[a] = the last one's head, then
+  // `again(a)` for each one after the first and `into(b)` for each head b.
+  template <class Again, class Into>
+  void boundary_out(uint32_t a, Array& next, Again&& again, Into&& into) const {
+    bool out = false;
+    for (uint32_t i = first[a]; i < first[a + 1]; ++i) {
+      if (twin[corners[i]] != kNone) continue;
+      if (out) again(a);
+      out = true;
+      next[a] = heads[i];
+      into(heads[i]);
+    }
+  }
   uint32_t degree(uint32_t v) const { return first[v + 1] - first[v]; }
   uint32_t head(uint32_t c) const { return tris[c / 3][(c % 3 + 1) % 3]; }
   uint32_t tail(uint32_t c) const { return tris[c / 3][(c % 3 + 2) % 3]; }
@@ -211,15 +224,8 @@ struct Checker {
     each(points, [&](size_t v) {
       const uint32_t a = uint32_t(v);
       m.twins(a);
-      bool out = false;
-      for (uint32_t i = m.first[a]; i < m.first[a + 1]; ++i) {
-        const uint32_t b = m.heads[i];
-        if (m.twin[m.corners[i]] != kNone) continue;
-        if (out) blame.add(a);
-        out = true;
-        next[a] = b;
-        shared(in[b]).fetch_add(1, std::memory_order_relaxed);
-      }
+      m.boundary_out(a, next, [&](uint32_t v) { blame.add(v); },
+                     [&](uint32_t b) { shared(in[b]).fetch_add(1, std::memory_order_relaxed); });
     });
     each(points, [&](size_t v) {
       if (in[v] > 1 || (in[v] == 1) != (next[v] != kNone)) blame.add(uint32_t(v));
@@ -260,17 +266,7 @@ struct Checker {
     for (uint32_t v : old) next[v] = kNone;
     m.twin.resize(m.tris.size() * 3);
     for (uint32_t a : old) m.twins(a);
-    for (uint32_t a : old) {
-      bool out = false;
-      for (uint32_t i = m.first[a]; i < m.first[a + 1]; ++i) {
-        const uint32_t b = m.heads[i];
-        if (m.twin[m.corners[i]] != kNone) continue;
-        if (out) off.push_back(a);
-        out = true;
-        next[a] = b;
-        ++in[b];
-      }
-    }
+    for (uint32_t a : old) m.boundary_out(a, next, [&](uint32_t v) { off.push_back(v); }, [&](uint32_t b) { ++in[b]; });
     for (uint32_t v : old) {
       const uint32_t k = in.count(v) ? in[v] : 0;
       if (k > 1 || (k == 1) != (next[v] != kNone)) off.push_back(v);
