@@ -383,6 +383,9 @@ std::vector<Triangle> place_runs(std::vector<std::vector<Triangle>>& runs, size_
 }
 
 std::vector<Triangle> merge_runs(std::vector<std::vector<Triangle>>& runs, size_t n) {
+  runs.erase(std::remove_if(runs.begin(), runs.end(), [](const auto& r) { return r.empty(); }), runs.end());
+  if (runs.empty()) return {};
+  if (runs.size() == 1) return std::move(runs.front());  // sorted already
   size_t total = 0;
   for (const auto& r : runs) total += r.size();
   return total <= UINT32_MAX ? place_runs<uint32_t>(runs, n, total) : place_runs<uint64_t>(runs, n, total);
@@ -393,8 +396,7 @@ struct TileResult {
   std::vector<Triangle> final_triangles;
   std::vector<Edge> border;
   double cdt_ms = 0, other_ms = 0;
-  // Parts of other_ms: the tile's input, the host's final test and border, the results in the whole's ids.
-  double gather_ms = 0, final_ms = 0, output_ms = 0;
+  double gather_ms = 0, final_ms = 0;  // parts of other_ms: the tile's input, the host's final test and border
 };
 
 // A tile's final triangles and border, timed into r: its CDT from the finalizer.
@@ -524,7 +526,6 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
   r.gather_ms = ms_since(t0);
   TileFinal f = finalize ? finalize_tile(finalize, TileJob{v, ids, local_segments, node.rect, name}, r)
                          : final_on_host(v, ids, local_segments, node.rect, triangulate, name, r);
-  const auto t3 = Clock::now();
   // Back to the whole's ids, in place (a fresh 1.5 GB array for a 64M-point tile was zeroed on one core):
   // sorted ids keep a canonical list canonical.
   r.final_triangles = std::move(f.triangles);
@@ -540,7 +541,6 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
     for (uint32_t id : r.final_triangles[i])
       std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
   });
-  r.output_ms = ms_since(t3);
   r.other_ms = ms_since(t0) - r.cdt_ms;
   return r;
 }
