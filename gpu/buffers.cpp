@@ -259,21 +259,22 @@ void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSiz
   upload_with(ctx, dst, bytes, [&](void* mapped) { std::memcpy(mapped, data, bytes); }, offset);
 }
 
-VkDeviceSize BufferCache::regrown(const Buffer& old, VkDeviceSize bytes) const {
-  if (!old.buffer || grow_by <= 0) return bytes;
-  return std::max(bytes, old.size + VkDeviceSize(double(old.size) * grow_by));
+Buffer& BufferCache::fit(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label,
+                         bool addressed) {
+  Buffer& b = buffers_[key];
+  if (!b.buffer || b.size < bytes) {
+    const VkDeviceSize want =
+        b.buffer && grow_by > 0 ? std::max(bytes, b.size + VkDeviceSize(double(b.size) * grow_by)) : bytes;
+    b = Buffer();  // the old one goes first: a lower peak
+    b = addressed ? create_addressed_buffer(ctx, want, label)
+                  : create_buffer(ctx, std::min(want, std::max(bytes, ctx.info.max_storage_buffer_range)), label);
+  }
+  return b;
 }
 
 const Buffer& BufferCache::get(const Context& ctx, const std::string& key, VkDeviceSize bytes,
                                const std::string& label) {
-  Buffer& b = buffers_[key];
-  if (!b.buffer || b.size < bytes) {
-    const VkDeviceSize want = regrown(b, bytes);
-    b = Buffer();  // the old one goes first: a lower peak
-    b = create_buffer(ctx, std::min<VkDeviceSize>(want, std::max<VkDeviceSize>(bytes, ctx.info.max_storage_buffer_range)),
-                      label.empty() ? key : label);
-  }
-  return b;
+  return fit(ctx, key, bytes, label.empty() ? key : label, false);
 }
 
 Buffer BufferCache::take(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label) {
@@ -283,13 +284,7 @@ Buffer BufferCache::take(const Context& ctx, const std::string& key, VkDeviceSiz
 
 Buffer BufferCache::take_addressed(const Context& ctx, const std::string& key, VkDeviceSize bytes,
                                    const std::string& label) {
-  Buffer& b = buffers_[key];
-  if (!b.buffer || b.size < bytes) {
-    const VkDeviceSize want = regrown(b, bytes);
-    b = Buffer();
-    b = create_addressed_buffer(ctx, want, label);
-  }
-  return std::move(b);
+  return std::move(fit(ctx, key, bytes, label, true));
 }
 
 void BufferCache::give(const std::string& key, Buffer b) {

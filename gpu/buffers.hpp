@@ -78,7 +78,8 @@ class BufferCache {
   double grow_by = 0;
 
  private:
-  VkDeviceSize regrown(const Buffer& old, VkDeviceSize bytes) const;
+  // The buffer under `key`, made (or regrown, by grow_by) to hold `bytes`.
+  Buffer& fit(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label, bool addressed);
   std::map<std::string, Buffer> buffers_;
 };
 
