@@ -13,7 +13,7 @@ namespace cdtgpu {
 
 namespace {
 
-bool sorted_and_unique(const std::vector<Point3>& v) {
+bool sorted_and_unique(const Points& v) {
   for (size_t i = 1; i < v.size(); ++i)
     if (v[i - 1].x > v[i].x || (v[i - 1].x == v[i].x && v[i - 1].y >= v[i].y)) return false;
   return true;
@@ -21,7 +21,7 @@ bool sorted_and_unique(const std::vector<Point3>& v) {
 
 }  // namespace
 
-void canonicalize_triangles(std::vector<Triangle>& triangles) {
+void canonicalize_triangles(Triangles& triangles) {
   // Rotation keeps the orientation.
   tbb::parallel_for(size_t(0), triangles.size(), [&](size_t i) {
     Triangle& t = triangles[i];
@@ -39,7 +39,7 @@ void canonicalize_triangles(std::vector<Triangle>& triangles) {
 }
 
 void canonicalize(Mesh& mesh) {
-  const std::vector<Point3>& v = mesh.vertices;
+  const Points& v = mesh.vertices;
   if (!sorted_and_unique(v)) {  // the backends' vertices usually are: then only the triangles move
     std::vector<uint32_t> order(v.size());
     std::iota(order.begin(), order.end(), 0u);
@@ -50,7 +50,7 @@ void canonicalize(Mesh& mesh) {
       return a < b;
     });
     std::vector<uint32_t> new_index(v.size());
-    std::vector<Point3> sorted(v.size());
+    Points sorted(v.size());
     for (uint32_t i = 0; i < order.size(); ++i) {
       new_index[order[i]] = i;
       sorted[i] = v[order[i]];

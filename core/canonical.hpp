@@ -10,6 +10,6 @@ void canonicalize(Mesh& mesh);
 
 // The triangles' part of it, for a list whose vertex order is canonical already: each rotated, the list sorted
 // (on all cores; a list already in order, as the GPU's and the tiles' runs come, is only checked).
-void canonicalize_triangles(std::vector<Triangle>& triangles);
+void canonicalize_triangles(Triangles& triangles);
 
 }  // namespace cdtgpu

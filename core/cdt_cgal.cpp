@@ -87,7 +87,7 @@ using CdtPlus = CGAL::Constrained_triangulation_plus_2<Cdt>;
 // Inserts the vertices as CGAL's range insert does (Hilbert-sorted, each with the last one's face as hint);
 // `set_index(handle, i)` records vertex i's index on its handle. Returns the handle of each vertex.
 template <class Tri, class SetIndex>
-std::vector<typename Tri::Vertex_handle> insert_points(Tri& cdt, const std::vector<Point3>& vertices,
+std::vector<typename Tri::Vertex_handle> insert_points(Tri& cdt, const Points& vertices,
                                                        SetIndex set_index) {
   std::vector<Epick::Point_2> points;
   points.reserve(vertices.size());
@@ -110,7 +110,7 @@ std::vector<typename Tri::Vertex_handle> insert_points(Tri& cdt, const std::vect
 }  // namespace
 
 CdtResult triangulate_cgal(const PreparedInput& prepared) {
-  const std::vector<Point3>& in = prepared.vertices;
+  const Points& in = prepared.vertices;
   const uint32_t n = uint32_t(in.size());
   CdtResult result;
 
@@ -158,7 +158,7 @@ CdtResult triangulate_cgal(const PreparedInput& prepared) {
   return result;
 }
 
-std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+Triangles cdt_of_graph(const Points& vertices, const std::vector<Edge>& segments,
                                    std::vector<uint32_t>* neighbours) {
   using GVb = CGAL::Triangulation_vertex_base_with_info_2<uint32_t, Epick>;
   struct FaceIndex {
@@ -171,7 +171,7 @@ std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const st
   const std::vector<GraphCdt::Vertex_handle> handle =
       insert_points(cdt, vertices, [](GraphCdt::Vertex_handle v, uint32_t i) { v->info() = i; });
   for (const Edge& e : segments) cdt.insert_constraint(handle[e[0]], handle[e[1]]);
-  std::vector<Triangle> triangles;
+  Triangles triangles;
   if (cdt.dimension() != 2) return triangles;
   triangles.reserve(cdt.number_of_faces());
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {

@@ -21,7 +21,7 @@ CdtResult triangulate_cgal(const PreparedInput& prepared);
 // triangulate_cgal on the input the graph was resolved from. Fewer than 3 vertices or all collinear: none.
 // `neighbours`, when given: 3 per triangle, [3i + k] the triangle across its edge from vertex k to vertex k + 1,
 // or UINT32_MAX on the hull.
-std::vector<Triangle> cdt_of_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+Triangles cdt_of_graph(const Points& vertices, const std::vector<Edge>& segments,
                                    std::vector<uint32_t>* neighbours = nullptr);
 
 }  // namespace cdtgpu

@@ -9,14 +9,17 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <type_traits>
 #include <vector>
 
 #include "core/touched.hpp"
 
 namespace cdtgpu {
 
-template <class T, class Count, class Emit>
-std::vector<T> compact(size_t n, Count count, Emit emit) {
+// Into `out` (resized to the items' count): a RawVector is written once, a std::vector zeroed first.
+template <class Vec, class Count, class Emit>
+Vec compact_as(size_t n, Count count, Emit emit) {
+  using T = typename Vec::value_type;
   constexpr size_t kBlock = 1 << 16;
   const size_t blocks = (n + kBlock - 1) / kBlock;
   std::vector<size_t> first(blocks + 1, 0);
@@ -24,13 +27,21 @@ std::vector<T> compact(size_t n, Count count, Emit emit) {
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) first[b + 1] += count(i);
   });
   for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
-  std::vector<T> out;
-  resize_touched(out, first[blocks]);
+  Vec out;
+  if constexpr (std::is_same_v<Vec, RawVector<T>>)
+    resize_unwritten(out, first[blocks]);
+  else
+    resize_touched(out, first[blocks]);
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     T* at = out.data() + first[b];
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) at = emit(i, at);
   });
   return out;
+}
+
+template <class T, class Count, class Emit>
+std::vector<T> compact(size_t n, Count count, Emit emit) {
+  return compact_as<std::vector<T>>(n, count, emit);
 }
 
 }  // namespace cdtgpu

@@ -27,7 +27,7 @@ namespace cdtgpu {
 struct Contour {
   double level = 0;
   bool closed = false;
-  std::vector<Point3> points;  // closed: the last point equals the first
+  Points points;  // closed: the last point equals the first
 };
 
 // Throws UsageError for an interval that is not a positive finite number or more than max_levels levels.

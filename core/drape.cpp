@@ -25,8 +25,8 @@ P2 p2(const Point3& p) { return {p.x, p.y}; }
 }  // namespace
 
 DrapeSurface::DrapeSurface(Mesh surface) : mesh_(std::move(surface)) {
-  const std::vector<Point3>& vs = mesh_.vertices;
-  const std::vector<Triangle>& ts = mesh_.triangles;
+  const Points& vs = mesh_.vertices;
+  const Triangles& ts = mesh_.triangles;
   if (ts.empty()) throw std::invalid_argument("DrapeSurface: no triangles");
   double x1 = -HUGE_VAL, y1 = -HUGE_VAL;
   x0_ = y0_ = HUGE_VAL;
@@ -74,7 +74,7 @@ uint32_t DrapeSurface::cell_y(double y) const {
 }
 
 double DrapeSurface::z_at(double x, double y, bool* outside) const {
-  const std::vector<Point3>& vs = mesh_.vertices;
+  const Points& vs = mesh_.vertices;
   const P2 p(x, y);
   const size_t cell = size_t(cell_y(y)) * nx_ + cell_x(x);
   uint32_t found = std::numeric_limits<uint32_t>::max();
@@ -165,7 +165,7 @@ DrapeStats apply_z_rules(InputSet& in, const std::vector<InputPart>& parts) {
     if (!part.z.draped()) continue;
     for (size_t i = part.points_begin; i < part.points_end; ++i) drape_point(in.points[i]);
     for (size_t i = part.lines_begin; i < part.lines_end; ++i) {
-      std::vector<Point3>& pts = in.lines[i].points;
+      Points& pts = in.lines[i].points;
       for (Point3& p : pts) drape_point(p);
       if (pts.empty() || part.z.kind == ZRule::Kind::drape) continue;
       double lo = HUGE_VAL, hi = -HUGE_VAL, sum = 0;

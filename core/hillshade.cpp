@@ -83,7 +83,7 @@ std::vector<uint8_t> hillshade_rgba(const Raster& dem) {
   return rgba;
 }
 
-void draw_edges(std::vector<uint8_t>& rgba, const GridSpec& g, const std::vector<Point3>& vertices,
+void draw_edges(std::vector<uint8_t>& rgba, const GridSpec& g, const Points& vertices,
                 const std::vector<Edge>& edges) {
   // Pixel (col, row) covers the cell centred at (g.x(col), g.y(row)).
   const double left = double(g.ix0) * g.cell, top = double(g.iy0 + int64_t(g.nrows) - 1) * g.cell;

@@ -26,7 +26,7 @@ std::vector<uint8_t> hillshade_rgba(const Raster& dem);
 
 // Draws each edge (a, b) of `vertices` as a one-pixel dark line onto an image of dem's grid (pixel = cell);
 // parts outside the grid are clipped.
-void draw_edges(std::vector<uint8_t>& rgba, const GridSpec& grid, const std::vector<Point3>& vertices,
+void draw_edges(std::vector<uint8_t>& rgba, const GridSpec& grid, const Points& vertices,
                 const std::vector<Edge>& edges);
 
 }  // namespace cdtgpu

@@ -136,8 +136,8 @@ PointMerge merge_points(std::span<const double> xy) {
     heads[k + 1] = c;
   });
   for (size_t k = 1; k <= blocks; ++k) heads[k] += heads[k - 1];
-  resize_touched(m.vertex_of, n);
-  m.first.resize(heads[blocks]);
+  resize_unwritten(m.vertex_of, n);  // every element written below, on all cores
+  resize_unwritten(m.first, heads[blocks]);
   tbb::parallel_for(size_t(0), blocks, [&](size_t k) {
     uint32_t v = heads[k];
     for (size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) {

@@ -22,7 +22,7 @@ using Points = RawVector<Point3>;
 // A constraint polyline as read: a contour (open) or a ring such as a building footprint (closed; the
 // closing edge from the last point back to the first is implied, the first point is not repeated).
 struct Polyline {
-  std::vector<Point3> points;
+  Points points;
   bool closed = false;
   uint32_t source = 0;  // index into InputSet::sources
   uint64_t record = 0;  // 1-based record (shapefile) or line (text) in that source, for messages
@@ -66,12 +66,15 @@ inline bool is_missing_z(double z) { return std::bit_cast<uint64_t>(z) == 0x7ff8
 
 using Triangle = std::array<uint32_t, 3>;  // vertex indices, counter-clockwise
 using Edge = std::array<uint32_t, 2>;
+// Triangles as made (downloads, merges, the tiles' canonical order): resize() leaves the new ones for their
+// writer, on all cores; std::vector's would first zero them on one core (1 s for 512M triangles).
+using Triangles = RawVector<Triangle>;
 
 // A TIN. Canonical order (canonical.hpp): vertices sorted by (x, y); each triangle starts at its smallest
 // index and stays counter-clockwise; triangles sorted lexicographically.
 struct Mesh {
-  std::vector<Point3> vertices;
-  std::vector<Triangle> triangles;
+  Points vertices;
+  Triangles triangles;
 };
 
 }  // namespace cdtgpu

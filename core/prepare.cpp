@@ -48,9 +48,9 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
   out.input_points = total;
 
   // Every occurrence's coordinates in reading order, gathered on all cores (lines start at known offsets).
-  std::vector<double> xy, z;
-  resize_touched(xy, 2 * total);
-  resize_touched(z, total);
+  RawVector<double> xy, z;
+  resize_unwritten(xy, 2 * total);
+  resize_unwritten(z, total);
   std::vector<uint64_t> line_at(in.lines.size() + 1, in.points.size());
   for (size_t i = 0; i < in.lines.size(); ++i) line_at[i + 1] = line_at[i] + in.lines[i].points.size();
   std::atomic<bool> bad{false};
@@ -80,9 +80,9 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
   if (m.vertex_of.size() != total || m.first.size() > total)
     throw std::logic_error("prepare: the point merge returned " + std::to_string(m.vertex_of.size()) +
                            " of " + std::to_string(total) + " points");
-  const std::vector<uint32_t>& vertex_of = m.vertex_of;
+  const RawVector<uint32_t>& vertex_of = m.vertex_of;
   // Both loops gather at random (cache misses): in parallel (TBB), each result independent of the split.
-  resize_touched(out.vertices, m.first.size());
+  resize_unwritten(out.vertices, m.first.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, m.first.size()), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t v = r.begin(); v < r.end(); ++v) {
       const uint32_t i = m.first[v];

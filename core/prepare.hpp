@@ -12,7 +12,7 @@ struct PreparedInput {
   // occurrence in the order InputSet holds them: every loose point (in.points, in order) before every
   // polyline vertex (in.lines in order, each line's points in order). With several files this is not read
   // order: a later file's loose points come before an earlier file's lines.
-  std::vector<Point3> vertices;
+  Points vertices;
   // Constraint segments (a < b), unique, no zero-length ones, sorted. Crossings are not resolved here.
   std::vector<Edge> constraints;
   // For each constraint, the index of the input polyline it came from (first one if shared).
@@ -31,7 +31,7 @@ struct PreparedInput {
 // Exact duplicate merging of n points (xy = x0, y0, x1, y1, ...): vertices numbered in (x, y) order,
 // vertex_of[i] = the vertex of point i, first[v] = the smallest i on vertex v (-0.0 equals +0.0).
 struct PointMerge {
-  std::vector<uint32_t> vertex_of, first;
+  RawVector<uint32_t> vertex_of, first;
 };
 using PointMerger = std::function<PointMerge(std::span<const double> xy)>;
 

@@ -46,7 +46,7 @@ uint64_t key(uint32_t a, uint32_t b) { return uint64_t(a) << 32 | b; }
 bool xy_less(const Point3& a, const Point3& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; }
 
 // Index of the vertex at (x, y) in vertices sorted by (x, y), or kNone.
-uint32_t find_vertex(const std::vector<Point3>& vs, const Point3& p) {
+uint32_t find_vertex(const Points& vs, const Point3& p) {
   auto it = std::lower_bound(vs.begin(), vs.end(), p, xy_less);
   return it != vs.end() && it->x == p.x && it->y == p.y ? uint32_t(it - vs.begin()) : kNone;
 }
@@ -66,7 +66,7 @@ struct HalfEdges {
 // start[] of a canonical list, and corner[v] = v's last triangle's first half-edge where v starts one
 // (kNone elsewhere, until half_edges finds one). A list out of canonical order is a logic_error: the twins
 // rely on it.
-void starts(const std::vector<Triangle>& ts, uint32_t V, HalfEdges& e) {
+void starts(const Triangles& ts, uint32_t V, HalfEdges& e) {
   const size_t T = ts.size();
   e.start = BigArray<uint32_t>(size_t(V) + 1);
   e.corner = BigArray<uint32_t>(V);
@@ -83,7 +83,7 @@ void starts(const std::vector<Triangle>& ts, uint32_t V, HalfEdges& e) {
 }
 
 // The triangle in [start[v], start[v + 1]) whose corner k is w (half-edges between v and w), or kNone.
-uint32_t find_in_range(const std::vector<Triangle>& ts, const HalfEdges& e, uint32_t v, int k, uint32_t w) {
+uint32_t find_in_range(const Triangles& ts, const HalfEdges& e, uint32_t v, int k, uint32_t w) {
   for (uint32_t s = e.start[v]; s < e.start[v + 1]; ++s)
     if (ts[s][k] == w) return s;
   return kNone;
@@ -101,7 +101,7 @@ struct Open {  // a middle half-edge h whose twin is not found yet, by its edge 
 // twin among a's triangles, a middle half-edge b -> c among min(b, c)'s, and the middle-to-middle pairs left
 // (an edge whose two triangles both start elsewhere) meet in a sort by edge.
 HalfEdges half_edges(const Mesh& mesh) {
-  const std::vector<Triangle>& ts = mesh.triangles;
+  const Triangles& ts = mesh.triangles;
   const uint32_t V = uint32_t(mesh.vertices.size());
   const size_t T = ts.size();
   HalfEdges e;
@@ -146,7 +146,7 @@ HalfEdges half_edges(const Mesh& mesh) {
 // over 500K contour segments walk 1K segments, not 500K.
 void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std::vector<uint8_t>& region,
                       bool all, const HalfEdges& e, BigArray<uint8_t>& flag) {
-  const std::vector<Point3>& mv = mesh.vertices;
+  const Points& mv = mesh.vertices;
   const uint32_t V = uint32_t(mv.size());
   auto P = [&](uint32_t v) { return P2(mv[v].x, mv[v].y); };
   BigArray<uint8_t> is_input(V, 0);
@@ -418,7 +418,7 @@ uint64_t trim(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& fla
 // used[v]: whether v is a corner of a kept triangle. Each vertex is written by one thread, or marks from
 // every thread would share cache lines: the triangles starting in a block of vertices mark their corners in
 // that block (a corner is never below the start) and leave the few beyond it to a second pass.
-BigArray<uint8_t> used_vertices(const std::vector<Triangle>& ts, const HalfEdges& e,
+BigArray<uint8_t> used_vertices(const Triangles& ts, const HalfEdges& e,
                                 const BigArray<uint8_t>& keep) {
   constexpr size_t kBlock = 1 << 16;
   const size_t V = e.start.size() - 1;
@@ -438,7 +438,7 @@ BigArray<uint8_t> used_vertices(const std::vector<Triangle>& ts, const HalfEdges
 }
 
 // The used vertices, in order, and renumber[v], each one's new index (kNone for the others).
-std::vector<Point3> kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& used,
+Points kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& used,
                                   BigArray<uint32_t>& renumber) {
   constexpr size_t kBlock = 1 << 16;
   const size_t V = mesh.vertices.size(), blocks = (V + kBlock - 1) / kBlock;
@@ -450,8 +450,8 @@ std::vector<Point3> kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& use
     first[b + 1] = n;
   });
   for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
-  std::vector<Point3> out;
-  resize_touched(out, first[blocks]);
+  Points out;
+  resize_unwritten(out, first[blocks]);
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     for (size_t v = b * kBlock; v < end(b); ++v)
       if (renumber[v] != kNone) out[renumber[v] += first[b]] = mesh.vertices[v];
@@ -462,7 +462,7 @@ std::vector<Point3> kept_vertices(const Mesh& mesh, const BigArray<uint8_t>& use
 // Keeps the triangles with keep[t], renumbered, at the front of `ts`, and drops the rest. They go through
 // `scratch` (3 per triangle: the twins' pages, faulted already) and back into ts' own pages: a fresh list
 // would fault its pages, and freeing the old one unmap them.
-void keep_triangles(std::vector<Triangle>& ts, const BigArray<uint8_t>& keep,
+void keep_triangles(Triangles& ts, const BigArray<uint8_t>& keep,
                     const BigArray<uint32_t>& renumber, BigArray<uint32_t>& scratch) {
   constexpr size_t kBlock = 1 << 16;
   const size_t T = ts.size(), blocks = (T + kBlock - 1) / kBlock;
@@ -572,7 +572,7 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
   // Compaction: the vertices still used, then the kept triangles. The renumbering keeps the order of
   // vertices, so triangles stay sorted and start at their smallest index: the mesh stays canonical.
   BigArray<uint32_t> renumber(V);
-  std::vector<Point3> vertices = kept_vertices(mesh, used_vertices(mesh.triangles, e, keep), renumber);
+  Points vertices = kept_vertices(mesh, used_vertices(mesh.triangles, e, keep), renumber);
   keep_triangles(mesh.triangles, keep, renumber, e.twin);
   stats.vertices_removed = V - vertices.size();
   mesh.vertices = std::move(vertices);

@@ -25,7 +25,7 @@ void add_point(InputSet& in, uint32_t source, uint64_t record, const Point3& p) 
 }
 
 void add_polyline(InputSet& in, Polyline line) {
-  std::vector<Point3> kept;
+  Points kept;
   kept.reserve(line.points.size());
   for (const Point3& p : line.points) {
     check_finite(in, line.source, line.record, p);

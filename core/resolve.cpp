@@ -248,18 +248,18 @@ struct SweepState {
 class Resolver {
  public:
   // Takes the input.
-  Resolver(std::vector<Point3>&& vertices, std::vector<Edge>&& constraints, unsigned threads)
+  Resolver(Points&& vertices, std::vector<Edge>&& constraints, unsigned threads)
       : threads_(threads), v_(std::move(vertices)), seg_(std::move(constraints)) {}
 
   // Copies the input. With several threads the copy runs beside round 1, which reads the caller's arrays
   // meanwhile: 48 MB of vertices take ~30 ms to copy on the 2-core machines, mostly page faults, and that
   // overlaps with the sweep's computing. The copy itself on all cores (TBB): on one, 120 MB (5M vertices)
   // outlasted the sweep on the 16-core H100 machine.
-  Resolver(const std::vector<Point3>& vertices, const std::vector<Edge>& constraints, unsigned threads)
+  Resolver(const Points& vertices, const std::vector<Edge>& constraints, unsigned threads)
       : threads_(threads), vr_(&vertices), sr_(&constraints) {
     if (threads_ > 1)
       copier_ = std::jthread([this, &vertices, &constraints] {
-        resize_touched(v_, vertices.size());
+        resize_unwritten(v_, vertices.size());
         tbb::parallel_for(tbb::blocked_range<size_t>(0, vertices.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
           std::copy(vertices.begin() + r.begin(), vertices.begin() + r.end(), v_.begin() + r.begin());
         });
@@ -776,11 +776,11 @@ class Resolver {
   }
 
   const unsigned threads_;
-  std::vector<Point3> v_;        // prepared vertices
-  std::vector<Point3> steiner_;  // Steiner vertices in creation order: vertex n0_ + i is steiner_[i]
+  Points v_;        // prepared vertices
+  Points steiner_;  // Steiner vertices in creation order: vertex n0_ + i is steiner_[i]
   std::vector<Edge> seg_;        // prepared constraints, then the pieces of splits (in order along them)
   // What rounds read: the caller's arrays while they are being copied, then v_ and seg_.
-  const std::vector<Point3>* vr_ = &v_;
+  const Points* vr_ = &v_;
   const std::vector<Edge>* sr_ = &seg_;
   std::jthread copier_;           // declared after v_ and seg_: destroyed (joined) before them
   std::vector<Span> span_;        // columns of each piece

@@ -12,7 +12,7 @@ namespace cdtgpu {
 
 struct ResolvedInput {
   // prepared.vertices plus the Steiner vertices, canonical: sorted by (x, y), unique.
-  std::vector<Point3> vertices;
+  Points vertices;
   // Segments (a < b), unique, sorted; no two cross, none has a vertex strictly inside it.
   std::vector<Edge> constraints;
   // Vertices created where constraints cross (same meaning as CdtResult::steiner_points); a crossing whose

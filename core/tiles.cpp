@@ -55,7 +55,7 @@ struct Node {
 };
 
 struct Plan {
-  std::vector<uint32_t> order;  // vertex ids, each node's a contiguous range
+  RawVector<uint32_t> order;  // vertex ids, each node's a contiguous range
   std::vector<Node> nodes;      // nodes[0]: the root
   std::vector<uint32_t> tiles;  // the leaf nodes, left to right in the tree
 };
@@ -90,8 +90,8 @@ void select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less) {
     count[b] = at;
     for (int k = 0; k < 3; ++k) at[k] += c[k];
   }
-  std::vector<uint32_t> out;
-  resize_touched(out, n);
+  RawVector<uint32_t> out;
+  resize_unwritten(out, n);
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     std::array<size_t, 3> w = count[b];
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) out[w[part(first[i])]++] = first[i];
@@ -112,10 +112,10 @@ void select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less) {
 // order, at the coordinate of the first one after it: every vertex strictly before that coordinate is on the
 // near side, so by induction every vertex strictly inside a tile's rectangle is one of the tile's own. A
 // binary tree over the cuts serves the segments' descent.
-Plan plan_tiles(const std::vector<Point3>& v, uint64_t max_points) {
+Plan plan_tiles(const Points& v, uint64_t max_points) {
   const size_t n = v.size();
   Plan plan;
-  resize_touched(plan.order, n);
+  resize_unwritten(plan.order, n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) { plan.order[i] = uint32_t(i); });
   auto [y0, y1] = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, n, 1 << 16), std::pair<double, double>{kInf, -kInf},
@@ -261,7 +261,7 @@ uint64_t key_of(uint32_t a, uint32_t b) { return a < b ? uint64_t(a) << 32 | b :
 // The hull chains of p[ids] (ids in (x, y) order): the lower one left to right, then the upper one right to
 // left, collinear boundary points kept (a triangulation's hull edges join consecutive ones). Returns the
 // closed cycle, its first point repeated at the end.
-std::vector<uint32_t> hull_cycle(const std::vector<Point3>& p, const std::vector<uint32_t>& ids) {
+std::vector<uint32_t> hull_cycle(const Points& p, const std::vector<uint32_t>& ids) {
   auto turn = [&](uint32_t a, uint32_t b, uint32_t c) {
     return pred::orient2d({p[a].x, p[a].y}, {p[b].x, p[b].y}, {p[c].x, p[c].y});
   };
@@ -282,7 +282,7 @@ std::vector<uint32_t> hull_cycle(const std::vector<Point3>& p, const std::vector
 // The edges of the convex hull of sorted points, counter-clockwise, as directed keys a << 32 | b. A point on
 // the whole hull is on the hull of any run of the order that holds it, so runs' hull points are found on all
 // cores and the hull of those few is the answer (64M points: 5.7 s on one core before).
-std::vector<uint64_t> hull_edges(const std::vector<Point3>& p) {
+std::vector<uint64_t> hull_edges(const Points& p) {
   constexpr size_t kRun = 1 << 16;
   const size_t runs = (p.size() + kRun - 1) / kRun;
   std::vector<std::vector<uint32_t>> on_hull(runs);
@@ -306,7 +306,7 @@ std::vector<uint64_t> hull_edges(const std::vector<Point3>& p) {
 // not shared with another final triangle. Such an edge is shared with a non-final triangle (b->a is one of
 // its edges) or lies on the tile's hull (a->b is a hull edge); both its ends then touch a non-final triangle
 // or the hull, which a byte per vertex tells, so nearly every edge is settled without a look-up.
-void mark_border(const std::vector<Triangle>& triangles, const std::vector<Point3>& local,
+void mark_border(const Triangles& triangles, const Points& local,
                  std::vector<uint8_t>& final_mask) {
   const size_t nt = triangles.size();
   const std::vector<uint64_t> hull = hull_edges(local);
@@ -340,7 +340,7 @@ void mark_border(const std::vector<Triangle>& triangles, const std::vector<Point
 // Calls f(v, i, j) for each group [i, j) of triangles with the same first vertex v in a sorted run, on all
 // cores; one call per group, so writes indexed by v do not race within a run.
 template <class F>
-void each_group(const std::vector<Triangle>& run, F&& f) {
+void each_group(const Triangles& run, F&& f) {
   tbb::parallel_for(tbb::blocked_range<size_t>(0, run.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) {
       if (i > 0 && run[i - 1][0] == run[i][0]) continue;
@@ -356,7 +356,7 @@ void each_group(const std::vector<Triangle>& run, F&& f) {
 // together and in order, so only the buckets that take triangles from two runs (vertices on the final
 // region's border) are sorted afterwards. A heap merge of the runs took 1.5 s for 512M triangles on 16 threads.
 template <class Offset>
-std::vector<Triangle> place_runs(std::vector<std::vector<Triangle>>& runs, size_t n, size_t total) {
+Triangles place_runs(std::vector<Triangles>& runs, size_t n, size_t total) {
   RawVector<Offset> first(n + 1);  // counts at [v + 1], then bucket v's next free place at [v]
   RawVector<uint8_t> mixed(n);     // bucket v takes triangles from two runs
   each(n + 1, [&](size_t v) { first[v] = 0; });
@@ -367,8 +367,8 @@ std::vector<Triangle> place_runs(std::vector<std::vector<Triangle>>& runs, size_
       first[v + 1] += Offset(j - i);
     });
   prefix_sums(first);
-  std::vector<Triangle> out;
-  resize_touched(out, total);
+  Triangles out;
+  resize_unwritten(out, total);
   for (auto& run : runs) {
     each_group(run, [&](uint32_t v, size_t i, size_t j) {
       std::copy(run.begin() + i, run.begin() + j, out.begin() + first[v]);
@@ -382,7 +382,7 @@ std::vector<Triangle> place_runs(std::vector<std::vector<Triangle>>& runs, size_
   return out;
 }
 
-std::vector<Triangle> merge_runs(std::vector<std::vector<Triangle>>& runs, size_t n) {
+Triangles merge_runs(std::vector<Triangles>& runs, size_t n) {
   runs.erase(std::remove_if(runs.begin(), runs.end(), [](const auto& r) { return r.empty(); }), runs.end());
   if (runs.empty()) return {};
   if (runs.size() == 1) return std::move(runs.front());  // sorted already
@@ -393,7 +393,7 @@ std::vector<Triangle> merge_runs(std::vector<std::vector<Triangle>>& runs, size_
 
 // One tile: its CDT, its final triangles (vertex ids of the whole) and their border.
 struct TileResult {
-  std::vector<Triangle> final_triangles;
+  Triangles final_triangles;
   std::vector<Edge> border;
   double cdt_ms = 0, other_ms = 0;
   double gather_ms = 0, final_ms = 0;  // parts of other_ms: the tile's input, the host's final test and border
@@ -408,19 +408,19 @@ TileFinal finalize_tile(const TileFinalizer& finalize, const TileJob& job, TileR
 }
 
 // The same from the triangulator's whole CDT of the tile, tested here.
-TileFinal final_on_host(const std::vector<Point3>& v, std::span<const uint32_t> ids,
+TileFinal final_on_host(const Points& v, std::span<const uint32_t> ids,
                         const std::vector<Edge>& segments, const Rect& rect, const TileTriangulator& triangulate,
                         const std::string& name, TileResult& r) {
   auto t = Clock::now();
-  std::vector<Point3> local;
-  resize_touched(local, ids.size());
+  Points local;
+  resize_unwritten(local, ids.size());
   tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) { local[i] = v[ids[i]]; });
   r.gather_ms += ms_since(t);
   t = Clock::now();
   TileMesh mesh = triangulate(local, segments, name);
   r.cdt_ms = ms_since(t);
   t = Clock::now();
-  const std::vector<Triangle>& triangles = mesh.triangles;
+  const Triangles& triangles = mesh.triangles;
   const size_t nt = triangles.size();
   // Bit 3: final; bit k < 3: its edge k is on the final region's border.
   std::vector<uint8_t> final_mask(nt, 0);
@@ -441,7 +441,7 @@ TileFinal final_on_host(const std::vector<Point3>& v, std::span<const uint32_t> 
   }
   r.final_ms = ms_since(t);
   TileFinal f;
-  f.triangles = compact<Triangle>(
+  f.triangles = compact_as<Triangles>(
       nt, [&](size_t i) { return final_mask[i] ? 1 : 0; },
       [&](size_t i, Triangle* at) {
         if (final_mask[i]) *at++ = triangles[i];
@@ -458,7 +458,7 @@ TileFinal final_on_host(const std::vector<Point3>& v, std::span<const uint32_t> 
   return f;
 }
 
-TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segments, const Plan& plan,
+TileResult run_tile(const Points& v, const std::vector<Edge>& segments, const Plan& plan,
                     const Node& node, std::span<const uint32_t> tile_segments,
                     const TileTriangulator& triangulate, const TileFinalizer& finalize,
                     const std::string& name, std::vector<uint8_t>& in_final) {
@@ -548,7 +548,7 @@ TileResult run_tile(const std::vector<Point3>& v, const std::vector<Edge>& segme
 // The merge's triangles outside the final region: the merge triangulates the final region's holes too, from
 // their border vertices; those triangles lie in parts of the merge, bounded by border edges, that are on the
 // final side of a border edge (tiling.md, claim 2). `border` is directed with the final region on its left.
-std::vector<Triangle> outside_final(const std::vector<Triangle>& m, const std::vector<Edge>& border) {
+Triangles outside_final(const Triangles& m, const std::vector<Edge>& border) {
   std::vector<std::pair<uint64_t, bool>> final_side;  // key, and whether the final side is left of (min, max)
   final_side.reserve(border.size());
   for (const Edge& e : border) final_side.push_back({key_of(e[0], e[1]), e[0] < e[1]});
@@ -597,7 +597,7 @@ std::vector<Triangle> outside_final(const std::vector<Triangle>& m, const std::v
           "tile merge: a part of the merge lies on both sides of the final region's border");
     mk = want;
   }
-  std::vector<Triangle> kept;
+  Triangles kept;
   kept.reserve(m.size());
   for (size_t t = 0; t < m.size(); ++t)
     if (mark[root(uint32_t(t))] != 1) kept.push_back(m[t]);
@@ -607,7 +607,7 @@ std::vector<Triangle> outside_final(const std::vector<Triangle>& m, const std::v
 }  // namespace
 
 TileTriangulator cgal_tile_triangulator() {
-  return [](const std::vector<Point3>& v, const std::vector<Edge>& s, std::string_view) {
+  return [](const Points& v, const std::vector<Edge>& s, std::string_view) {
     TileMesh m;
     m.triangles = cdt_of_graph(v, s, &m.neighbours);
     return m;
@@ -617,14 +617,14 @@ TileTriangulator cgal_tile_triangulator() {
 namespace {
 
 // tiled_cdt's triangles as sorted canonical runs: one per tile, one for the merge's.
-std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, const std::vector<Edge>& segments,
+std::vector<Triangles> tiled_runs(const Points& v, const std::vector<Edge>& segments,
                                               const TileOptions& options, const TileTriangulator& triangulate,
                                               TileStats& s) {
   const uint64_t n = v.size();
   const uint64_t level = s.levels + 1;
   if (options.max_tile_points < 3 || n <= options.max_tile_points) {
     const auto t = Clock::now();
-    std::vector<std::vector<Triangle>> all(1, triangulate(v, segments, "the whole input").triangles);
+    std::vector<Triangles> all(1, triangulate(v, segments, "the whole input").triangles);
     canonicalize_triangles(all[0]);
     s.merge_ms = ms_since(t);
     s.merge_vertices = n;
@@ -763,7 +763,7 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   // The merge: the vertices not inside the final region, the segments between them (a segment with an end
   // inside the final region lies inside it) and the final region's border.
   const auto t_merge_input = Clock::now();
-  std::vector<std::vector<Triangle>> runs(tiles);
+  std::vector<Triangles> runs(tiles);
   std::vector<Edge> border;
   uint64_t final_count = 0;
   for (size_t t = 0; t < tiles; ++t) {
@@ -788,7 +788,7 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
         return at;
       });
   RawVector<uint32_t> local_of(n);
-  std::vector<Point3> merge_vertices(ids.size());
+  Points merge_vertices(ids.size());
   tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) {
     local_of[ids[i]] = uint32_t(i);
     merge_vertices[i] = v[ids[i]];
@@ -817,9 +817,9 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
   // Tiled again while that shrinks it; the last level is one call (its time is merge_ms).
   const bool again =
       ids.size() > options.max_tile_points && double(ids.size()) <= options.retile_share * double(n);
-  std::vector<Triangle> merged;
+  Triangles merged;
   if (again) {
-    std::vector<std::vector<Triangle>> merge_runs_ =
+    std::vector<Triangles> merge_runs_ =
         tiled_runs(merge_vertices, merge_segments, options, triangulate, s);
     merged = merge_runs(merge_runs_, merge_vertices.size());
   } else {
@@ -831,7 +831,7 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
     s.merge_segments = merge_segments.size();
   }
   const auto t_keep = Clock::now();
-  std::vector<Triangle> kept = outside_final(merged, local_border);  // in order, so still a sorted run
+  Triangles kept = outside_final(merged, local_border);  // in order, so still a sorted run
   if (!again) s.merge_triangles = kept.size();
   tbb::parallel_for(size_t(0), kept.size(), [&](size_t i) {
     for (uint32_t& id : kept[i]) id = ids[id];
@@ -844,14 +844,14 @@ std::vector<std::vector<Triangle>> tiled_runs(const std::vector<Point3>& v, cons
 
 }  // namespace
 
-std::vector<Triangle> tiled_cdt(const std::vector<Point3>& v, const std::vector<Edge>& segments,
+Triangles tiled_cdt(const Points& v, const std::vector<Edge>& segments,
                                 const TileOptions& options, const TileTriangulator& triangulate,
                                 TileStats* stats) {
   TileStats local_stats;
   TileStats& s = stats ? *stats : local_stats;
-  std::vector<std::vector<Triangle>> runs = tiled_runs(v, segments, options, triangulate, s);
+  std::vector<Triangles> runs = tiled_runs(v, segments, options, triangulate, s);
   const auto t = Clock::now();
-  std::vector<Triangle> out = merge_runs(runs, v.size());
+  Triangles out = merge_runs(runs, v.size());
   s.order_ms = ms_since(t);
   return out;
 }
@@ -867,7 +867,7 @@ CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options,
 }
 
 std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points) {
-  const std::vector<Point3>& v = mesh.vertices;
+  const Points& v = mesh.vertices;
   if (v.empty()) return {};
   const Plan plan = plan_tiles(v, std::max<uint64_t>(1, tile_points));
   const size_t tiles = plan.tiles.size();

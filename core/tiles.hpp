@@ -33,7 +33,7 @@ namespace cdtgpu {
 // A tile's CDT: counter-clockwise triangles in any order, and optionally their neighbours (cdt_of_graph's
 // layout: [3i + k] across the edge from vertex k to k + 1, UINT32_MAX on the hull); empty: worked out here.
 struct TileMesh {
-  std::vector<Triangle> triangles;
+  Triangles triangles;
   std::vector<uint32_t> neighbours;
 };
 
@@ -41,7 +41,7 @@ struct TileMesh {
 // meeting only at shared endpoints and holding no vertex inside. Called from several threads at once (a GPU
 // triangulator serialises itself). `what` names the call for messages ("tile 3 of 16, level 1", "merge, level
 // 1").
-using TileTriangulator = std::function<TileMesh(const std::vector<Point3>& vertices,
+using TileTriangulator = std::function<TileMesh(const Points& vertices,
                                                 const std::vector<Edge>& segments, std::string_view what)>;
 
 // CGAL's constrained Delaunay triangulation (core/cdt_cgal.hpp, cdt_of_graph).
@@ -56,7 +56,7 @@ struct TileRect {
 // A tile as a TileFinalizer takes it: its vertices are all[ids[i]] (ids sorted), its segments in those local
 // indices (sorted).
 struct TileJob {
-  const std::vector<Point3>& all;
+  const Points& all;
   std::span<const uint32_t> ids;
   const std::vector<Edge>& segments;
   TileRect rect;
@@ -66,7 +66,7 @@ struct TileJob {
 // open rectangle; canonical order) and the final region's border within it (final triangles' edges not shared
 // with another final triangle, directed with the final triangle on their left; any order).
 struct TileFinal {
-  std::vector<Triangle> triangles;
+  Triangles triangles;
   std::vector<Edge> border;
 };
 // A triangulator that finds a tile's final triangles and border itself (the GPU's, next to its neighbours),
@@ -115,7 +115,7 @@ struct TileStats {
 
 // The triangles of CDT(vertices, segments) (the graph as TileTriangulator takes it), tiled as `options` say,
 // in canonical order (core/canonical.hpp): each starts at its smallest index, the list sorted.
-std::vector<Triangle> tiled_cdt(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+Triangles tiled_cdt(const Points& vertices, const std::vector<Edge>& segments,
                                 const TileOptions& options, const TileTriangulator& triangulate,
                                 TileStats* stats = nullptr);
 

@@ -35,13 +35,13 @@ std::string num(double v) {
   return buf;
 }
 
-std::string vtx(const std::vector<Point3>& vs, uint32_t i) {
+std::string vtx(const Points& vs, uint32_t i) {
   std::string s = "vertex " + std::to_string(i);
   if (i < vs.size()) s += " (" + num(vs[i].x) + ", " + num(vs[i].y) + ")";
   return s;
 }
 
-std::string tri(const std::vector<Triangle>& ts, size_t t) {
+std::string tri(const Triangles& ts, size_t t) {
   return "triangle " + std::to_string(t) + " (" + std::to_string(ts[t][0]) + ", " + std::to_string(ts[t][1]) +
          ", " + std::to_string(ts[t][2]) + ")";
 }
@@ -80,8 +80,8 @@ VerifyReport verify_mesh(const Mesh& mesh, const PreparedInput& prepared, size_t
                          std::vector<Edge>* constrained_edges) {
   VerifyReport report;
   Collector fail{report, std::max<size_t>(max_failures, 1)};
-  const std::vector<Point3>& mv = mesh.vertices;
-  const std::vector<Triangle>& ts = mesh.triangles;
+  const Points& mv = mesh.vertices;
+  const Triangles& ts = mesh.triangles;
   const uint32_t V = uint32_t(mv.size());
   std::vector<P2> P;
   P.reserve(V);

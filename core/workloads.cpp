@@ -91,7 +91,7 @@ void add_dt_edge_constraints(InputSet& in, uint64_t m, double f, uint64_t seed) 
   std::vector<uint32_t> idx(n);
   std::iota(idx.begin(), idx.end(), 0u);
   for (uint64_t i = 0; i < s; ++i) std::swap(idx[i], idx[i + uniform_below(rng, n - i)]);
-  std::vector<Point3> sub(s);
+  Points sub(s);
   for (uint64_t i = 0; i < s; ++i) sub[i] = in.points[idx[i]];
   std::sort(sub.begin(), sub.end(), less_xy);
   sub.erase(std::unique(sub.begin(), sub.end(), same_xy), sub.end());

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "core/touched.hpp"
 #include "gpu/context.hpp"
 
 namespace cdtgpu::gpu {
@@ -106,6 +107,15 @@ Buffer upload_new(const Context& ctx, const std::vector<T>& data, const std::str
   return upload_new(ctx, std::span<const T>(data), name);
 }
 // Reads the first `count` elements of `src`.
+// The same into a RawVector: the download's copy, on all cores, is the only write (no zeroing first).
+template <class T>
+RawVector<T> download_raw(const Context& ctx, const Buffer& src, size_t count) {
+  RawVector<T> out;
+  resize_unwritten(out, count);
+  if (count) download(ctx, src, out.data(), count * sizeof(T));
+  return out;
+}
+
 template <class T>
 std::vector<T> download_vector(const Context& ctx, const Buffer& src, size_t count) {
   std::vector<T> out(count);

@@ -24,7 +24,7 @@ TriangleSorter::TriangleSorter(const Context& ctx, const Primitives& prims)
       keys_(create_pass(ctx, {"canonical_keys", 4, sizeof(CanonicalKeysPush)})),
       write_(create_pass(ctx, {"canonical_write", 4, sizeof(CanonicalKeysPush)})) {}
 
-std::vector<Triangle> TriangleSorter::download(GpuTriangulation& tri, double* gpu_ms, std::vector<Triangle> out) const {
+Triangles TriangleSorter::download(GpuTriangulation& tri, double* gpu_ms, Triangles out) const {
   if (gpu_ms) *gpu_ms = 0;
   const uint32_t slots = tri.num_slots;
   if (slots == 0) {

@@ -20,8 +20,8 @@ class TriangleSorter {
   // Overwrites tri.nbrs with the sorted triangles and tri.vertex_slots (if any) with bucket sizes: both are not
   // needed any more, so no extra buffers.
   // `out`: storage to reuse (its pages already touched, say), resized to the finite triangles.
-  std::vector<Triangle> download(GpuTriangulation& tri, double* gpu_ms = nullptr,
-                                 std::vector<Triangle> out = {}) const;
+  Triangles download(GpuTriangulation& tri, double* gpu_ms = nullptr,
+                                 Triangles out = {}) const;
 
   BufferCache* cache = nullptr;  // where the keys live between calls (shared keys); null: a cache of its own
 

@@ -34,9 +34,9 @@ void record_stage(GpuCdtStats& s, const char* name, Clock::time_point t0) {
 
 // The host array for the triangles of n vertices (at most 2n), its pages touched on other cores while the GPU
 // works: fresh memory costs a page fault per 4 KiB, ~15 ms for 2.5M points, which the download would wait for.
-std::future<std::vector<Triangle>> triangle_storage(size_t n) {
+std::future<Triangles> triangle_storage(size_t n) {
   return std::async(std::launch::async, [n] {
-    std::vector<Triangle> v;
+    Triangles v;
     resize_touched(v, 2 * n);
     return v;
   });
@@ -96,7 +96,7 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
 
-  std::future<std::vector<Triangle>> triangles = triangle_storage(prepared.vertices.size());
+  std::future<Triangles> triangles = triangle_storage(prepared.vertices.size());
 
   // 1. CPU, on other threads (`resolving`): constraints that pass through vertices are split there, crossings
   //    get Steiner vertices, so that the GPU sees a planar straight-line graph on canonical vertices.
@@ -135,12 +135,12 @@ void GpuCdt::constrain(GpuTriangulation& tri, const std::vector<Edge>& constrain
   record_stage(s, "constraints", t);
 }
 
-std::vector<Triangle> GpuCdt::download_sorted(GpuTriangulation& tri, GpuCdtStats& s,
-                                              std::vector<Triangle> storage) const {
+Triangles GpuCdt::download_sorted(GpuTriangulation& tri, GpuCdtStats& s,
+                                              Triangles storage) const {
   // 4. The finite triangles, sorted into canonical order on the GPU, then downloaded.
   auto t = Clock::now();
   double sort_ms = 0;
-  std::vector<Triangle> triangles = sorter_.download(tri, &sort_ms, std::move(storage));
+  Triangles triangles = sorter_.download(tri, &sort_ms, std::move(storage));
   // During the sort: the triangulation and every scratch buffer the stages left in the cache (the sort takes
   // its own from there too).
   const uint64_t sorting = tri.points.size + tri.verts.size + tri.nbrs.size + tri.vertex_slots.size + cache_.bytes();
@@ -150,16 +150,16 @@ std::vector<Triangle> GpuCdt::download_sorted(GpuTriangulation& tri, GpuCdtStats
   return triangles;
 }
 
-std::vector<Triangle> GpuCdt::triangulate_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+Triangles GpuCdt::triangulate_graph(const Points& vertices, const std::vector<Edge>& segments,
                                                 GpuCdtStats* stats) const {
   GpuCdtStats local;
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
-  std::future<std::vector<Triangle>> storage = triangle_storage(vertices.size());
+  std::future<Triangles> storage = triangle_storage(vertices.size());
   GpuTriangulation tri = delaunay_of(vertices, {}, s);
   constrain(tri, segments, s);
-  std::vector<Triangle> triangles = download_sorted(tri, s, storage.get());
+  Triangles triangles = download_sorted(tri, s, storage.get());
   s.wall_total_ms = ms_since(t_all);
   return triangles;
 }
@@ -169,7 +169,7 @@ TileFinal GpuCdt::finalize_tile(const TileJob& job, GpuCdtStats* stats) const {
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
-  std::future<std::vector<Triangle>> storage = triangle_storage(job.ids.size());
+  std::future<Triangles> storage = triangle_storage(job.ids.size());
   cache_.grow_by = tile_cache_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &tile_cache_);
   constrain(tri, job.segments, s);

@@ -67,7 +67,7 @@ class GpuCdt {
   // The CDT of a graph resolved already (vertices sorted and unique, segments meeting only at shared endpoints and
   // through no vertex: a tile of core/tiles): stages 2-4 without the resolve stage or any copy of the input.
   // Triangles in canonical order.
-  std::vector<Triangle> triangulate_graph(const std::vector<Point3>& vertices, const std::vector<Edge>& segments,
+  Triangles triangulate_graph(const Points& vertices, const std::vector<Edge>& segments,
                                           GpuCdtStats* stats = nullptr) const;
 
   // A tile of core/tiles (a resolved graph too, its vertices job.all[job.ids[i]]): stages 2-3, then its final
@@ -96,7 +96,7 @@ class GpuCdt {
   // Stage 3: the constraints inserted.
   void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s) const;
   // Stage 4: the triangles downloaded in canonical order into `storage`.
-  std::vector<Triangle> download_sorted(GpuTriangulation& tri, GpuCdtStats& s, std::vector<Triangle> storage) const;
+  Triangles download_sorted(GpuTriangulation& tri, GpuCdtStats& s, Triangles storage) const;
 
   const Context& ctx_;
   // One scratch cache for the stages, which run one after another: the Delaunay build's per-slot buffers are

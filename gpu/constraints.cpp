@@ -102,7 +102,7 @@ uint64_t directed(uint32_t x, uint32_t y) { return (uint64_t(x) << 32) | y; }
 // perturbation for ties). Its triangle is empty and crosses no chain edge because every chain vertex sees the
 // base (it is an endpoint of an edge that crossed the base), and both halves keep that property.
 void split_pseudo_polygon(const HostTriangulation& h, const std::vector<uint32_t>& chain, size_t i, size_t j,
-                          std::vector<Triangle>& out) {
+                          Triangles& out) {
   auto xy = [&](uint32_t v) { return pred::XY{h.xy[2 * v], h.xy[2 * v + 1]}; };
   if (j - i < 2) return;
   size_t apex = i + 1;
@@ -177,7 +177,7 @@ uint32_t insert_on_host(HostTriangulation& h, std::span<const Edge> cons) {
         if (in_cavity[NBR_TRI(code)] != c)
           outside[directed(h.verts[3 * x + (e + 1) % 3], h.verts[3 * x + (e + 2) % 3])] = code;
       }
-    std::vector<Triangle> made;
+    Triangles made;
     split_pseudo_polygon(h, left, 0, left.size() - 1, made);  // left chain: left of a -> b
     std::reverse(right.begin(), right.end());
     split_pseudo_polygon(h, right, 0, right.size() - 1, made);  // right chain reversed: left of b -> a

@@ -8,7 +8,7 @@
 //   gpu::GpuTriangulation tri = gpu::upload_triangulation(ctx, host_dt);
 //   gpu::ConstraintStats stats;
 //   gpu::ConstrainedEdges ce = inserter.insert(tri, constraints, &stats);
-//   std::vector<Triangle> mesh = gpu::download_triangles(ctx, tri);
+//   Triangles mesh = gpu::download_triangles(ctx, tri);
 //
 // Requirements on the input: `tri` holds the Delaunay triangulation of its points (the perturbed one, as CGAL
 // builds it; set ConstraintOptions::legalise_all otherwise); constraints are pairs of vertex indices, inside the

@@ -70,8 +70,8 @@ PointMerge merge_points(const PointDeduper& deduper, std::span<const double> xy)
   Buffer input = upload_new(ctx, xy.subspan(0, size_t(n) * 2), "points");
   DedupedPoints d = deduper.run(input, n);
   PointMerge m;
-  m.vertex_of = download_vector<uint32_t>(ctx, d.map, n);
-  m.first = download_vector<uint32_t>(ctx, d.first, d.count);
+  m.vertex_of = download_raw<uint32_t>(ctx, d.map, n);
+  m.first = download_raw<uint32_t>(ctx, d.first, d.count);
   return m;
 }
 

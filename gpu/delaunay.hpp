@@ -5,7 +5,7 @@
 //
 //   gpu::DelaunayBuilder dt(ctx);                 // builds the passes once
 //   gpu::GpuTriangulation tri = dt.build(xy);      // xy: canonical (sorted by x, then y, unique) pairs
-//   std::vector<Triangle> tris = gpu::download_triangles(ctx, tri);
+//   Triangles tris = gpu::download_triangles(ctx, tri);
 //
 // Fewer than 3 points, or all points collinear: num_slots = 0 (no triangles), as CGAL has no finite faces
 // then. Cost: about 20 rounds for 2M uniform points, each one submit with a host read of a few counters,

@@ -118,7 +118,7 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
   auto on = std::make_shared<OnDevice>(std::move(cdts), sum);
   GpuTiles g;
   // A tile is a resolved graph already: no resolve stage, no copies.
-  g.triangulate = [on](const std::vector<Point3>& vertices, const std::vector<Edge>& segments, std::string_view what) {
+  g.triangulate = [on](const Points& vertices, const std::vector<Edge>& segments, std::string_view what) {
     return (*on)(what, vertices.size(), segments.size(), [&](const GpuCdt& cdt, GpuCdtStats& one) {
       return TileMesh{cdt.triangulate_graph(vertices, segments, &one), {}};
     });

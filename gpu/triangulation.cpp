@@ -78,8 +78,8 @@ HostTriangulation download_host(const Context& ctx, const GpuTriangulation& tri)
   return h;
 }
 
-std::vector<Triangle> finite_triangles(const HostTriangulation& host) {
-  std::vector<Triangle> out;
+Triangles finite_triangles(const HostTriangulation& host) {
+  Triangles out;
   out.reserve(host.verts.size() / 6 + 1);
   for (size_t t = 0; t < host.verts.size() / 3; ++t) {
     Triangle v{host.verts[3 * t], host.verts[3 * t + 1], host.verts[3 * t + 2]};
@@ -91,7 +91,7 @@ std::vector<Triangle> finite_triangles(const HostTriangulation& host) {
   return out;
 }
 
-std::vector<Triangle> download_triangles(const Context& ctx, const GpuTriangulation& tri) {
+Triangles download_triangles(const Context& ctx, const GpuTriangulation& tri) {
   HostTriangulation h;
   h.verts = download_vector<uint32_t>(ctx, tri.verts, size_t(tri.num_slots) * 3);
   return finite_triangles(h);

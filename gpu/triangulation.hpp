@@ -46,8 +46,8 @@ GpuTriangulation upload_triangulation(const Context& ctx, const HostTriangulatio
 HostTriangulation download_host(const Context& ctx, const GpuTriangulation& tri);
 
 // Finite triangles, each rotated to start at its smallest index, sorted: core's canonical order.
-std::vector<Triangle> finite_triangles(const HostTriangulation& host);
-std::vector<Triangle> download_triangles(const Context& ctx, const GpuTriangulation& tri);
+Triangles finite_triangles(const HostTriangulation& host);
+Triangles download_triangles(const Context& ctx, const GpuTriangulation& tri);
 
 // Empty when the slots are a valid closed triangulation: neighbours symmetric, shared edges with matching
 // vertices in opposite directions, finite triangles strictly CCW (exact orient2d), every vertex used;

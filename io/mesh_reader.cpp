@@ -574,8 +574,8 @@ class WktParser {
   size_t i_ = 0;
   uint64_t line_ = 1;
   uint64_t polygons_ = 0;
-  std::vector<Point3> vertices_;
-  std::vector<Triangle> triangles_;
+  Points vertices_;
+  Triangles triangles_;
   std::unordered_map<Point3, uint32_t, PointHash, PointBitsEqual> index_;
 };
 

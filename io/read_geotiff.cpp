@@ -386,7 +386,7 @@ uint64_t cells_to_points(const unsigned char* image, const Layout& l, const Geor
   }
   for (uint64_t k = 0; k < bands; ++k) valid[k + 1] += valid[k];
   const size_t first = in.points.size();
-  resize_touched(in.points, first + valid[bands]);  // pages touched on all cores, the earlier inputs kept
+  resize_unwritten(in.points, first + valid[bands]);  // written on all cores, the earlier inputs kept
   tbb::parallel_for(uint64_t(0), bands, [&](uint64_t k) {
     Point3* out = in.points.data() + first + valid[k];
     const uint64_t row_end = std::min<uint64_t>(l.height, (k + 1) * band_rows);

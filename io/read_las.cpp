@@ -337,7 +337,7 @@ void read_las(const std::string& path, const LasFilter& filter, InputSet& in) {
     }
 
   // Pass 2: the kept points, in file order, each range into its own slice.
-  resize_touched(in.points, at.back());  // pages touched on all cores, the earlier inputs kept
+  resize_unwritten(in.points, at.back());  // written on all cores, the earlier inputs kept
   struct Extent {
     double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x, min_y = min_x, max_y = -min_x;
   };

@@ -58,7 +58,7 @@ void read_peer_input(std::istream& text, const std::string& name, InputSet& in) 
   if (!next_line()) throw InputError(name, 0, "empty file (expected a first line \"V E\")");
   if (!two_numbers(line, nv, ne)) throw InputError(name, line_no, "expected \"V E\" (two counts)");
 
-  std::vector<Point3> vertices;
+  Points vertices;
   vertices.reserve(nv < (1u << 24) ? nv : (1u << 24));
   for (uint64_t i = 0; i < nv; ++i) {
     if (!next_line())

@@ -381,7 +381,7 @@ void read_ascii_grid_text(std::string_view text, const std::string& name, InputS
   const uint32_t source = add_source(in, name);
   const size_t base = in.points.size();
   const double x0 = h.x_center ? 0.0 : 0.5, y0 = h.y_center ? 0.0 : 0.5;
-  resize_touched(in.points, base + at.back());
+  resize_unwritten(in.points, base + at.back());
   std::atomic<bool> bad{false};
   tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
     Point3* out = in.points.data() + base + at[k];

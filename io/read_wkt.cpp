@@ -161,8 +161,8 @@ class Parser {
   }
 
   // '(' coordinate, ... ')' (the opening '(' already eaten).
-  std::vector<Point3> coordinates(Dim dim) {
-    std::vector<Point3> pts;
+  Points coordinates(Dim dim) {
+    Points pts;
     do pts.push_back(coordinate(dim));
     while (eat(','));
     expect(')');

@@ -153,7 +153,7 @@ void append_parts(InputSet& in, std::vector<InputSet>& parts) {
     at[k + 1] = at[k] + parts[k].points.size();
     lines += parts[k].lines.size();
   }
-  resize_touched(in.points, at.back());  // pages touched on all cores, the earlier inputs kept
+  resize_unwritten(in.points, at.back());  // written on all cores, the earlier inputs kept
   tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
     std::copy(parts[k].points.begin(), parts[k].points.end(), in.points.begin() + std::ptrdiff_t(at[k]));
     parts[k].points = {};

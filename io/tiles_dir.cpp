@@ -101,7 +101,7 @@ Mesh read_tiles_dir(const std::string& dir) {
     return v[a].x != v[b].x ? v[a].x < v[b].x : v[a].y < v[b].y;
   });
   std::vector<uint32_t> merged(v.size());
-  std::vector<Point3> unique;
+  Points unique;
   for (size_t k = 0; k < order.size(); ++k) {
     const Point3& p = v[order[k]];
     if (unique.empty() || unique.back().x != p.x || unique.back().y != p.y) {

@@ -21,7 +21,7 @@
 namespace cdtgpu {
 namespace {
 
-double signed_area(const std::vector<Point3>& ring) {
+double signed_area(const Points& ring) {
   double a = 0;
   for (size_t i = 0; i + 1 < ring.size(); ++i) a += ring[i].x * ring[i + 1].y - ring[i + 1].x * ring[i].y;
   return a / 2;
@@ -140,10 +140,10 @@ TEST(Contours, VerticesAtTheLevelCountAsAbove) {
   // z = 0 everywhere above 0 or at it: no line at 0. At 5: the middle, higher ground (+x) on the left,
   // through the crossing of the diagonal.
   EXPECT_EQ(lines[0].level, 5);
-  EXPECT_EQ(lines[0].points, (std::vector<Point3>{{0.5, 1, 5}, {0.5, 0.5, 5}, {0.5, 0, 5}}));
+  EXPECT_EQ(lines[0].points, (Points{{0.5, 1, 5}, {0.5, 0.5, 5}, {0.5, 0, 5}}));
   // At 10 the line runs along the edge whose ends are at the level, through the vertices themselves.
   EXPECT_EQ(lines[1].level, 10);
-  EXPECT_EQ(lines[1].points, (std::vector<Point3>{{1, 1, 10}, {1, 0, 10}}));
+  EXPECT_EQ(lines[1].points, (Points{{1, 1, 10}, {1, 0, 10}}));
   std::ostringstream out;
   write_contours_wkt(lines, out);
   EXPECT_EQ(out.str(), "LINESTRING Z (0.5 1 5, 0.5 0.5 5, 0.5 0 5)\nLINESTRING Z (1 1 10, 1 0 10)\n");

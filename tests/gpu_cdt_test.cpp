@@ -75,7 +75,7 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 }
 
 // CGAL's Delaunay triangulation (perturbed, like the GPU Delaunay stage) of canonical vertices: CCW triangles.
-std::vector<Triangle> delaunay(const std::vector<Point3>& v) {
+Triangles delaunay(const Points& v) {
   using K = CGAL::Exact_predicates_inexact_constructions_kernel;
   using Vb = CGAL::Triangulation_vertex_base_with_info_2<uint32_t, K>;
   using Dt = CGAL::Delaunay_triangulation_2<K, CGAL::Triangulation_data_structure_2<Vb>>;
@@ -84,7 +84,7 @@ std::vector<Triangle> delaunay(const std::vector<Point3>& v) {
   for (uint32_t i = 0; i < v.size(); ++i) pts.emplace_back(K::Point_2(v[i].x, v[i].y), i);
   Dt dt;
   dt.insert(pts.begin(), pts.end());
-  std::vector<Triangle> out;
+  Triangles out;
   if (dt.dimension() < 2) return out;
   for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f)
     out.push_back({f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()});
@@ -94,12 +94,12 @@ std::vector<Triangle> delaunay(const std::vector<Point3>& v) {
 // The Delaunay triangulation the constraints start from: CGAL's, or with CDTGPU_DT_START=voronoi the GPU build
 // from the Voronoi start, checked against CGAL's.
 gpu::HostTriangulation start_triangulation(const std::string& name, const std::vector<double>& xy,
-                                           const std::vector<Point3>& vertices) {
+                                           const Points& vertices) {
   if (!voronoi_start()) return gpu::make_host_triangulation(xy, delaunay(vertices));
   gpu::DelaunayBuilder dt(ctx());
   dt.initial_dt = gpu::DelaunayBuilder::Start::voronoi;
   gpu::HostTriangulation host = gpu::download_host(ctx(), dt.build(xy));
-  std::vector<Triangle> want = delaunay(vertices);
+  Triangles want = delaunay(vertices);
   for (Triangle& t : want) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
   std::sort(want.begin(), want.end());
   EXPECT_EQ(gpu::finite_triangles(host), want) << name << ": the Voronoi start's Delaunay triangulation";
@@ -108,7 +108,7 @@ gpu::HostTriangulation start_triangulation(const std::string& name, const std::v
 
 // Splits every constraint at the vertices lying exactly on it (vertices sorted by x, then y, as prepare makes
 // them), the CPU step that precedes insertion. Pieces are returned as (smaller, larger), sorted, unique.
-std::vector<Edge> split_at_vertices(const std::vector<Point3>& v, const std::vector<Edge>& cons) {
+std::vector<Edge> split_at_vertices(const Points& v, const std::vector<Edge>& cons) {
   std::vector<Edge> out;
   auto less_x = [](const Point3& p, double x) { return p.x < x; };
   for (const Edge& e : cons) {
@@ -166,13 +166,13 @@ Outcome check_against_cgal(const std::string& name, const InputSet& in, const Co
     walls += (run ? ", " : "") + std::to_string(gpu_ms);
   }
 
-  std::vector<Triangle> got = gpu::download_triangles(ctx(), tri);
+  Triangles got = gpu::download_triangles(ctx(), tri);
   out.slots = gpu::download_host(ctx(), tri);
   EXPECT_EQ(gpu::check_triangulation(out.slots), "") << name;
   EXPECT_EQ(got.size(), ref.mesh.triangles.size()) << name;
   if (got != ref.mesh.triangles) {
     size_t differ = 0;
-    std::vector<Triangle> only_gpu;
+    Triangles only_gpu;
     std::set_difference(got.begin(), got.end(), ref.mesh.triangles.begin(), ref.mesh.triangles.end(),
                         std::back_inserter(only_gpu));
     differ = only_gpu.size();
@@ -205,7 +205,7 @@ InputSet random_with_dt_edges(uint64_t n, uint64_t m, double f, uint64_t seed) {
   return in;
 }
 
-Polyline line(std::vector<Point3> pts, bool closed = false) {
+Polyline line(Points pts, bool closed = false) {
   Polyline l;
   l.points = std::move(pts);
   l.closed = closed;
@@ -254,7 +254,7 @@ TEST(GpuCdt, BuildingFootprints) {
       const double w = 4 + unit_double(rng) * 6, h = 4 + unit_double(rng) * 5, ang = unit_double(rng) * 1.5;
       const double c = std::cos(ang), s = std::sin(ang);
       auto at = [&](double u, double v) { return Point3{cx + c * u - s * v, cy + s * u + c * v, 10.0}; };
-      std::vector<Point3> ring;
+      Points ring;
       if ((bx + by) % 3 == 0)  // an L-shape
         ring = {at(-w, -h), at(w, -h), at(w, 0), at(0, 0), at(0, h), at(-w, h)};
       else
@@ -291,12 +291,12 @@ TEST(GpuCdt, SharedEndpoints) {
   // A star of 60 constraints from one vertex (left half), and a wheel: a closed ring with spokes (right half).
   InputSet in = uniform_points(8000, 51);
   std::mt19937_64 rng(52);
-  std::vector<Point3> left;
+  Points left;
   for (const Point3& q : in.points)
     if (q.x < kUniformX0 + 5000) left.push_back(q);
   const Point3 centre = left[0];
   for (int i = 1; i <= 60; ++i) add_polyline(in, line({centre, left[1 + uniform_below(rng, left.size() - 1)]}));
-  std::vector<Point3> fan;
+  Points fan;
   for (int i = 0; i < 40; ++i) {
     double ang = i * 6.283185307179586 / 40;
     fan.push_back({kUniformX0 + 7000 + 1500 * std::cos(ang), kUniformY0 + 3000 + 1500 * std::sin(ang), 1});
@@ -469,7 +469,7 @@ TEST(GpuCdt, TriangleBuffersPassTheStorageBufferRange) {
     GTEST_SKIP() << "range " << range << " bytes: the 256M-point bench covers it (docs/performance.md)";
   const uint64_t want = range / 12 + 50000;
   const uint32_t side = uint32_t(std::ceil(std::sqrt(double(want) / 2))) + 1;
-  std::vector<Triangle> tris;
+  Triangles tris;
   tris.reserve(size_t(2) * (side - 1) * (side - 1));
   std::mt19937 rng(7);
   for (uint32_t i = 0; i + 1 < side; ++i)

@@ -38,8 +38,8 @@ bool large() {
 DedupedHost cpu_dedupe(const std::vector<double>& xy) {
   const PointMerge m = stable_sort_merge(xy);
   DedupedHost h;
-  h.map = m.vertex_of;
-  h.first = m.first;
+  h.map.assign(m.vertex_of.begin(), m.vertex_of.end());
+  h.first.assign(m.first.begin(), m.first.end());
   for (uint32_t j : m.first) {
     h.xy.push_back(xy[2 * j]);
     h.xy.push_back(xy[2 * j + 1]);

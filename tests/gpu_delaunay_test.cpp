@@ -118,7 +118,7 @@ std::vector<double> canonical(std::vector<std::pair<double, double>> pts) {
   return xy;
 }
 
-std::vector<Triangle> cgal_delaunay(const std::vector<double>& xy) {
+Triangles cgal_delaunay(const std::vector<double>& xy) {
   using K = CGAL::Exact_predicates_inexact_constructions_kernel;
   using Vb = CGAL::Triangulation_vertex_base_with_info_2<uint32_t, K>;
   using Tds = CGAL::Triangulation_data_structure_2<Vb>;
@@ -128,7 +128,7 @@ std::vector<Triangle> cgal_delaunay(const std::vector<double>& xy) {
   for (uint32_t i = 0; i < xy.size() / 2; ++i) pts.push_back({K::Point_2(xy[2 * i], xy[2 * i + 1]), i});
   Dt dt;
   dt.insert(pts.begin(), pts.end());
-  std::vector<Triangle> out;
+  Triangles out;
   if (dt.dimension() < 2) return out;
   for (auto f = dt.finite_faces_begin(); f != dt.finite_faces_end(); ++f) {
     Triangle t{f->vertex(0)->info(), f->vertex(1)->info(), f->vertex(2)->info()};
@@ -152,9 +152,9 @@ DelaunayStats expect_cgal(const std::string& name, const std::vector<double>& xy
   GpuTriangulation tri = dt.build(xy, &stats);
   const double gpu_ms = ms_since(t0);
   HostTriangulation host = download_host(ctx(), tri);
-  std::vector<Triangle> got = finite_triangles(host);
+  Triangles got = finite_triangles(host);
   t0 = std::chrono::steady_clock::now();
-  std::vector<Triangle> want = cgal_delaunay(xy);
+  Triangles want = cgal_delaunay(xy);
   const double cgal_ms = ms_since(t0);
   std::string stages;
   for (auto& [stage, ms] : stats.stage_ms)
@@ -344,7 +344,7 @@ TEST(GpuDelaunay, ManySmallDegenerateInputs) {
     }
     std::vector<double> xy = canonical(pts);
     HostTriangulation host = download_host(ctx(), builder().build(xy));
-    std::vector<Triangle> want = cgal_delaunay(xy);
+    Triangles want = cgal_delaunay(xy);
     if (!host.verts.empty()) {
       ASSERT_EQ(check_triangulation(host), "") << "case " << it;
     }

@@ -152,7 +152,7 @@ TEST(GpuPipeline, GridWithConstraintsThroughVertices) {
 }
 
 TEST(GpuPipeline, DegenerateInputs) {
-  auto run = [](const std::vector<Point3>& pts, const std::vector<Polyline>& lines) {
+  auto run = [](const Points& pts, const std::vector<Polyline>& lines) {
     InputSet in;
     in.points.assign(pts.begin(), pts.end());
     in.lines = lines;

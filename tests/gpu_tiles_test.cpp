@@ -54,14 +54,14 @@ TEST(GpuTiles, TwoDevicesGiveTheSingleRunsBytes) {
 // The device's final triangles of one tile against the host's test on the same CDT: never one the host does not
 // take (its test is checked against exact rationals in tiles_test), nearly all of them, and the border the
 // final set has. Grid points with the rectangle's sides on grid lines put many circles exactly on a side.
-void expect_final_within_host(const gpu::GpuCdt& cdt, const std::vector<Point3>& all, const std::vector<Edge>& segments,
+void expect_final_within_host(const gpu::GpuCdt& cdt, const Points& all, const std::vector<Edge>& segments,
                               const TileRect& rect, const std::string& what) {
   std::vector<uint32_t> ids(all.size());
   for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
   const TileFinal f = cdt.finalize_tile(TileJob{all, ids, segments, rect, what});
-  std::vector<Triangle> cdt_all = cdt_of_graph(all, segments);
+  Triangles cdt_all = cdt_of_graph(all, segments);
   canonicalize_triangles(cdt_all);
-  std::vector<Triangle> host;
+  Triangles host;
   for (const Triangle& t : cdt_all)
     if (circumdisk_inside(all[t[0]], all[t[1]], all[t[2]], rect.x0, rect.x1, rect.y0, rect.y1)) host.push_back(t);
   ASSERT_TRUE(std::is_sorted(f.triangles.begin(), f.triangles.end())) << what;

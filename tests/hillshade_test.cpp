@@ -81,7 +81,7 @@ TEST(Hillshade, EdgesAreDrawnOnTheirPixelsAndClipped) {
   const Raster dem = rasterise(plane_mesh(0.1, 0.1), 1);  // centres 0 .. 100 both ways, row 0 at y = 100
   std::vector<uint8_t> rgba = hillshade_rgba(dem);
   const std::vector<uint8_t> before = rgba;
-  const std::vector<Point3> v = {{10, 20, 0},  {30, 20, 0}, {50, -500, 0},
+  const Points v = {{10, 20, 0},  {30, 20, 0}, {50, -500, 0},
                                  {50, 500, 0}, {-9, -9, 0}, {-5, -1, 0}};
   draw_edges(rgba, dem.spec, v, {{0, 1}, {2, 3}, {4, 5}});
   const uint64_t w = dem.spec.ncols;

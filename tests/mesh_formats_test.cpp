@@ -322,7 +322,7 @@ TEST_F(MeshFormatsTest, TwoDmNodesMayFollowTheirElementsAndIdsNeedNotStartAtOne)
   const Mesh m = read_mesh_file(path("x.2dm"));
   ASSERT_EQ(m.vertices.size(), 3u);
   EXPECT_EQ(m.vertices[2], (Point3{0, 1, 3}));
-  EXPECT_EQ(m.triangles, (std::vector<Triangle>{{2, 0, 1}}));
+  EXPECT_EQ(m.triangles, (Triangles{{2, 0, 1}}));
 }
 
 }  // namespace

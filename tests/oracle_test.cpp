@@ -22,7 +22,7 @@
 namespace cdtgpu {
 namespace {
 
-Polyline line(std::vector<Point3> pts, bool closed = false) {
+Polyline line(Points pts, bool closed = false) {
   Polyline l;
   l.points = std::move(pts);
   l.closed = closed;
@@ -98,7 +98,7 @@ TEST(Prepare, SortsVerticesLexicographically) {
   in.points = {{3, 1, 0}, {1, 5, 0}, {1, -2, 0}, {-4, 9, 0}, {3, 0, 0}};
   PreparedInput p = prepare(in);
   ASSERT_EQ(p.vertices.size(), 5u);
-  std::vector<Point3> expect = {{-4, 9, 0}, {1, -2, 0}, {1, 5, 0}, {3, 0, 0}, {3, 1, 0}};
+  Points expect = {{-4, 9, 0}, {1, -2, 0}, {1, 5, 0}, {3, 0, 0}, {3, 1, 0}};
   EXPECT_EQ(p.vertices, expect);
   EXPECT_EQ(p.merged_duplicates, 0u);
   EXPECT_EQ(p.input_segments, 0u);
@@ -149,10 +149,10 @@ TEST(Canonicalize, SortsVerticesAndTrianglesKeepingOrientation) {
   m.vertices = {{2, 0, 0}, {0, 0, 0}, {2, 2, 0}, {0, 2, 0}};  // sorted: (0,0) (0,2) (2,0) (2,2)
   m.triangles = {{2, 3, 0}, {1, 0, 3}};                       // both CCW, not rotated to the smallest
   canonicalize(m);
-  std::vector<Point3> vs = {{0, 0, 0}, {0, 2, 0}, {2, 0, 0}, {2, 2, 0}};
+  Points vs = {{0, 0, 0}, {0, 2, 0}, {2, 0, 0}, {2, 2, 0}};
   EXPECT_EQ(m.vertices, vs);
   // old 2->3, 3->1, 0->2, 1->0: {3,1,2} -> {1,2,3}; {0,2,1} -> {0,2,1}
-  std::vector<Triangle> ts = {{0, 2, 1}, {1, 2, 3}};
+  Triangles ts = {{0, 2, 1}, {1, 2, 3}};
   EXPECT_EQ(m.triangles, ts);
   for (const Triangle& t : m.triangles) EXPECT_GT(signed_area(m, t), 0);
 }
@@ -165,7 +165,7 @@ TEST(Canonicalize, IsIdempotentAndOrderIndependent) {
   std::vector<uint32_t> perm(shuffled.vertices.size());
   for (uint32_t i = 0; i < perm.size(); ++i) perm[i] = i;
   std::shuffle(perm.begin(), perm.end(), rng);
-  std::vector<Point3> vs(perm.size());
+  Points vs(perm.size());
   for (uint32_t i = 0; i < perm.size(); ++i) vs[perm[i]] = shuffled.vertices[i];
   shuffled.vertices = vs;
   for (Triangle& t : shuffled.triangles) {

@@ -59,12 +59,23 @@ std::string error_of(const std::function<void()>& f) {
 // Readers append to what earlier inputs read: growing a vector past its storage keeps its elements and zeroes
 // only the new ones (a 24 MB vector, so the pages are touched on all cores).
 TEST(ResizeTouched, KeepsTheElementsItHasAndZeroesTheNew) {
-  std::vector<Point3> v(1000, Point3{1, 2, 3});
+  Points v(1000, Point3{1, 2, 3});
   v.shrink_to_fit();
   resize_touched(v, 1000000);
   ASSERT_EQ(v.size(), 1000000u);
   EXPECT_EQ(std::count(v.begin(), v.begin() + 1000, Point3{1, 2, 3}), 1000);
   EXPECT_EQ(std::count(v.begin() + 1000, v.end(), Point3{0, 0, 0}), 999000);
+  // Within its storage: a RawVector's own resize writes nothing, so the new elements are zeroed here, also
+  // after garbage was left there (resize_unwritten, then a shrink).
+  resize_unwritten(v, 2000000);
+  std::fill(v.begin(), v.end(), Point3{7, 7, 7});
+  v.resize(10);
+  resize_touched(v, 1500000);
+  EXPECT_EQ(std::count(v.begin(), v.begin() + 10, Point3{7, 7, 7}), 10);
+  EXPECT_EQ(std::count(v.begin() + 10, v.end(), Point3{0, 0, 0}), 1499990);
+  v.resize(10);
+  resize_touched(v, 20);
+  EXPECT_EQ(std::count(v.begin() + 10, v.end(), Point3{0, 0, 0}), 10);
 }
 
 TEST(TextSource, SplitLinesEndsEveryChunkAtALineEndAndNumbersLines) {

@@ -94,8 +94,8 @@ TEST(ReadPeer, ReadsVerticesAndEdges) {
   ASSERT_EQ(in.points.size(), 4u);
   EXPECT_EQ(in.points[1], (Point3{1.5, 0, 0}));
   ASSERT_EQ(in.lines.size(), 2u);
-  EXPECT_EQ(in.lines[0].points, (std::vector<Point3>{{0, 0, 0}, {1, 1, 0}}));
-  EXPECT_EQ(in.lines[1].points, (std::vector<Point3>{{1.5, 0, 0}, {0, 1, 0}}));
+  EXPECT_EQ(in.lines[0].points, (Points{{0, 0, 0}, {1, 1, 0}}));
+  EXPECT_EQ(in.lines[1].points, (Points{{1.5, 0, 0}, {0, 1, 0}}));
   EXPECT_EQ(in.lines[1].record, 8u);  // line numbers count the blank line
   EXPECT_FALSE(in.lines[0].closed);
 }

@@ -157,9 +157,9 @@ TEST(Wkt, ReadsEveryTypeWithAndWithoutZ) {
     EXPECT_EQ(in.lines[i].closed, want[i].closed) << i;
     EXPECT_EQ(in.lines[i].source, 0u);
   }
-  EXPECT_EQ(in.lines[1].points, (std::vector<Point3>{{0, 0, 1}, {5, 5, 2}}));  // repeated vertex removed
+  EXPECT_EQ(in.lines[1].points, (Points{{0, 0, 1}, {5, 5, 2}}));  // repeated vertex removed
   EXPECT_EQ(in.lines[4].points[2], (Point3{4, 4, 10}));                        // POLYGON Z keeps its z
-  EXPECT_EQ(in.lines[8].points, (std::vector<Point3>{{0, 0, 1}, {1, 1, 2}}));  // ZM: m dropped
+  EXPECT_EQ(in.lines[8].points, (Points{{0, 0, 1}, {1, 1, 2}}));  // ZM: m dropped
   EXPECT_EQ(in.repairs.repeated_vertices, 1u);
   EXPECT_EQ(in.repairs.rings_closed, 1u);  // the second MULTIPOLYGON ring did not repeat its first vertex
 }
@@ -226,7 +226,7 @@ TEST(Wkt, StdinDash) {
 TEST(Wkt, RepairsRingNotClosedAndRepeatedVertices) {
   InputSet in = wkt("POLYGON ((0 0, 0 0, 1 0, 1 1, 1 1))\nLINESTRING (2 2, 2 2)\n");
   ASSERT_EQ(in.lines.size(), 1u);
-  EXPECT_EQ(in.lines[0].points, (std::vector<Point3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
+  EXPECT_EQ(in.lines[0].points, (Points{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
   EXPECT_EQ(in.repairs.repeated_vertices, 3u);
   EXPECT_EQ(in.repairs.rings_closed, 1u);
   EXPECT_EQ(in.repairs.degenerate_lines, 1u);  // LINESTRING (2 2, 2 2) kept as a point
@@ -372,8 +372,8 @@ TEST_F(Shapefile, ArcZTakesZFromGeometryOrFromTheZField) {
   InputSet geo;
   read_input(path("contours.shp"), {}, geo);
   ASSERT_EQ(geo.lines.size(), 3u);
-  EXPECT_EQ(geo.lines[0].points, (std::vector<Point3>{{0, 0, 1}, {1, 1, 1}, {2, 0, 1}}));
-  EXPECT_EQ(geo.lines[2].points, (std::vector<Point3>{{7, 6, 3}, {8, 6, 3}, {9, 6, 3}}));
+  EXPECT_EQ(geo.lines[0].points, (Points{{0, 0, 1}, {1, 1, 1}, {2, 0, 1}}));
+  EXPECT_EQ(geo.lines[2].points, (Points{{7, 6, 3}, {8, 6, 3}, {9, 6, 3}}));
   EXPECT_EQ(geo.lines[1].record, 2u);
   EXPECT_EQ(geo.lines[2].record, 2u);
   EXPECT_FALSE(geo.lines[0].closed);
@@ -409,7 +409,7 @@ TEST_F(Shapefile, MissingZFieldListsTheFields) {
   expect_input_error([&] { read_input(path("flat.shp"), {.z_field = "HEIGHT"}, in); },
                      "no field HEIGHT in " + path("flat.dbf") + " (fields: ID, ELEV)", 0);
   read_input(path("flat.shp"), {.z_field = "ELEV"}, in);
-  EXPECT_EQ(in.lines[1].points, (std::vector<Point3>{{0, 1, 20}, {1, 1, 20}}));
+  EXPECT_EQ(in.lines[1].points, (Points{{0, 1, 20}, {1, 1, 20}}));
   fs::remove(path("flat.dbf"));
   expect_input_error([&] { read_input(path("flat.shp"), {.z_field = "ELEV"}, in); }, "no attribute file", 0);
   InputSet plain;
@@ -429,8 +429,8 @@ TEST_F(Shapefile, PolygonZWithHole) {
   ASSERT_EQ(in.lines.size(), 2u);
   EXPECT_TRUE(in.lines[0].closed);
   EXPECT_TRUE(in.lines[1].closed);
-  EXPECT_EQ(in.lines[0].points, (std::vector<Point3>{{0, 0, 5}, {0, 10, 5}, {10, 10, 5}, {10, 0, 5}}));
-  EXPECT_EQ(in.lines[1].points, (std::vector<Point3>{{2, 2, 6}, {4, 2, 6}, {4, 4, 6}}));
+  EXPECT_EQ(in.lines[0].points, (Points{{0, 0, 5}, {0, 10, 5}, {10, 10, 5}, {10, 0, 5}}));
+  EXPECT_EQ(in.lines[1].points, (Points{{2, 2, 6}, {4, 2, 6}, {4, 4, 6}}));
   EXPECT_EQ(in.lines[1].record, 1u);
   EXPECT_EQ(in.repairs.repeated_vertices, 1u);
   EXPECT_EQ(in.repairs.rings_closed, 1u);
@@ -491,7 +491,7 @@ TEST_F(Shapefile, MeasuredTypesHaveNoZAndMultiPatchIsRefused) {
   read_input(path("m.shp"), {}, in);
   read_input(path("mpz.shp"), {}, in);
   ASSERT_EQ(in.lines.size(), 1u);
-  EXPECT_EQ(in.lines[0].points, (std::vector<Point3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
+  EXPECT_EQ(in.lines[0].points, (Points{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
   EXPECT_EQ(in.points, (Points{{1, 3, 5}, {2, 4, 6}}));
   write_shapefile(path("patch"), SHPT_MULTIPATCH, {Shape{{0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}}});
   expect_input_error([&] { read_input(path("patch.shp"), {}, in); }, "shape type MultiPatch is not supported",

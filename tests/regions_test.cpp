@@ -40,8 +40,8 @@ namespace {
 
 struct Layer {
   Role role = Role::breakline;
-  std::vector<Point3> points;
-  std::vector<std::vector<Point3>> rings;
+  Points points;
+  std::vector<Points> rings;
   ZRule z;
 };
 
@@ -72,15 +72,15 @@ Built build(const std::vector<Layer>& layers) {
   return b;
 }
 
-std::vector<Point3> square(double cx, double cy, double half, double z = 0) {
+Points square(double cx, double cy, double half, double z = 0) {
   return {{cx - half, cy - half, z},
           {cx + half, cy - half, z},
           {cx + half, cy + half, z},
           {cx - half, cy + half, z}};
 }
 
-std::vector<Point3> polygon(double cx, double cy, double r, int n, double phase = 0.1) {
-  std::vector<Point3> pts;
+Points polygon(double cx, double cy, double r, int n, double phase = 0.1) {
+  Points pts;
   for (int k = 0; k < n; ++k) {
     const double a = phase + 2 * std::numbers::pi * k / n;
     pts.push_back({cx + r * std::cos(a), cy + r * std::sin(a), 0});
@@ -88,10 +88,10 @@ std::vector<Point3> polygon(double cx, double cy, double r, int n, double phase 
   return pts;
 }
 
-std::vector<Point3> scatter(int n, double x0, double y0, double x1, double y1, uint64_t seed) {
+Points scatter(int n, double x0, double y0, double x1, double y1, uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> ux(x0, x1), uy(y0, y1);
-  std::vector<Point3> pts;
+  Points pts;
   for (int i = 0; i < n; ++i) {
     const double x = ux(rng), y = uy(rng);
     pts.push_back({x, y, 0.01 * x + 0.02 * y});
@@ -330,7 +330,7 @@ TEST(Regions, NestedHolesInsideABoundary) {
 
 // A C-shaped coastline: dense points along it and inside the land, nothing in the bay.
 std::vector<Layer> coastline() {
-  std::vector<Point3> pts;
+  Points pts;
   for (const Point3& p : scatter(3000, 0, 0, 200, 200, 6)) {
     const double dx = p.x - 100, dy = p.y - 100, r = std::hypot(dx, dy);
     const bool bay = dx > -20 && std::abs(dy) < 45;
@@ -394,7 +394,7 @@ TEST(Regions, MeshOutOfCanonicalOrderIsRefused) {
 // hull is the domain) and a bay empty of points cut into it from the left, which max-edge trims. The CDT
 // restricted to the domain, and the same bytes on 1 and 2 threads.
 std::vector<Layer> parcels(bool bay) {
-  std::vector<Point3> pts;
+  Points pts;
   for (const Point3& q : scatter(70000, -10, -10, 410, 410, 21))
     if (!bay || q.x > 120 || std::abs(q.y - 200) > 30) pts.push_back(q);
   std::vector<Layer> layers;
@@ -547,11 +547,11 @@ double area(const Mesh& m) {
 // Several boundaries are their union, also when they share edges (adjacent parcels) or parts of edges: a
 // segment given twice is crossed twice.
 TEST(Regions, AdjacentBoundariesAreTheirUnion) {
-  const std::vector<Point3> pts = scatter(300, -5, -5, 25, 15, 10);
-  const std::vector<Point3> a = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}};
-  const std::vector<Point3> b = {{10, 0, 0}, {20, 0, 0}, {20, 10, 0}, {10, 10, 0}};
-  const std::vector<Point3> c = {{10, 2, 0}, {10, 8, 0}, {4, 8, 0}, {4, 2, 0}};  // inside a, on its edge
-  const std::vector<Point3> d = {
+  const Points pts = scatter(300, -5, -5, 25, 15, 10);
+  const Points a = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0}};
+  const Points b = {{10, 0, 0}, {20, 0, 0}, {20, 10, 0}, {10, 10, 0}};
+  const Points c = {{10, 2, 0}, {10, 8, 0}, {4, 8, 0}, {4, 2, 0}};  // inside a, on its edge
+  const Points d = {
       {20, 2, 0}, {24, 2, 0}, {24, 8, 0}, {20, 8, 0}};  // beside b, part of its edge
   for (const auto& [name, rings, want] : {std::tuple{"shared edge", std::vector{a, b}, 200.0},
                                           std::tuple{"partly shared edge", std::vector{a, b, d}, 224.0}}) {
@@ -599,17 +599,17 @@ TEST(RegionsGpu, SameAsCgalBackend) {
 double plane(double x, double y) { return 100 + 0.25 * x - 0.125 * y; }
 
 TEST(Drape, FootprintOnASlopingPlaneGetsThePlanesZ) {
-  std::vector<Point3> dem;
+  Points dem;
   for (int j = 0; j <= 10; ++j)
     for (int i = 0; i <= 10; ++i) dem.push_back({i * 10.0, j * 10.0, plane(i * 10.0, j * 10.0)});
-  const std::vector<Point3> footprint = {
+  const Points footprint = {
       {31.5, 42.25, 0}, {47.125, 42.25, 0}, {47.125, 58.5, 0}, {31.5, 58.5, 0}};
   for (auto kind : {ZRule::Kind::drape, ZRule::Kind::min, ZRule::Kind::mean, ZRule::Kind::max}) {
     Built b = build({{Role::vertices, dem, {}, {}}, {Role::breakline, {}, {footprint}, {kind, 0}}});
     DrapeStats s = apply_z_rules(b.in, b.parts);
     EXPECT_EQ(s.draped_vertices, 4u);
     EXPECT_EQ(s.outside_surface, 0u);
-    const std::vector<Point3>& got = b.in.lines[0].points;
+    const Points& got = b.in.lines[0].points;
     ASSERT_EQ(got.size(), 4u);
     std::vector<double> zs;
     for (const Point3& p : footprint) zs.push_back(plane(p.x, p.y));
@@ -629,7 +629,7 @@ TEST(Drape, FootprintOnASlopingPlaneGetsThePlanesZ) {
 }
 
 TEST(Drape, ConstantAndOutsideTheHull) {
-  std::vector<Point3> dem = {
+  Points dem = {
       {0, 0, plane(0, 0)}, {10, 0, plane(10, 0)}, {0, 10, plane(0, 10)}, {10, 10, plane(10, 10)}};
   Built b = build({{Role::vertices, dem, {}, {}},
                    {Role::vertices, {{5, 5, 0}, {20, 5, 0}}, {}, {ZRule::Kind::drape, 0}},

@@ -27,7 +27,7 @@ namespace {
 
 using pred::XY;
 
-Polyline line(std::vector<Point3> pts, bool closed = false) {
+Polyline line(Points pts, bool closed = false) {
   Polyline l;
   l.points = std::move(pts);
   l.closed = closed;

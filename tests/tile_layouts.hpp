@@ -11,7 +11,7 @@
 
 namespace cdtgpu::tile_layouts {
 
-inline Polyline line(std::vector<Point3> pts, bool closed = false) {
+inline Polyline line(Points pts, bool closed = false) {
   Polyline l;
   l.points = std::move(pts);
   l.closed = closed;

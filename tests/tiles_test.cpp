@@ -29,7 +29,7 @@ using tile_layouts::random_points;
 
 // CGAL's triangles without their neighbours, as the GPU gives them: the tiles find their border themselves.
 TileTriangulator without_neighbours() {
-  return [](const std::vector<Point3>& v, const std::vector<Edge>& s, std::string_view what) {
+  return [](const Points& v, const std::vector<Edge>& s, std::string_view what) {
     TileMesh m = cgal_tile_triangulator()(v, s, what);
     m.neighbours.clear();
     return m;

@@ -368,7 +368,7 @@ TEST_F(WritersTest, ReaderTakesCommonVariantsOfOtherTools) {
   std::ofstream(path("a.obj")) << "o tin\nv 0 0 0\nv 1 0 0\nv 0 1 0.5\nvn 0 0 1\nf 1//1 2//1 3//1\nf -3 -2 -1\n";
   const Mesh a = read_mesh_file(path("a.obj"));
   EXPECT_EQ(a.vertices.size(), 3u);
-  EXPECT_EQ(a.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 1, 2}}));
+  EXPECT_EQ(a.triangles, (Triangles{{0, 1, 2}, {0, 1, 2}}));
   EXPECT_EQ(a.vertices[2].z, 0.5);
 
   std::ofstream(path("b.ply")) << "ply\nformat ascii 1.0\ncomment hi\nelement vertex 3\nproperty float x\n"
@@ -376,14 +376,14 @@ TEST_F(WritersTest, ReaderTakesCommonVariantsOfOtherTools) {
                                   "property list uchar int vertex_index\nend_header\n0 0 0 7\n1.5 0 0 7\n0 1 2 7\n"
                                   "3 0 1 2\n";
   const Mesh b = read_mesh_file(path("b.ply"));
-  EXPECT_EQ(b.vertices, (std::vector<Point3>{{0, 0, 0}, {1.5, 0, 0}, {0, 1, 2}}));
-  EXPECT_EQ(b.triangles, (std::vector<Triangle>{{0, 1, 2}}));
+  EXPECT_EQ(b.vertices, (Points{{0, 0, 0}, {1.5, 0, 0}, {0, 1, 2}}));
+  EXPECT_EQ(b.triangles, (Triangles{{0, 1, 2}}));
 
   std::ofstream(path("c.wkt")) << "POLYHEDRALSURFACE Z (((1 0 0, 1 1 0, 0 0 0, 1 0 0)))";
   const Mesh c = read_mesh_file(path("c.wkt"));
   // Vertices come back in (x, y) order: (0 0), (1 0), (1 1).
-  EXPECT_EQ(c.vertices, (std::vector<Point3>{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
-  EXPECT_EQ(c.triangles, (std::vector<Triangle>{{1, 2, 0}}));
+  EXPECT_EQ(c.vertices, (Points{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}));
+  EXPECT_EQ(c.triangles, (Triangles{{1, 2, 0}}));
 }
 
 }  // namespace
