@@ -1,6 +1,7 @@
 // Device-local buffers and synchronous staging copies; see buffers.hpp.
 #include "gpu/buffers.hpp"
 
+#include <spdlog/spdlog.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -18,6 +19,8 @@ namespace {
 std::atomic<uint64_t> memory_ns{0};
 
 // Adds the time from its construction to its end to memory_ns.
+constexpr VkDeviceSize kLoggedBytes = VkDeviceSize(64) << 20;
+
 struct MemoryClock {
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
   ~MemoryClock() {
@@ -89,6 +92,9 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
     info.buffer = b.buffer;
     b.address = vkGetBufferDeviceAddress(ctx.device, &info);
   }
+  if (bytes >= kLoggedBytes)  // -v: where the tiles' allocation time goes (issue 29)
+    spdlog::debug("{} buffer '{}': {:.0f} MB allocated in {:.1f} ms", host ? "host" : "device", name, bytes / 1e6,
+                  double((std::chrono::steady_clock::now() - clock.t0).count()) * 1e-6);
   return b;
 }
 
@@ -172,6 +178,9 @@ Buffer::~Buffer() {
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
   if (memory) vkFreeMemory(device, memory, nullptr);
   if (budget) budget->used.fetch_sub(charged);
+  if (memory && size >= kLoggedBytes)
+    spdlog::debug("buffer '{}': {:.0f} MB freed in {:.1f} ms", name, size / 1e6,
+                  double((std::chrono::steady_clock::now() - clock.t0).count()) * 1e-6);
 }
 
 Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
