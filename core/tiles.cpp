@@ -688,14 +688,25 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
         if (meets(plan.nodes[c].rect, a, b)) stack[top++] = uint32_t(c);
     }
   };
+  // The first pass keeps the tile of a segment that meets only one (nearly all), so the second reads that
+  // instead of both ends again; for contour-like input the far end is far in memory (256M points: the plan
+  // took 1.1 s longer with 64M segments than without).
   constexpr size_t kSegmentBlock = 1 << 15;
+  constexpr uint32_t kSeveral = UINT32_MAX;
   const size_t segment_blocks = (segments.size() + kSegmentBlock - 1) / kSegmentBlock;
   std::vector<std::vector<uint32_t>> block_count(segment_blocks);
+  RawVector<uint32_t> only_tile;
+  resize_unwritten(only_tile, segments.size());
   tbb::parallel_for(size_t(0), segment_blocks, [&](size_t b) {
     std::vector<uint32_t>& count = block_count[b];
     count.assign(tiles, 0);
-    for (size_t i = b * kSegmentBlock; i < std::min(segments.size(), (b + 1) * kSegmentBlock); ++i)
-      for_tiles_of(i, [&](uint32_t t) { ++count[t]; });
+    const size_t end = std::min(segments.size(), (b + 1) * kSegmentBlock);
+    for (size_t i = b * kSegmentBlock; i < end; ++i) {
+      if (i + 16 < end) __builtin_prefetch(&v[segments[i + 16][1]]);
+      uint32_t met = 0, last = 0;
+      for_tiles_of(i, [&](uint32_t t) { ++count[t], ++met, last = t; });
+      only_tile[i] = met == 1 ? last : kSeveral;
+    }
   });
   std::vector<size_t> first(tiles + 1, 0);
   for (size_t t = 0; t < tiles; ++t) {
@@ -706,11 +717,15 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
       first[t + 1] += c;
     }
   }
-  std::vector<uint32_t> tile_segments(first[tiles]);
+  RawVector<uint32_t> tile_segments;
+  resize_unwritten(tile_segments, first[tiles]);  // every element written below
   tbb::parallel_for(size_t(0), segment_blocks, [&](size_t b) {
     std::vector<uint32_t>& at = block_count[b];
     for (size_t i = b * kSegmentBlock; i < std::min(segments.size(), (b + 1) * kSegmentBlock); ++i)
-      for_tiles_of(i, [&](uint32_t t) { tile_segments[first[t] + at[t]++] = uint32_t(i); });
+      if (only_tile[i] != kSeveral)
+        tile_segments[first[only_tile[i]] + at[only_tile[i]]++] = uint32_t(i);
+      else
+        for_tiles_of(i, [&](uint32_t t) { tile_segments[first[t] + at[t]++] = uint32_t(i); });
   });
   block_count.clear();
 
