@@ -199,32 +199,48 @@ Buffer create_addressed_buffer(const Context& ctx, VkDeviceSize bytes, const std
 
 namespace {
 
-// One host-visible buffer per context, mapped for its whole life, grown to the largest copy so far.
-struct Staging {
-  Buffer buffer;
-  void* mapped = nullptr;
-  ~Staging() {
-    if (mapped) vkUnmapMemory(buffer.device, buffer.memory);
-  }
-};
-
-Staging& staging_of(const Context& ctx, VkDeviceSize bytes) {
-  auto& slot = ctx.staging;
-  auto* s = static_cast<Staging*>(slot.get());
-  if (!s || s->buffer.size < bytes) {
-    // Regrown by an eighth at least: pinned memory costs ~0.3 ms per MB, and tiles' copies differ by a few %.
-    const VkDeviceSize size = s ? std::max(bytes, s->buffer.size + s->buffer.size / 8) : bytes;
-    slot.reset();
-    auto fresh = std::make_shared<Staging>();
-    fresh->buffer = make(ctx, size, "staging", true);
-    VK_CHECK(vkMapMemory(ctx.device, fresh->buffer.memory, 0, VK_WHOLE_SIZE, 0, &fresh->mapped));
-    slot = fresh;
-    s = fresh.get();
-  }
-  return *s;
+// One host-visible buffer per context, grown to the largest copy so far.
+HostStaging& staging_of(const Context& ctx, VkDeviceSize bytes) {
+  if (!ctx.staging) ctx.staging = std::make_shared<HostStaging>();
+  HostStaging& s = *static_cast<HostStaging*>(ctx.staging.get());
+  s.fit(ctx, bytes);
+  return s;
 }
 
 }  // namespace
+
+HostStaging::~HostStaging() {
+  if (mapped) vkUnmapMemory(buffer.device, buffer.memory);
+}
+
+void HostStaging::fit(const Context& ctx, VkDeviceSize bytes) {
+  if (mapped && buffer.size >= bytes) return;
+  // Regrown by an eighth at least: pinned memory costs ~0.3 ms per MB, and tiles' copies differ by a few %.
+  const VkDeviceSize size = mapped ? std::max(bytes, buffer.size + buffer.size / 8) : bytes;
+  if (mapped) vkUnmapMemory(buffer.device, buffer.memory);
+  mapped = nullptr;
+  buffer = Buffer();
+  buffer = make(ctx, size, "staging", true);
+  VK_CHECK(vkMapMemory(ctx.device, buffer.memory, 0, VK_WHOLE_SIZE, 0, &mapped));
+}
+
+void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes) {
+  check_range(dst, bytes, 0, "copy from staging");
+  if (!bytes) return;
+  run_once(ctx, [&](VkCommandBuffer cmd) {
+    VkBufferCopy region{0, 0, bytes};
+    vkCmdCopyBuffer(cmd, staging.buffer.buffer, dst.buffer, 1, &region);
+  });
+}
+
+void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes) {
+  check_range(src, bytes, 0, "copy to staging");
+  if (!bytes) return;
+  run_once(ctx, [&](VkCommandBuffer cmd) {
+    VkBufferCopy region{0, 0, bytes};
+    vkCmdCopyBuffer(cmd, src.buffer, staging.buffer.buffer, 1, &region);
+  });
+}
 
 void reserve_staging(const Context& ctx, VkDeviceSize bytes) {
   if (bytes) staging_of(ctx, bytes);
@@ -252,7 +268,7 @@ void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, cons
                  VkDeviceSize offset) {
   check_range(dst, bytes, offset, "upload");
   if (!bytes) return;
-  Staging& staging = staging_of(ctx, bytes);
+  HostStaging& staging = staging_of(ctx, bytes);
   write(staging.mapped);
   run_once(ctx, [&](VkCommandBuffer cmd) {
     VkBufferCopy region{0, offset, bytes};
@@ -263,7 +279,7 @@ void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, cons
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset) {
   check_range(src, bytes, offset, "download");
   if (!bytes) return;
-  Staging& staging = staging_of(ctx, bytes);
+  HostStaging& staging = staging_of(ctx, bytes);
   run_once(ctx, [&](VkCommandBuffer cmd) {
     VkBufferCopy region{offset, 0, bytes};
     vkCmdCopyBuffer(cmd, src.buffer, staging.buffer.buffer, 1, &region);

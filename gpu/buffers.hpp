@@ -49,6 +49,22 @@ Buffer create_addressed_buffer(const Context& ctx, VkDeviceSize bytes, const std
 double memory_ms();
 
 // Synchronous copies through a host-visible staging buffer (each waits for the queue to finish).
+// A host-visible buffer, mapped for its whole life: the context's own (upload, download) or one a caller keeps
+// for copies it makes without holding the device (a GPU tile's points and triangles, gpu/tile_triangulator).
+struct HostStaging {
+  Buffer buffer;
+  void* mapped = nullptr;
+  HostStaging() = default;
+  HostStaging(const HostStaging&) = delete;
+  HostStaging& operator=(const HostStaging&) = delete;
+  ~HostStaging();
+  // At least `bytes` long (regrown by an eighth at least; the old contents are lost).
+  void fit(const Context& ctx, VkDeviceSize bytes);
+};
+// The device's copies between a staging buffer (from its start) and a device buffer, synchronously.
+void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes);
+void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes);
+
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
 // Grows the staging buffer that upload() and download() share to at least `bytes` now: pinned host memory costs

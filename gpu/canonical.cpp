@@ -24,13 +24,10 @@ TriangleSorter::TriangleSorter(const Context& ctx, const Primitives& prims)
       keys_(create_pass(ctx, {"canonical_keys", 4, sizeof(CanonicalKeysPush)})),
       write_(create_pass(ctx, {"canonical_write", 4, sizeof(CanonicalKeysPush)})) {}
 
-Triangles TriangleSorter::download(GpuTriangulation& tri, double* gpu_ms, Triangles out) const {
+uint32_t TriangleSorter::sort(GpuTriangulation& tri, double* gpu_ms) const {
   if (gpu_ms) *gpu_ms = 0;
   const uint32_t slots = tri.num_slots;
-  if (slots == 0) {
-    out.clear();
-    return out;
-  }
+  if (slots == 0) return 0;
   BufferCache& buffers = cache ? *cache : scratch_;
   const uint32_t n = tri.num_points;
   const Buffer& count = buffers.get(ctx_, "canonical count", 8);  // finite triangles, a bucket too large
@@ -81,12 +78,16 @@ Triangles TriangleSorter::download(GpuTriangulation& tri, double* gpu_ms, Triang
     });
     if (gpu_ms) *gpu_ms += ms;
   }
-  const uint32_t finite = counts[0];
+  return counts[0];
+}
+
+Triangles TriangleSorter::download(GpuTriangulation& tri, double* gpu_ms, Triangles out) const {
+  const uint32_t finite = sort(tri, gpu_ms);
   static_assert(sizeof(Triangle) == 12, "Triangle is three packed uint32");
   const auto t0 = std::chrono::steady_clock::now();
   resize_touched(out, finite);  // no work where `out` holds that many already
   const auto t1 = std::chrono::steady_clock::now();
-  gpu::download(ctx_, tris, out.data(), uint64_t(finite) * sizeof(Triangle));
+  if (finite) gpu::download(ctx_, tri.nbrs, out.data(), uint64_t(finite) * sizeof(Triangle));
   spdlog::debug("canonical download: {:.1f} ms to allocate, {:.1f} ms to copy {} triangles",
                 std::chrono::duration<double, std::milli>(t1 - t0).count(),
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count(), finite);

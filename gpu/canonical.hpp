@@ -22,6 +22,8 @@ class TriangleSorter {
   // `out`: storage to reuse (its pages already touched, say), resized to the finite triangles.
   Triangles download(GpuTriangulation& tri, double* gpu_ms = nullptr,
                                  Triangles out = {}) const;
+  // The same left on the device: the count of finite triangles, sorted at the start of tri.nbrs.
+  uint32_t sort(GpuTriangulation& tri, double* gpu_ms = nullptr) const;
 
   BufferCache* cache = nullptr;  // where the keys live between calls (shared keys); null: a cache of its own
 

@@ -73,6 +73,14 @@ class GpuCdt {
   // A tile of core/tiles (a resolved graph too, its vertices job.all[job.ids[i]]): stages 2-3, then its final
   // triangles and their border found on the device (gpu/tile_final) and only those downloaded, sorted.
   TileFinal finalize_tile(const TileJob& job, GpuCdtStats* stats = nullptr) const;
+  // The same in three parts, so that tiles in flight hold the device only for its own part
+  // (gpu/tile_triangulator): the tile's points written into `staging` (host work; staging_bytes of it), then the
+  // device's part, which leaves the sorted final triangles in `staging` and returns their count (the border in
+  // `f`), then those copied out (host work).
+  static uint64_t staging_bytes(const TileJob& job);
+  static void stage_points(const TileJob& job, HostStaging& staging);
+  uint32_t finalize_staged(const TileJob& job, HostStaging& staging, TileFinal& f, GpuCdtStats* stats = nullptr) const;
+  static void unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f);
   // Duplicate merging on the GPU for prepare(in, cdt.merger()); the same answer as the CPU's merge_points.
   PointMerger merger() const;
 
@@ -91,8 +99,9 @@ class GpuCdt {
  private:
   // Upload and Delaunay build of all[ids[i]] (of all, when ids is empty), their stages added to `s`.
   // `keep`: the tiles' cache (DelaunayBuilder::build).
+  // `staged`: the points are in it already (stage_points).
   GpuTriangulation delaunay_of(std::span<const Point3> all, std::span<const uint32_t> ids, GpuCdtStats& s,
-                               BufferCache* keep = nullptr) const;
+                               BufferCache* keep = nullptr, const HostStaging* staged = nullptr) const;
   // Stage 3: the constraints inserted.
   void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s) const;
   // Stage 4: the triangles downloaded in canonical order into `storage`.

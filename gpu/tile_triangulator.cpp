@@ -39,12 +39,18 @@ class DevicePool {
     free_.pop_back();
     return i;
   }
+  // Waits for i.
+  void take(size_t i) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    freed_.wait(lock, [&] { return std::find(free_.begin(), free_.end(), i) != free_.end(); });
+    free_.erase(std::find(free_.begin(), free_.end(), i));
+  }
   void give(size_t i) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       free_.push_back(i);
     }
-    freed_.notify_one();
+    freed_.notify_all();
   }
 
  private:
@@ -68,7 +74,44 @@ namespace {
 // Runs work(cdt, stats) on a free device: its stats added to `sum`, a DeviceError given the call's name.
 class OnDevice {
  public:
-  OnDevice(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) : cdts_(std::move(cdts)), sum_(sum), pool_(cdts_.size()) {}
+  OnDevice(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum)
+      : cdts_(std::move(cdts)), sum_(sum), pool_(cdts_.size()), slots_(kSlotsPerDevice * cdts_.size()) {
+    for (size_t i = 0; i < kSlotsPerDevice * cdts_.size(); ++i) staging_.push_back(std::make_unique<HostStaging>());
+  }
+
+  // A tile in a slot of its own (a staging buffer; two a device, as many as the tiles in flight): its points are
+  // written there and its final triangles copied out without the device, which is held only for the GPU part,
+  // so those host copies overlap another tile's GPU work.
+  TileFinal staged(const TileJob& job) {
+    return tbb::this_task_arena::isolate([&] {
+      const size_t slot = slots_.take();
+      struct Give {
+        DevicePool& pool;
+        size_t i;
+        ~Give() { pool.give(i); }
+      } give_slot{slots_, slot};
+      const size_t d = slot % cdts_.size();
+      const GpuCdt& cdt = *cdts_[d];
+      HostStaging& staging = *staging_[slot];
+      try {
+        staging.fit(cdt.context(), GpuCdt::staging_bytes(job));
+        GpuCdt::stage_points(job, staging);
+        TileFinal f;
+        uint32_t count = 0;
+        GpuCdtStats one;
+        {
+          pool_.take(d);
+          Give give_device{pool_, d};
+          count = cdt.finalize_staged(job, staging, f, &one);
+        }
+        GpuCdt::unstage_triangles(staging, count, f);
+        if (sum_) add_up(one);
+        return f;
+      } catch (const DeviceError& e) {
+        throw named(e, job.what, job.ids.size(), job.segments.size(), d);
+      }
+    });
+  }
 
   template <class Work>
   auto operator()(std::string_view what, size_t vertices, size_t segments, Work&& work) {
@@ -87,16 +130,24 @@ class OnDevice {
         if (sum_) add_up(one);
         return result;
       } catch (const DeviceError& e) {
-        const std::string on = cdts_.size() > 1 ? " on device " + std::to_string(cdts_[d]->context().info.index) +
-                                                      " (" + cdts_[d]->context().info.name + ")"
-                                                : "";
-        throw DeviceError(std::string(what) + " (" + std::to_string(vertices) + " vertices, " +
-                          std::to_string(segments) + " segments)" + on + ": " + e.what());
+        throw named(e, what, vertices, segments, d);
       }
     });
   }
 
  private:
+  static constexpr size_t kSlotsPerDevice = 2;
+
+  DeviceError named(const DeviceError& e, std::string_view what, size_t vertices, size_t segments, size_t d) const {
+    std::string m(what);
+    m += " (" + std::to_string(vertices) + " vertices, " + std::to_string(segments) + " segments)";
+    if (cdts_.size() > 1)
+      m += " on device " + std::to_string(cdts_[d]->context().info.index) + " (" + cdts_[d]->context().info.name + ")";
+    m += ": ";
+    m += e.what();
+    return DeviceError(m);
+  }
+
   void add_up(const GpuCdtStats& one) {
     std::lock_guard<std::mutex> lock(sum_lock_);
     add(sum_->wall_ms, one.wall_ms);
@@ -108,7 +159,9 @@ class OnDevice {
 
   std::vector<const GpuCdt*> cdts_;
   GpuCdtStats* sum_;
-  DevicePool pool_;
+  DevicePool pool_;   // the devices not running a call
+  DevicePool slots_;  // the staging buffers not holding a tile; slot i is device i % devices'
+  std::vector<std::unique_ptr<HostStaging>> staging_;
   std::mutex sum_lock_;
 };
 
@@ -123,10 +176,7 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
       return TileMesh{cdt.triangulate_graph(vertices, segments, &one), {}};
     });
   };
-  g.finalize = [on](const TileJob& job) {
-    return (*on)(job.what, job.ids.size(), job.segments.size(),
-                 [&](const GpuCdt& cdt, GpuCdtStats& one) { return cdt.finalize_tile(job, &one); });
-  };
+  g.finalize = [on](const TileJob& job) { return on->staged(job); };
   return g;
 }
 
