@@ -16,7 +16,7 @@
 
 namespace cdtgpu {
 
-// Into `out` (resized to the items' count): a RawVector is written once, a std::vector zeroed first.
+// The same into a container of one's choosing: a RawVector is written once, a std::vector zeroed first.
 template <class Vec, class Count, class Emit>
 Vec compact_as(size_t n, Count count, Emit emit) {
   using T = typename Vec::value_type;

@@ -16,7 +16,7 @@ struct Point3 {
   friend bool operator==(const Point3&, const Point3&) = default;
 };
 
-// Loose vertices as read: resize() leaves the new ones for the reader to write.
+// Vertices (as read, prepared, resolved, a mesh's): resize() leaves the new ones for their writer.
 using Points = RawVector<Point3>;
 
 // A constraint polyline as read: a contour (open) or a ring such as a building footprint (closed; the
