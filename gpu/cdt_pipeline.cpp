@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <future>
+#include <memory>
+#include <utility>
 
 #include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
@@ -209,6 +211,13 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
+  // The device's other copies of this call (the build's uploads, the border) go through `staging` as well, once
+  // the points have left it: a pinned buffer per tile in flight and none more for the context.
+  struct Restore {
+    const Context& ctx;
+    std::shared_ptr<void> own;
+    ~Restore() { ctx.staging = std::move(own); }
+  } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
   cache_.grow_by = tile_cache_.grow_by = 0.125;
   GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &tile_cache_, &staging);
   constrain(tri, job.segments, s);
