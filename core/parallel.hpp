@@ -10,6 +10,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_scan.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -41,6 +42,21 @@ uint64_t count_if(size_t n, F&& f, size_t grain = kParallelGrain) {
         return sum;
       },
       std::plus<uint64_t>());
+}
+
+// std::copy of n items in 1 MB blocks on all cores when large: one core copies ~5 GB/s on the H100 machine,
+// and fresh destination pages are faulted where they are written.
+template <class T>
+void copy_on_all_cores(const T* from, size_t n, T* to) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  constexpr size_t kBlock = std::max<size_t>(1, (size_t(1) << 20) / sizeof(T));
+  if (n < 8 * kBlock) {
+    std::copy(from, from + n, to);
+    return;
+  }
+  tbb::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t b) {
+    std::copy(from + b * kBlock, from + std::min(n, (b + 1) * kBlock), to + b * kBlock);
+  });
 }
 
 // first[0] = 0 and first[i + 1] a count for item i: afterwards first[i] is the sum of the counts before i (so

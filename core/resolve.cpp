@@ -45,6 +45,7 @@
 #include <thread>
 #include <utility>
 
+#include "core/parallel.hpp"
 #include "core/predicates.hpp"
 #include "core/touched.hpp"
 
@@ -260,9 +261,7 @@ class Resolver {
     if (threads_ > 1)
       copier_ = std::jthread([this, &vertices, &constraints] {
         resize_unwritten(v_, vertices.size());
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, vertices.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-          std::copy(vertices.begin() + r.begin(), vertices.begin() + r.end(), v_.begin() + r.begin());
-        });
+        copy_on_all_cores(vertices.data(), vertices.size(), v_.data());
         seg_ = constraints;
       });
     else

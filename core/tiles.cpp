@@ -101,9 +101,7 @@ void select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less) {
     std::array<size_t, 3> w = count[b];
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) out[w[part[i]]++] = first[i];
   });
-  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
-    std::copy(out.begin() + b * kBlock, out.begin() + std::min(n, (b + 1) * kBlock), first + b * kBlock);
-  });
+  copy_on_all_cores(out.data(), n, first);
   const size_t k = size_t(nth - first);
   if (k >= total[0] && k < total[0] + total[1])
     std::nth_element(first + total[0], nth, first + total[0] + total[1], less);

@@ -11,6 +11,7 @@
 #include <functional>
 #include <utility>
 
+#include "core/parallel.hpp"
 #include "gpu/check.hpp"
 
 namespace cdtgpu::gpu {
@@ -94,7 +95,7 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
   }
   if (bytes >= kLoggedBytes)  // -v: where the tiles' allocation time goes (issue 29)
     spdlog::debug("{} buffer '{}': {:.0f} MB allocated in {:.1f} ms", host ? "host" : "device", name, bytes / 1e6,
-                  double((std::chrono::steady_clock::now() - clock.t0).count()) * 1e-6);
+                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - clock.t0).count());
   return b;
 }
 
@@ -180,7 +181,7 @@ Buffer::~Buffer() {
   if (budget) budget->used.fetch_sub(charged);
   if (memory && size >= kLoggedBytes)
     spdlog::debug("buffer '{}': {:.0f} MB freed in {:.1f} ms", name, size / 1e6,
-                  double((std::chrono::steady_clock::now() - clock.t0).count()) * 1e-6);
+                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - clock.t0).count());
 }
 
 Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
@@ -246,23 +247,6 @@ void reserve_staging(const Context& ctx, VkDeviceSize bytes) {
   if (bytes) staging_of(ctx, bytes);
 }
 
-namespace {
-
-// memcpy, in 1 MB blocks on all cores when large: one core copies ~5 GB/s on the H100 machine (a 64M-point
-// tile's 1.5 GB of slots took 300 ms).
-void copy_on_all_cores(void* to, const void* from, size_t bytes) {
-  constexpr size_t kBlock = 1 << 20;
-  if (bytes < 8 * kBlock) {
-    std::memcpy(to, from, bytes);
-    return;
-  }
-  tbb::parallel_for(size_t(0), (bytes + kBlock - 1) / kBlock, [&](size_t b) {
-    const size_t at = b * kBlock;
-    std::memcpy(static_cast<char*>(to) + at, static_cast<const char*>(from) + at, std::min(kBlock, bytes - at));
-  });
-}
-
-}  // namespace
 
 void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, const std::function<void(void*)>& write,
                  VkDeviceSize offset) {
@@ -286,11 +270,14 @@ void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize by
   });
   // Large copies on all cores: the destination is usually fresh memory, and its page faults and the copy
   // itself took ~30 ms for a 2M-point triangulation's 48 MB on one core.
-  copy_on_all_cores(data, staging.mapped, bytes);
+  copy_on_all_cores(static_cast<const char*>(staging.mapped), bytes, static_cast<char*>(data));
 }
 
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset) {
-  upload_with(ctx, dst, bytes, [&](void* mapped) { copy_on_all_cores(mapped, data, bytes); }, offset);
+  upload_with(
+      ctx, dst, bytes,
+      [&](void* mapped) { copy_on_all_cores(static_cast<const char*>(data), bytes, static_cast<char*>(mapped)); },
+      offset);
 }
 
 Buffer& BufferCache::fit(const Context& ctx, const std::string& key, VkDeviceSize bytes, const std::string& label,

@@ -55,7 +55,9 @@ void expect_same(const std::vector<double>& xy) {
   EXPECT_EQ(gpu.map, cpu.map);
   // Bit-exact: a vertex keeps its first occurrence's bits (-0.0 stays -0.0 if it came first).
   ASSERT_EQ(gpu.xy.size(), cpu.xy.size());
-  if (!gpu.xy.empty()) EXPECT_EQ(0, std::memcmp(gpu.xy.data(), cpu.xy.data(), gpu.xy.size() * sizeof(double)));
+  if (!gpu.xy.empty()) {
+    EXPECT_EQ(0, std::memcmp(gpu.xy.data(), cpu.xy.data(), gpu.xy.size() * sizeof(double)));
+  }
   EXPECT_TRUE(ctx().messages().empty()) << ctx().messages().front();
 }
 

@@ -110,7 +110,9 @@ TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
       const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate, &ts);
       EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << name << ", tiles of " << tp;
       EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << name << ", tiles of " << tp;
-      if (p.vertices.size() > tp) EXPECT_GE(ts.tiles, 2u) << name << ", tiles of " << tp;
+      if (p.vertices.size() > tp) {
+        EXPECT_GE(ts.tiles, 2u) << name << ", tiles of " << tp;
+      }
     }
   }
 }
