@@ -13,12 +13,16 @@
 #include <unordered_map>
 #include <utility>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include "core/error.hpp"
 #include "core/repair.hpp"
+#include "core/touched.hpp"
 
 namespace cdtgpu {
 
@@ -56,7 +60,9 @@ double exp_neg(double t) {
 
 }  // namespace
 
-double unit_double(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+double unit_double(uint64_t draw) { return static_cast<double>(draw >> 11) * 0x1.0p-53; }
+
+double unit_double(std::mt19937_64& rng) { return unit_double(rng()); }
 
 uint64_t uniform_below(std::mt19937_64& rng, uint64_t bound) {
   uint64_t threshold = (0 - bound) % bound;  // 2^64 mod bound
@@ -69,14 +75,24 @@ uint64_t uniform_below(std::mt19937_64& rng, uint64_t bound) {
 InputSet uniform_points(uint64_t n, uint64_t seed) {
   InputSet in;
   in.sources.push_back("uniform(n=" + std::to_string(n) + ",seed=" + std::to_string(seed) + ")");
-  in.points.reserve(n);
+  resize_unwritten(in.points, n);
+  // The draws come from one stream, so they are made in order on one core, a block at a time; turning them
+  // into points (and faulting the pages of 24 GB at 1B points) runs on all cores.
+  constexpr uint64_t kBlock = uint64_t(1) << 20;
+  std::vector<uint64_t> draws(3 * std::min(n, kBlock));
   std::mt19937_64 rng(seed);
-  for (uint64_t i = 0; i < n; ++i) {
-    double ux = unit_double(rng), uy = unit_double(rng), uz = unit_double(rng);
-    // Integer millimetres divided once: the nearest double to the millimetre value.
-    Point3 p{(500000000.0 + std::floor(ux * 1e7)) / 1000, (6000000000.0 + std::floor(uy * 1e7)) / 1000,
-             std::floor(uz * 1e5) / 1000};
-    add_point(in, 0, i + 1, p);
+  for (uint64_t first = 0; first < n; first += kBlock) {
+    const uint64_t count = std::min(kBlock, n - first);
+    for (uint64_t k = 0; k < 3 * count; ++k) draws[k] = rng();
+    tbb::parallel_for(tbb::blocked_range<uint64_t>(0, count, 1 << 14), [&](const tbb::blocked_range<uint64_t>& r) {
+      for (uint64_t i = r.begin(); i < r.end(); ++i) {
+        const double ux = unit_double(draws[3 * i]), uy = unit_double(draws[3 * i + 1]),
+                     uz = unit_double(draws[3 * i + 2]);
+        // Integer millimetres divided once: the nearest double to the millimetre value.
+        in.points[first + i] = Point3{(500000000.0 + std::floor(ux * 1e7)) / 1000,
+                                      (6000000000.0 + std::floor(uy * 1e7)) / 1000, std::floor(uz * 1e5) / 1000};
+      }
+    });
   }
   return in;
 }

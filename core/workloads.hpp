@@ -13,6 +13,7 @@ namespace cdtgpu {
 
 // The 53 high bits of one draw as a double in [0, 1): (r >> 11) * 2^-53, exact.
 double unit_double(std::mt19937_64& rng);
+double unit_double(uint64_t draw);  // the same, of a draw already made
 
 // Uniform integer in [0, bound), bound > 0; rejection of the 2^64 mod bound lowest raw values keeps it unbiased.
 uint64_t uniform_below(std::mt19937_64& rng, uint64_t bound);
