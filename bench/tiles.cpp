@@ -73,7 +73,8 @@ Row time_row(const std::string& mode, const std::string& backend, int runs, F&& 
 }
 
 void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangulator& tri, Row& out,
-                unsigned in_flight = 0, const TileFinalizer& finalize = {}) {
+                unsigned in_flight = 0, const TileFinalizer& finalize = {},
+                const std::function<void(uint64_t)>& reserve = {}) {
   const auto t = Clock::now();
   ResolvedInput in = resolve_constraints(p);
   out.resolve_ms.push_back(ms_since(t));
@@ -81,6 +82,7 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
   opt.finalize = finalize;
+  opt.reserve = reserve;
   out.tile_points = tile_points;
   out.mesh = triangulate_tiled(std::move(in), opt, tri, &out.tiles).mesh;
 }
@@ -217,7 +219,8 @@ int run_tiles(const BenchOptions& o) {
       const double memory_before = gpu::memory_ms();
       results.push_back(time_row("tiled", backend, o.runs, [&](Row& r) {
         sum = gpu::GpuCdtStats{};
-        tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(o.tiles_in_flight * users.size()), tri.finalize);
+        tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(o.tiles_in_flight * users.size()), tri.finalize,
+                   tri.reserve);
       }));
       std::string parts;
       for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);

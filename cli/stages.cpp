@@ -73,9 +73,10 @@ std::string gpu_refused(const gpu::DeviceError& e) {
 // finalize: the tiles' own (the GPU's, core/tiles.hpp); empty: the host's test.
 CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
                                const TileTriangulator& triangulate, unsigned in_flight = 0,
-                               TileFinalizer finalize = {}) {
+                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {}) {
   TileOptions opt;
   opt.finalize = std::move(finalize);
+  opt.reserve = std::move(reserve);
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
   opt.sharing = job.options.sharing;
@@ -180,7 +181,8 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       const uint64_t tile_here = options.max_tile_points >= 0 ? tile : std::min(tile, devices.max_tile_points());
       gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
       return triangulate_in_tiles(job, std::move(in), tile_here, tiles.triangulate,
-                                  unsigned(2 * devices.cdts().size()), std::move(tiles.finalize));
+                                  unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
+                                  std::move(tiles.reserve));
     } catch (const gpu::DeviceError& e) {
       return on_cpu_instead(e);
     }

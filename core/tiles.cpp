@@ -663,6 +663,11 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   const auto t_tiles = Clock::now();
   const Plan plan = plan_tiles(v, options.max_tile_points);
   const size_t tiles = plan.tiles.size();
+  if (level == 1 && options.reserve) {
+    uint64_t largest = 0;
+    for (uint32_t t : plan.tiles) largest = std::max<uint64_t>(largest, plan.nodes[t].hi - plan.nodes[t].lo);
+    options.reserve(largest + largest / 64 + 1024);
+  }
   std::vector<uint32_t> tile_of_node(plan.nodes.size(), 0);
   for (size_t t = 0; t < tiles; ++t) tile_of_node[plan.tiles[t]] = uint32_t(t);
 

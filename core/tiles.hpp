@@ -95,6 +95,9 @@ struct TileOptions {
   // Tiles (of every level) through this instead of the triangulator plus the host's final test; the merges
   // still take the triangulator. Empty: the host's test.
   TileFinalizer finalize;
+  // Told the largest first-level tile's vertex count (with room for segment ends from outside) once the tiles
+  // are planned, before their segments are: a GPU finalizer allocates its pinned staging meanwhile.
+  std::function<void(uint64_t vertices)> reserve;
 };
 
 struct TileStats {

@@ -200,8 +200,8 @@ TileFinal GpuCdt::finalize_tile(const TileJob& job, GpuCdtStats* stats) const {
   return f;
 }
 
-uint64_t GpuCdt::staging_bytes(const TileJob& job) {
-  return std::max<uint64_t>(16, 2 * sizeof(Triangle)) * job.ids.size();  // the points, at most 2n triangles
+uint64_t GpuCdt::staging_bytes(uint64_t vertices) {
+  return std::max<uint64_t>(16, 2 * sizeof(Triangle)) * vertices;  // the points, at most 2n triangles
 }
 
 void GpuCdt::stage_points(const TileJob& job, HostStaging& staging) { write_points(job.all, job.ids, staging.mapped); }

@@ -77,7 +77,7 @@ class GpuCdt {
   // (gpu/tile_triangulator): the tile's points written into `staging` (host work; staging_bytes of it), then the
   // device's part, which leaves the sorted final triangles in `staging` and returns their count (the border in
   // `f`), then those copied out (host work).
-  static uint64_t staging_bytes(const TileJob& job);
+  static uint64_t staging_bytes(uint64_t vertices);  // a tile of this many vertices
   static void stage_points(const TileJob& job, HostStaging& staging);
   uint32_t finalize_staged(const TileJob& job, HostStaging& staging, TileFinal& f, GpuCdtStats* stats = nullptr) const;
   static void unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f);

@@ -25,6 +25,7 @@ TileTriangulator gpu_tile_triangulator(std::vector<const GpuCdt*> cdts, GpuCdtSt
 struct GpuTiles {
   TileTriangulator triangulate;
   TileFinalizer finalize;
+  std::function<void(uint64_t vertices)> reserve;  // TileOptions::reserve: every slot's staging, on a thread
 };
 GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum = nullptr);
 

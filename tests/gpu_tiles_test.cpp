@@ -41,7 +41,7 @@ TEST(GpuTiles, TwoDevicesGiveTheSingleRunsBytes) {
       TileStats ts;
       gpu::GpuCdtStats sum;
       gpu::GpuTiles tiles = gpu::gpu_tiles({&a, &b}, &sum);
-      if (on_device) opt.finalize = tiles.finalize;
+      if (on_device) opt.finalize = tiles.finalize, opt.reserve = tiles.reserve;
       const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate, &ts);
       const std::string what = std::to_string(in_flight) + " in flight, final test on the " + (on_device ? "device" : "host");
       EXPECT_GE(ts.tiles, 8u);
@@ -106,6 +106,7 @@ TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
       TileOptions opt;
       opt.max_tile_points = tp;
       opt.finalize = tiles.finalize;
+      if (tp == 50) opt.reserve = tiles.reserve;  // staging allocated ahead, and regrown by a later layout's tiles
       TileStats ts;
       const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate, &ts);
       EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << name << ", tiles of " << tp;
