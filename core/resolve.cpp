@@ -28,12 +28,14 @@
 #include "core/resolve.hpp"
 
 #include <CGAL/Exact_rational.h>
+#include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
 #include <bit>
+#include <chrono>
 #include <cfloat>
 #include <cmath>
 #include <exception>
@@ -273,11 +275,17 @@ class Resolver {
     n0_ = uint32_t(vr_->size());
     m0_ = uint32_t(sr_->size());
     Events ev;
+    const auto t0 = std::chrono::steady_clock::now();
+    auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
     if (m0_ > 0) {
       setup();
+      const auto t1 = std::chrono::steady_clock::now();
       ev = sweep(/*everything=*/true);
+      spdlog::debug("resolve: setup {:.1f} ms, round 1 {:.1f} ms", ms(t0, t1), ms(t1, std::chrono::steady_clock::now()));
     }
+    const auto t2 = std::chrono::steady_clock::now();
     if (copier_.joinable()) copier_.join();
+    spdlog::debug("resolve: waited {:.1f} ms for the input's copy", ms(t2, std::chrono::steady_clock::now()));
     vr_ = &v_, sr_ = &seg_;
     if (ev.on.empty() && ev.cross.empty()) {  // the input is already clean: it is the output
       out.vertices = std::move(v_);
@@ -443,6 +451,15 @@ class Resolver {
     for (unsigned t = 0; t < ranges; ++t)
       bound[t] =
           uint32_t(std::lower_bound(work.begin(), work.end() - 1, work[nc] * t / ranges) - work.begin());
+    // reach_[b]: the largest last column of the pieces in blocks 0..b of the piece order.
+    const size_t pieces = order_.empty() ? m0_ : order_.size();
+    reach_.assign((pieces + kReachBlock - 1) / kReachBlock, 0);
+    parallel_chunks(reach_.size(), threads_, 64, [&](size_t b0, size_t b1, unsigned) {
+      for (size_t b = b0; b < b1; ++b)
+        for (size_t k = b * kReachBlock; k < std::min(pieces, (b + 1) * kReachBlock); ++k)
+          reach_[b] = std::max<uint32_t>(reach_[b], span_[piece_at(k)].last);
+    });
+    for (size_t b = 1; b < reach_.size(); ++b) reach_[b] = std::max(reach_[b], reach_[b - 1]);
     std::vector<SweepState> states(ranges);
     parallel_chunks(ranges, threads_, 1, [&](size_t t0, size_t t1, unsigned) {
       for (size_t t = t0; t < t1; ++t) {
@@ -474,8 +491,12 @@ class Resolver {
           {id, span_[id].first, span_[id].last, e[0], e[1], {}, {}, kAll || dirty_[id] != 0, false, 0, 0});
       if (kAll) gather(s.active.back());
     };
-    // Pieces that start left of the range and reach into it.
-    for (size_t k = 0; k < pfirst_[c0]; ++k)
+    // Pieces that start left of the range and reach into it: those after the first block whose running
+    // maximum of last columns reaches c0 (scanning from the start, each of 64 ranges read 2 GB at 1B points).
+    const size_t from =
+        size_t(std::partition_point(reach_.begin(), reach_.end(), [&](uint32_t r) { return r < c0; }) -
+               reach_.begin()) * kReachBlock;
+    for (size_t k = from; k < pfirst_[c0]; ++k)
       if (span_[piece_at(k)].last >= c0) add(piece_at(k));
     const Point3* V = vr_->data();
     for (uint32_t c = c0; c < c1; ++c) {
@@ -791,6 +812,8 @@ class Resolver {
   std::vector<uint32_t> prepared_order_;  // prepared constraints by first column (empty: 0, 1, 2, ... are)
   std::vector<uint32_t> order_;   // the pieces of this round by first column (empty: 0, 1, 2, ... are)
   std::vector<size_t> pfirst_;    // pieces starting in column c: order_[pfirst_[c] .. pfirst_[c + 1])
+  static constexpr size_t kReachBlock = 4096;
+  std::vector<uint32_t> reach_;   // per block of kReachBlock pieces in order_: the running maximum of last columns
   std::vector<uint32_t> sorder_;  // Steiner vertices by column
   std::vector<size_t> sfirst_;    // Steiner vertices of column c: sorder_[sfirst_[c] .. sfirst_[c + 1])
   std::map<std::pair<double, double>, uint32_t> steiner_at_;
