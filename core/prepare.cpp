@@ -5,6 +5,7 @@
 // GPU backend passes gpu::merge_points, which gives the same answer (tests/gpu_dedupe_test.cpp).
 #include "core/prepare.hpp"
 
+#include "core/compact.hpp"
 #include "core/parallel.hpp"
 #include "core/touched.hpp"
 
@@ -148,22 +149,14 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
     const uint64_t ab = segs[i].ab;
     return (ab >> 32) != (ab & 0xffffffffu) && (i == 0 || segs[i - 1].ab != ab);
   };
-  constexpr size_t kRun = size_t(1) << 16;
-  std::vector<uint64_t> kept_at((segs.size() + kRun - 1) / kRun + 1, 0);
-  each(kept_at.size() - 1, [&](size_t r) {
-    for (size_t i = r * kRun; i < std::min(segs.size(), (r + 1) * kRun); ++i) kept_at[r + 1] += kept(i);
-  }, 1);
-  for (size_t r = 1; r < kept_at.size(); ++r) kept_at[r] += kept_at[r - 1];
-  out.constraints.resize(kept_at.back());
-  out.constraint_line.resize(kept_at.back());
-  each(kept_at.size() - 1, [&](size_t r) {
-    uint64_t at = kept_at[r];
-    for (size_t i = r * kRun; i < std::min(segs.size(), (r + 1) * kRun); ++i)
-      if (kept(i)) {
-        out.constraints[at] = {uint32_t(segs[i].ab >> 32), uint32_t(segs[i].ab & 0xffffffffu)};
-        out.constraint_line[at++] = segs[i].line;
-      }
-  }, 1);
+  out.constraints = compact<Edge>(segs.size(), kept, [&](size_t i, Edge* at) {
+    if (kept(i)) *at++ = {uint32_t(segs[i].ab >> 32), uint32_t(segs[i].ab & 0xffffffffu)};
+    return at;
+  });
+  out.constraint_line = compact<uint32_t>(segs.size(), kept, [&](size_t i, uint32_t* at) {
+    if (kept(i)) *at++ = segs[i].line;
+    return at;
+  });
   out.duplicate_segments = out.input_segments - out.zero_length_segments - out.constraints.size();
   phase("constraints");
   return out;

@@ -145,6 +145,15 @@ void run_once(const Context& ctx, const std::function<void(VkCommandBuffer)>& re
   vkFreeCommandBuffers(ctx.device, ctx.pool, 1, &cmd);
 }
 
+// One copy between buffers on the device, synchronously.
+void copy_region(const Context& ctx, VkBuffer src, VkDeviceSize src_offset, VkBuffer dst, VkDeviceSize dst_offset,
+                 VkDeviceSize bytes) {
+  run_once(ctx, [&](VkCommandBuffer cmd) {
+    VkBufferCopy region{src_offset, dst_offset, bytes};
+    vkCmdCopyBuffer(cmd, src, dst, 1, &region);
+  });
+}
+
 void check_range(const Buffer& b, VkDeviceSize bytes, VkDeviceSize offset, const char* what) {
   if (offset + bytes > b.size)
     throw DeviceError(std::string(what) + " of " + std::to_string(bytes) + " bytes at offset " +
@@ -227,26 +236,17 @@ void HostStaging::fit(const Context& ctx, VkDeviceSize bytes) {
 
 void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes) {
   check_range(dst, bytes, 0, "copy from staging");
-  if (!bytes) return;
-  run_once(ctx, [&](VkCommandBuffer cmd) {
-    VkBufferCopy region{0, 0, bytes};
-    vkCmdCopyBuffer(cmd, staging.buffer.buffer, dst.buffer, 1, &region);
-  });
+  if (bytes) copy_region(ctx, staging.buffer.buffer, 0, dst.buffer, 0, bytes);
 }
 
 void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes) {
   check_range(src, bytes, 0, "copy to staging");
-  if (!bytes) return;
-  run_once(ctx, [&](VkCommandBuffer cmd) {
-    VkBufferCopy region{0, 0, bytes};
-    vkCmdCopyBuffer(cmd, src.buffer, staging.buffer.buffer, 1, &region);
-  });
+  if (bytes) copy_region(ctx, src.buffer, 0, staging.buffer.buffer, 0, bytes);
 }
 
 void reserve_staging(const Context& ctx, VkDeviceSize bytes) {
   if (bytes) staging_of(ctx, bytes);
 }
-
 
 void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, const std::function<void(void*)>& write,
                  VkDeviceSize offset) {
@@ -254,20 +254,14 @@ void upload_with(const Context& ctx, const Buffer& dst, VkDeviceSize bytes, cons
   if (!bytes) return;
   HostStaging& staging = staging_of(ctx, bytes);
   write(staging.mapped);
-  run_once(ctx, [&](VkCommandBuffer cmd) {
-    VkBufferCopy region{0, offset, bytes};
-    vkCmdCopyBuffer(cmd, staging.buffer.buffer, dst.buffer, 1, &region);
-  });
+  copy_region(ctx, staging.buffer.buffer, 0, dst.buffer, offset, bytes);
 }
 
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset) {
   check_range(src, bytes, offset, "download");
   if (!bytes) return;
   HostStaging& staging = staging_of(ctx, bytes);
-  run_once(ctx, [&](VkCommandBuffer cmd) {
-    VkBufferCopy region{offset, 0, bytes};
-    vkCmdCopyBuffer(cmd, src.buffer, staging.buffer.buffer, 1, &region);
-  });
+  copy_region(ctx, src.buffer, offset, staging.buffer.buffer, 0, bytes);
   // Large copies on all cores: the destination is usually fresh memory, and its page faults and the copy
   // itself took ~30 ms for a 2M-point triangulation's 48 MB on one core.
   copy_on_all_cores(static_cast<const char*>(staging.mapped), bytes, static_cast<char*>(data));

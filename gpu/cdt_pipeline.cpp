@@ -10,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "core/parallel.hpp"
 #include "core/resolve.hpp"
 #include "core/touched.hpp"
 #include "gpu/triangulation.hpp"
@@ -178,25 +179,12 @@ Triangles GpuCdt::triangulate_graph(const Points& vertices, const std::vector<Ed
 }
 
 TileFinal GpuCdt::finalize_tile(const TileJob& job, GpuCdtStats* stats) const {
-  GpuCdtStats local;
-  GpuCdtStats& s = stats ? *stats : local;
-  s = GpuCdtStats{};
-  const auto t_all = Clock::now();
-  std::future<Triangles> storage = triangle_storage(job.ids.size());
-  cache_.grow_by = tile_cache_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
-  GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &tile_cache_);
-  constrain(tri, job.segments, s);
-  auto t = Clock::now();
+  HostStaging staging;  // the three parts below, with a staging buffer of the call's own
+  staging.fit(ctx_, staging_bytes(job.ids.size()));
+  stage_points(job, staging);
   TileFinal f;
-  double final_ms = 0;
-  f.border = finals_.mark(tri, job.rect, cache_, &final_ms);
-  add_gpu(s, "", {{"tile final", final_ms}});
-  record_stage(s, "tile final", t);
-  f.triangles = download_sorted(tri, s, storage.get());
-  tile_cache_.give("points", std::move(tri.points));
-  tile_cache_.give("tri_verts", std::move(tri.verts));
-  tile_cache_.give("tri_nbrs", std::move(tri.nbrs));
-  s.wall_total_ms = ms_since(t_all);
+  const uint32_t count = finalize_staged(job, staging, f, stats);
+  unstage_triangles(staging, count, f);
   return f;
 }
 
@@ -218,7 +206,7 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
     std::shared_ptr<void> own;
     ~Restore() { ctx.staging = std::move(own); }
   } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
-  cache_.grow_by = tile_cache_.grow_by = 0.125;
+  cache_.grow_by = tile_cache_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &tile_cache_, &staging);
   constrain(tri, job.segments, s);
   auto t = Clock::now();
@@ -240,10 +228,7 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
 
 void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f) {
   resize_unwritten(f.triangles, count);
-  const Triangle* from = static_cast<const Triangle*>(staging.mapped);
-  tbb::parallel_for(tbb::blocked_range<uint32_t>(0, count, 1 << 16), [&](const tbb::blocked_range<uint32_t>& r) {
-    std::copy(from + r.begin(), from + r.end(), f.triangles.begin() + r.begin());
-  });
+  copy_on_all_cores(static_cast<const Triangle*>(staging.mapped), count, f.triangles.data());
 }
 
 }  // namespace cdtgpu::gpu

@@ -46,6 +46,13 @@ class DevicePool {
     freed_.wait(lock, [&] { return std::find(free_.begin(), free_.end(), i) != free_.end(); });
     free_.erase(std::find(free_.begin(), free_.end(), i));
   }
+  // Gives i back when it goes out of scope.
+  struct Held {
+    DevicePool& pool;
+    size_t i;
+    ~Held() { pool.give(i); }
+  };
+
   void give(size_t i) {
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -80,9 +87,6 @@ class OnDevice {
     for (size_t i = 0; i < kSlotsPerDevice * cdts_.size(); ++i) staging_.push_back(std::make_unique<HostStaging>());
   }
 
-  // A tile in a slot of its own (a staging buffer; two a device, as many as the tiles in flight): its points are
-  // written there and its final triangles copied out without the device, which is held only for the GPU part,
-  // so those host copies overlap another tile's GPU work.
   // Every slot's staging buffer for tiles of `vertices`, allocated in turn on a thread of its own: pinned memory
   // takes ~0.3 ms per MB (1.7 s for a 3 GB slot at 1B points), which the tiles' planning hides.
   void reserve(uint64_t vertices) {
@@ -94,15 +98,14 @@ class OnDevice {
                 }).share();
   }
 
+  // A tile in a slot of its own (a staging buffer; two a device, as many as the tiles in flight): its points are
+  // written there and its final triangles copied out without the device, which is held only for the GPU part,
+  // so those host copies overlap another tile's GPU work.
   TileFinal staged(const TileJob& job) {
     return tbb::this_task_arena::isolate([&] {
       if (const auto reserved = reserved_; reserved.valid()) reserved.get();  // rethrows the allocation's error
       const size_t slot = slots_.take();
-      struct Give {
-        DevicePool& pool;
-        size_t i;
-        ~Give() { pool.give(i); }
-      } give_slot{slots_, slot};
+      const DevicePool::Held held_slot{slots_, slot};
       const size_t d = slot % cdts_.size();
       const GpuCdt& cdt = *cdts_[d];
       HostStaging& staging = *staging_[slot];
@@ -114,7 +117,7 @@ class OnDevice {
         GpuCdtStats one;
         {
           pool_.take(d);
-          Give give_device{pool_, d};
+          const DevicePool::Held held_device{pool_, d};
           count = cdt.finalize_staged(job, staging, f, &one);
         }
         GpuCdt::unstage_triangles(staging, count, f);
@@ -132,11 +135,7 @@ class OnDevice {
     // which would wait for a device it holds.
     return tbb::this_task_arena::isolate([&] {
       const size_t d = pool_.take();
-      struct Give {
-        DevicePool& pool;
-        size_t d;
-        ~Give() { pool.give(d); }
-      } give{pool_, d};
+      const DevicePool::Held held{pool_, d};
       try {
         GpuCdtStats one;
         auto result = work(*cdts_[d], one);
