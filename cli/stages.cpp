@@ -143,7 +143,8 @@ gpu::TileDevices tile_devices(Job& job, GpuStart& start) {
 }
 
 // The GPU backend on a started device, the CPU's resolve stage running on other threads meanwhile.
-CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const double& resolve_ms) {
+CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const ResolveProgress& progress,
+                          const double& resolve_ms) {
   RunStats& stats = job.stats;
   GpuStart& start = *job.start;
   gpu::GpuCdt& cdt = start.cdt();
@@ -190,7 +191,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
   gpu::GpuCdtStats gs;
   CdtResult r;
   try {
-    r = cdt.triangulate(job.prepared, std::move(resolving), &gs);
+    r = cdt.triangulate(job.prepared, std::move(resolving), &gs, &progress);
   } catch (const gpu::DeviceError& e) {
     return on_cpu_instead(e);
   }
@@ -369,11 +370,12 @@ void triangulate_job(Job& job) {
   // The GPU path's CPU resolve stage starts now, on other threads, beside the device's start and then the
   // Delaunay build (gpu::GpuCdt::triangulate waits for it where it needs the constraints).
   double resolve_ms = 0;
+  ResolveProgress progress;
   std::future<ResolvedInput> resolving;
   if (job.want_gpu)
     resolving = std::async(std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
-      ResolvedInput r = resolve_constraints(job.prepared);
+      ResolvedInput r = resolve_constraints(job.prepared, progress);
       resolve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
     });
@@ -394,7 +396,7 @@ void triangulate_job(Job& job) {
     stats.backend = job.gpu ? "gpu" : "cgal";
     stats.backend_reason = job.backend_reason;
     spdlog::debug("backend {}: {}", stats.backend, job.backend_reason);
-    return job.gpu ? triangulate_gpu(job, resolving, resolve_ms) : triangulate_cpu(job);
+    return job.gpu ? triangulate_gpu(job, resolving, progress, resolve_ms) : triangulate_cpu(job);
   });
 }
 

@@ -47,6 +47,7 @@
 #include <thread>
 #include <utility>
 
+#include "core/compact.hpp"
 #include "core/parallel.hpp"
 #include "core/predicates.hpp"
 #include "core/touched.hpp"
@@ -244,7 +245,9 @@ struct SweepState {
   // The column's vertices by row, as arrays (the test loop over a row's vertices is branch-free).
   std::vector<double> vx, vy;
   std::vector<uint32_t> vid, vrow, vstart, sstart, srows;
-  std::vector<uint8_t> vdirty;
+  std::vector<uint8_t> vdirty, rdirty;  // later rounds: new vertices, rows holding one
+  std::vector<std::pair<double, double>> hot;  // later rounds: the column's y-ranges with something new
+  std::vector<uint32_t> rhot;                  // later rounds: prefix counts of the rows they reach
   Events events;
 };
 
@@ -258,13 +261,15 @@ class Resolver {
   // meanwhile: 48 MB of vertices take ~30 ms to copy on the 2-core machines, mostly page faults, and that
   // overlaps with the sweep's computing. The copy itself on all cores (TBB): on one, 120 MB (5M vertices)
   // outlasted the sweep on the 16-core H100 machine.
-  Resolver(const Points& vertices, const std::vector<Edge>& constraints, unsigned threads)
-      : threads_(threads), vr_(&vertices), sr_(&constraints) {
+  Resolver(const Points& vertices, const std::vector<Edge>& constraints, unsigned threads,
+           ResolveProgress* progress = nullptr)
+      : threads_(threads), progress_(progress), vr_(&vertices), sr_(&constraints) {
     if (threads_ > 1)
       copier_ = std::jthread([this, &vertices, &constraints] {
         resize_unwritten(v_, vertices.size());
         copy_on_all_cores(vertices.data(), vertices.size(), v_.data());
-        seg_ = constraints;
+        seg_.reserve(with_room(constraints.size()));
+        seg_.assign(constraints.begin(), constraints.end());
       });
     else
       v_ = vertices, seg_ = constraints;
@@ -283,6 +288,7 @@ class Resolver {
       ev = sweep(/*everything=*/true);
       spdlog::debug("resolve: setup {:.1f} ms, round 1 {:.1f} ms", ms(t0, t1), ms(t1, std::chrono::steady_clock::now()));
     }
+    if (progress_) progress_->crossings.store(ev.cross.empty() ? 0 : 1);
     const auto t2 = std::chrono::steady_clock::now();
     if (copier_.joinable()) copier_.join();
     spdlog::debug("resolve: waited {:.1f} ms for the input's copy", ms(t2, std::chrono::steady_clock::now()));
@@ -292,6 +298,12 @@ class Resolver {
       out.constraints = std::move(seg_);
       return out;
     }
+    // Room for the pieces to come, so that the rounds' appends do not copy these arrays (and fault their
+    // pages) again.
+    seg_.reserve(with_room(m0_));  // no work where the copy made room
+    origin_.reserve(with_room(m0_));
+    alive_.reserve(with_room(m0_));
+    dirty_.reserve(with_room(m0_));
     origin_.resize(m0_);
     std::iota(origin_.begin(), origin_.end(), 0u);
     alive_.assign(m0_, 1);
@@ -305,20 +317,27 @@ class Resolver {
       for (uint32_t u : dirty_vertices) vdirty_[u - n0_] = 0;
       dirty_pieces.clear();
       dirty_vertices.clear();
+      const auto r0 = std::chrono::steady_clock::now();
       apply(ev, dirty_pieces, dirty_vertices);
       vdirty_.resize(steiner_.size(), 0);
       for (uint32_t u : dirty_vertices) vdirty_[u - n0_] = 1;
       streams(dirty_pieces, dirty_vertices);
+      const auto r1 = std::chrono::steady_clock::now();
       ev = sweep(/*everything=*/false);
+      spdlog::debug("resolve: round {}: {} new pieces, apply {:.1f} ms, sweep {:.1f} ms", round, dirty_pieces.size(),
+                    ms(r0, r1), ms(r1, std::chrono::steady_clock::now()));
       if (ev.on.empty() && ev.cross.empty()) break;
     }
     out.steiner_points = steiner_points_;
     out.split_at_vertices = split_at_vertices_;
+    const auto f0 = std::chrono::steady_clock::now();
     finish(out);
+    spdlog::debug("resolve: {} Steiner vertices, finish {:.1f} ms", steiner_.size(), ms(f0, std::chrono::steady_clock::now()));
     return out;
   }
 
  private:
+  static size_t with_room(size_t n) { return n + n / 16 + 4096; }
   const Point3& vert(uint32_t i) const { return i < n0_ ? (*vr_)[i] : steiner_[i - n0_]; }
   XY xy(uint32_t i) const { return {vert(i).x, vert(i).y}; }
 
@@ -372,6 +391,7 @@ class Resolver {
   // The columns of every prepared constraint, reading each far end a little ahead of time (its near end is
   // next to the previous constraint's).
   void compute_spans() {
+    span_.reserve(with_room(m0_));
     span_.resize(m0_);
     parallel_chunks(m0_, threads_, 8192, [&](size_t b, size_t e, unsigned) {
       const Point3* V = vr_->data();
@@ -531,6 +551,10 @@ class Resolver {
     const size_t vb = vfirst_[c], nv = vfirst_[c + 1] - vb;
     const size_t ns = kAll ? 0 : sfirst_[c + 1] - sfirst_[c];
     auto vertex = [&](size_t k) { return k < nv ? uint32_t(vb + k) : sorder_[sfirst_[c] + (k - nv)]; };
+    // Later rounds: every new event has a new piece or vertex in it, so only the y-ranges of those (`hot`)
+    // matter; the column's other vertices and pieces are left out (a ring crossing the contours dirties
+    // every column, but only where it passes).
+    if (!kAll && !hot_ranges(c, s, ylo, yhi)) return;
     // Rows: monotone in y like the columns in x, so a point between two y's is in a row between theirs.
     const size_t rows = std::min<size_t>((nv + ns + s.active.size()) / kRowItems + 1, 1u << 16);
     double sy = yhi > ylo ? double(rows) / (yhi - ylo) : 0;
@@ -539,15 +563,28 @@ class Resolver {
       const double r = (y - ylo) * sy;
       return r < 1 ? uint32_t(0) : r >= double(rows) ? uint32_t(rows - 1) : uint32_t(r);
     };
+    // Later rounds: the rows that a hot range reaches (s.rhot: how many of rows 0 .. r - 1 are).
+    if (!kAll) {
+      s.rhot.assign(rows + 1, 0);
+      for (const auto& [lo, hi] : s.hot)
+        for (uint32_t r = row(lo), r1 = row(hi); r <= r1; ++r) s.rhot[r + 1] = 1;
+      std::partial_sum(s.rhot.begin(), s.rhot.end(), s.rhot.begin());
+    }
+    auto hot_row = [&](uint32_t r) { return kAll || s.rhot[r + 1] != s.rhot[r]; };
+    auto listed = [&](const SweepState::Active& a) {
+      return a.last >= c && (kAll || (a.hi >= ylo && a.lo <= yhi && s.rhot[row(a.hi) + 1] != s.rhot[row(a.lo)]));
+    };
     const Point3* V = vr_->data();
     s.vstart.assign(rows + 1, 0);
     s.vrow.resize(nv + ns);
-    for (size_t k = 0; k < nv + ns; ++k) {
-      const double y = kAll ? V[vb + k].y : vert(vertex(k)).y;
-      const bool in = y >= ylo && y <= yhi;  // no piece reaches the others
-      s.vrow[k] = in ? row(y) : kNone;
-      if (in) ++s.vstart[s.vrow[k] + 1];
-    }
+    auto place = [&](size_t k, double y) {  // no branches: whether a vertex is in is anyone's guess
+      const uint32_t r = row(y);
+      const bool in = (y >= ylo) & (y <= yhi) & hot_row(r);  // no piece reaches the others
+      s.vrow[k] = in ? r : kNone;
+      s.vstart[r + 1] += in;
+    };
+    for (size_t k = 0; k < nv; ++k) place(k, V[vb + k].y);
+    for (size_t k = nv; k < nv + ns; ++k) place(k, vert(vertex(k)).y);
     std::partial_sum(s.vstart.begin(), s.vstart.end(), s.vstart.begin());
     const size_t nin = s.vstart[rows];
     s.vx.resize(nin), s.vy.resize(nin), s.vid.resize(nin);
@@ -561,16 +598,22 @@ class Resolver {
     }
     for (size_t r = rows; r > 0; --r) s.vstart[r] = s.vstart[r - 1];
     s.vstart[0] = 0;
+    // Later rounds: a clean piece can meet only the new vertices of its rows.
+    if (!kAll) {
+      s.rdirty.assign(rows, 0);
+      for (size_t r = 0; r < rows; ++r)
+        for (uint32_t j = s.vstart[r]; j < s.vstart[r + 1]; ++j) s.rdirty[r] |= s.vdirty[j];
+    }
     s.sstart.assign(rows + 1, 0);
     for (const auto& a : s.active)
-      if (a.last >= c)
-        for (uint32_t r = row(a.lo), r1 = row(a.hi); r <= r1; ++r) ++s.sstart[r + 1];
+      if (listed(a))
+        for (uint32_t r = row(a.lo), r1 = row(a.hi); r <= r1; ++r) s.sstart[r + 1] += hot_row(r);
     std::partial_sum(s.sstart.begin(), s.sstart.end(), s.sstart.begin());
     s.srows.resize(s.sstart[rows]);
     for (uint32_t i = 0; i < s.active.size(); ++i)
-      if (s.active[i].last >= c)
+      if (listed(s.active[i]))
         for (uint32_t r = row(s.active[i].lo), r1 = row(s.active[i].hi); r <= r1; ++r)
-          s.srows[s.sstart[r]++] = i;
+          if (hot_row(r)) s.srows[s.sstart[r]++] = i;
     for (size_t r = rows; r > 0; --r) s.sstart[r] = s.sstart[r - 1];
     s.sstart[0] = 0;
 
@@ -584,11 +627,12 @@ class Resolver {
         // a vertex other than the piece's ends.
         const XY a = p.a, b = p.b;
         bool maybe = false;
-        for (uint32_t j = v0; j < v1; ++j) {
-          const double l = (a.x - X[j]) * (b.y - Y[j]), rr = (a.y - Y[j]) * (b.x - X[j]);
-          const bool end = (X[j] == a.x && Y[j] == a.y) | (X[j] == b.x && Y[j] == b.y);
-          maybe |= (std::abs(l - rr) <= kCcwErrBound * (std::abs(l) + std::abs(rr))) & !end;
-        }
+        if (kAll || p.dirty || s.rdirty[r])
+          for (uint32_t j = v0; j < v1; ++j) {
+            const double l = (a.x - X[j]) * (b.y - Y[j]), rr = (a.y - Y[j]) * (b.x - X[j]);
+            const bool end = (X[j] == a.x && Y[j] == a.y) | (X[j] == b.x && Y[j] == b.y);
+            maybe |= (std::abs(l - rr) <= kCcwErrBound * (std::abs(l) + std::abs(rr))) & !end;
+          }
         if (maybe)
           for (uint32_t j = v0; j < v1; ++j)
             if ((kAll || p.dirty || s.vdirty[j]) && s.vid[j] != p.ea && s.vid[j] != p.eb &&
@@ -602,6 +646,20 @@ class Resolver {
         }
       }
     }
+  }
+
+  // The y-ranges of column c's new pieces and its new vertices into s.hot, and their hull into
+  // ylo, yhi; false when there are none.
+  bool hot_ranges(uint32_t c, SweepState& s, double& ylo, double& yhi) const {
+    s.hot.clear();
+    for (const auto& a : s.active)
+      if (a.last >= c && a.dirty) s.hot.push_back({a.lo, a.hi});
+    for (size_t k = sfirst_[c]; k < sfirst_[c + 1]; ++k)
+      if (vdirty_[sorder_[k] - n0_]) s.hot.push_back({vert(sorder_[k]).y, vert(sorder_[k]).y});
+    if (s.hot.empty()) return false;
+    ylo = HUGE_VAL, yhi = -HUGE_VAL;
+    for (const auto& [lo, hi] : s.hot) ylo = std::min(ylo, lo), yhi = std::max(yhi, hi);
+    return true;
   }
 
   uint32_t existing_vertex(double x, double y) const {
@@ -753,49 +811,63 @@ class Resolver {
       const double t = len > 0 ? std::min(1.0, std::hypot(v.x - a.x, v.y - a.y) / len) : 0.0;
       v.z = a.z + t * (b.z - a.z);
     }
-    // Canonical vertex order: merge the Steiner vertices, sorted, into the prepared ones.
+    // Canonical vertex order: the Steiner vertices, sorted, merged into the prepared ones. Steiner vertex k
+    // (in that order) goes before the prepared vertex at[k] (none equals it), so it lands at at[k] + k and
+    // prepared vertex i moves up by the number of at[] <= i; the copies run on all cores (2M vertices took
+    // ~20 ms on one).
     std::vector<uint32_t> order(ns);
     std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&](uint32_t i, uint32_t j) {
-      const Point3 &p = steiner_[i], &q = steiner_[j];
-      return p.x != q.x ? p.x < q.x : p.y < q.y;
-    });
+    auto less = [](const Point3& p, const Point3& q) { return p.x != q.x ? p.x < q.x : p.y < q.y; };
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t i, uint32_t j) { return less(steiner_[i], steiner_[j]); });
+    std::vector<uint32_t> at(ns);
+    for (uint32_t k = 0; k < ns; ++k)
+      at[k] = uint32_t(std::lower_bound(v_.begin(), v_.begin() + n0_, steiner_[order[k]], less) - v_.begin());
     std::vector<uint32_t> renum(size_t(n0_) + ns);
-    out.vertices.clear();
-    out.vertices.reserve(renum.size());
-    for (uint32_t i = 0, k = 0; i < n0_ || k < ns;) {
-      const Point3* t = k < ns ? &steiner_[order[k]] : nullptr;
-      const bool take_input = !t || (i < n0_ && (v_[i].x != t->x ? v_[i].x < t->x : v_[i].y < t->y));
-      if (take_input) {
-        renum[i] = uint32_t(out.vertices.size());
-        out.vertices.push_back(v_[i++]);
-      } else {
-        renum[n0_ + order[k++]] = uint32_t(out.vertices.size());
-        out.vertices.push_back(*t);
+    resize_unwritten(out.vertices, renum.size());
+    Point3* V = out.vertices.data();
+    parallel_chunks(n0_, threads_, 1 << 16, [&](size_t b, size_t e, unsigned) {
+      size_t k = size_t(std::upper_bound(at.begin(), at.end(), uint32_t(b)) - at.begin());
+      for (size_t i = b; i < e; ++i) {
+        while (k < ns && at[k] <= i) ++k;
+        renum[i] = uint32_t(i + k);
+        V[i + k] = v_[i];
       }
+    });
+    for (uint32_t k = 0; k < ns; ++k) {
+      renum[n0_ + order[k]] = at[k] + k;
+      V[at[k] + k] = steiner_[order[k]];
     }
+
     // Constraints: the prepared ones left whole keep their sorted order (renumbering keeps the (x, y)
-    // order); the pieces are sorted and merged in.
-    std::vector<Edge>& cs = out.constraints;
-    cs.clear();
-    auto add = [&](uint32_t p) {
+    // order), renumbered on all cores; the pieces are sorted and merged in.
+    auto renumbered = [&](uint32_t p) {
       uint32_t a = renum[seg_[p][0]], b = renum[seg_[p][1]];
-      if (a > b) std::swap(a, b);
-      cs.push_back({a, b});
+      return a < b ? Edge{a, b} : Edge{b, a};
     };
-    for (uint32_t p = 0; p < m0_; ++p)
-      if (alive_[p]) add(p);
-    const size_t kept = cs.size();
+    std::vector<Edge> kept = compact<Edge>(
+        m0_, [&](size_t p) { return size_t(alive_[p]); },
+        [&](size_t p, Edge* to) {
+          if (alive_[p]) *to++ = renumbered(uint32_t(p));
+          return to;
+        });
+    std::vector<Edge> pieces;
     for (uint32_t p = m0_; p < seg_.size(); ++p)
-      if (alive_[p]) add(p);
-    const auto middle = cs.begin() + ptrdiff_t(kept);
-    if (!std::is_sorted(cs.begin(), middle)) std::sort(cs.begin(), middle);
-    std::sort(middle, cs.end());
-    std::inplace_merge(cs.begin(), middle, cs.end());
+      if (alive_[p]) pieces.push_back(renumbered(p));
+    std::sort(pieces.begin(), pieces.end());
+    if (!std::is_sorted(kept.begin(), kept.end())) std::sort(kept.begin(), kept.end());
+    std::vector<Edge>& cs = out.constraints;
+    if (pieces.empty()) {
+      cs = std::move(kept);
+    } else {
+      cs.resize(kept.size() + pieces.size());
+      std::merge(kept.begin(), kept.end(), pieces.begin(), pieces.end(), cs.begin());
+    }
     cs.erase(std::unique(cs.begin(), cs.end()), cs.end());
   }
 
   const unsigned threads_;
+  ResolveProgress* const progress_ = nullptr;
   Points v_;        // prepared vertices
   Points steiner_;  // Steiner vertices in creation order: vertex n0_ + i is steiner_[i]
   std::vector<Edge> seg_;        // prepared constraints, then the pieces of splits (in order along them)
@@ -831,6 +903,10 @@ unsigned thread_count(unsigned threads) {
 
 ResolvedInput resolve_constraints(const PreparedInput& prepared, unsigned threads) {
   return Resolver(prepared.vertices, prepared.constraints, thread_count(threads)).run();
+}
+
+ResolvedInput resolve_constraints(const PreparedInput& prepared, ResolveProgress& progress, unsigned threads) {
+  return Resolver(prepared.vertices, prepared.constraints, thread_count(threads), &progress).run();
 }
 
 ResolvedInput resolve_constraints(PreparedInput&& prepared, unsigned threads) {

@@ -2,6 +2,7 @@
 // that triangulate the vertices first and then recover constraints by flipping, which needs constraints that
 // never cross each other and never pass through a vertex.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -40,5 +41,12 @@ struct ResolvedInput {
 // ~70 ms in all); the second takes them from `prepared` (its vertices and constraints are left empty).
 ResolvedInput resolve_constraints(const PreparedInput& prepared, unsigned threads = 0);
 ResolvedInput resolve_constraints(PreparedInput&& prepared, unsigned threads = 0);
+
+// What a caller running resolve_constraints on another thread may learn early: after the first sweep (a
+// fraction of the whole), whether constraints cross (Steiner vertices are coming). -1 until then.
+struct ResolveProgress {
+  std::atomic<int> crossings{-1};
+};
+ResolvedInput resolve_constraints(const PreparedInput& prepared, ResolveProgress& progress, unsigned threads = 0);
 
 }  // namespace cdtgpu

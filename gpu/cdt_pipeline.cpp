@@ -65,8 +65,11 @@ PointMerger GpuCdt::merger() const {
 }
 
 CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats) const {
-  return triangulate(prepared, std::async(std::launch::async, [&] { return resolve_constraints(prepared, resolve_threads); }),
-                     stats);
+  ResolveProgress progress;
+  return triangulate(prepared, std::async(std::launch::async, [&] {
+                       return resolve_constraints(prepared, progress, resolve_threads);
+                     }),
+                     stats, &progress);
 }
 
 namespace {
@@ -104,27 +107,40 @@ GpuTriangulation GpuCdt::delaunay_of(std::span<const Point3> all, std::span<cons
 }
 
 CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<ResolvedInput> resolving,
-                              GpuCdtStats* stats) const {
+                              GpuCdtStats* stats, const ResolveProgress* progress) const {
   GpuCdtStats local;
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
 
-  std::future<Triangles> triangles = triangle_storage(prepared.vertices.size());
+  // Room for the Steiner vertices of a few crossings too: regrowing it after the download is 60 MB copied and
+  // faulted on one core at 2M points (37 ms more in the download with a boundary crossing the contours).
+  const size_t room = prepared.vertices.size() + prepared.vertices.size() / 256 + 4096;
+  std::future<Triangles> triangles = triangle_storage(room);
 
   // 1. CPU, on other threads (`resolving`): constraints that pass through vertices are split there, crossings
   //    get Steiner vertices, so that the GPU sees a planar straight-line graph on canonical vertices.
   // 2. GPU, meanwhile: the Delaunay triangulation of the prepared vertices, left on the device. They are the
   //    resolved vertices unless constraints cross somewhere; then the triangulation is built again from those.
-  GpuTriangulation tri = delaunay_of(prepared.vertices, {}, s);
+  //    Of the resolved vertices where the resolve is done already (it often is when the device was slower to
+  //    start) or has found crossings (a second build costs more than the wait).
+  const bool resolved = resolving.wait_for(std::chrono::seconds(0)) == std::future_status::ready ||
+                        (progress && progress->crossings.load() == 1);
   auto t = Clock::now();
-  ResolvedInput in = resolving.get();
-  record_stage(s, "resolve wait", t);
-  if (in.vertices.size() != prepared.vertices.size()) {  // Steiner vertices: resolve only ever adds vertices
+  ResolvedInput in = resolved ? resolving.get() : ResolvedInput{};
+  if (resolved) record_stage(s, "resolve wait", t);
+  GpuTriangulation tri = delaunay_of(resolved ? in.vertices : prepared.vertices, {}, s);
+  if (!resolved) {
+    t = Clock::now();
+    in = resolving.get();
+    record_stage(s, "resolve wait", t);
+  }
+  if (!resolved && in.vertices.size() != prepared.vertices.size()) {  // resolve only ever adds vertices
     tri = GpuTriangulation();
     tri = delaunay_of(in.vertices, {}, s);
     s.delaunay_built_twice = true;
   }
+  if (in.vertices.size() > room) triangles = triangle_storage(in.vertices.size());
   s.split_at_vertices = in.split_at_vertices;
   CdtResult result;
   result.steiner_points = in.steiner_points;

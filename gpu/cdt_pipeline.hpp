@@ -61,8 +61,9 @@ class GpuCdt {
   // The same with the CPU's resolve stage already running (resolve_constraints(prepared) on other threads,
   // started as early as the caller likes: cdtgpu triangulate starts it while the device starts). The GPU builds
   // the Delaunay triangulation of the prepared vertices meanwhile. `prepared` must outlive the call.
+  // With `progress` (the resolve's), the build waits for the resolve instead where it has found crossings.
   CdtResult triangulate(const PreparedInput& prepared, std::future<ResolvedInput> resolving,
-                        GpuCdtStats* stats = nullptr) const;
+                        GpuCdtStats* stats = nullptr, const ResolveProgress* progress = nullptr) const;
 
   // The CDT of a graph resolved already (vertices sorted and unique, segments meeting only at shared endpoints and
   // through no vertex: a tile of core/tiles): stages 2-4 without the resolve stage or any copy of the input.
