@@ -97,6 +97,27 @@ void parallel_chunks(size_t n, unsigned threads, size_t grain, const Body& body)
     if (e) std::rethrow_exception(e);
 }
 
+// Merging a few sorted items into many sorted ones, as std::merge does (each of the few after the many equal
+// to it), with the many moved on all cores: at[j], how many of the many go before few[j], which then lands at
+// at[j] + j; spread() hands every one of the many its new place.
+template <class T, class Less>
+std::vector<size_t> places(const T* many, size_t n, const std::vector<T>& few, Less less) {
+  std::vector<size_t> at(few.size());
+  for (size_t j = 0; j < few.size(); ++j) at[j] = size_t(std::upper_bound(many, many + n, few[j], less) - many);
+  return at;
+}
+
+template <class Put>
+void spread(size_t n, const std::vector<size_t>& at, unsigned threads, const Put& put) {
+  parallel_chunks(n, threads, 1 << 16, [&](size_t b, size_t e, unsigned) {
+    size_t j = size_t(std::upper_bound(at.begin(), at.end(), b) - at.begin());
+    for (size_t i = b; i < e; ++i) {
+      while (j < at.size() && at[j] <= i) ++j;
+      put(i, i + j);
+    }
+  });
+}
+
 // ---------------------------------------------------------------------------------------------------------------
 // Columns
 
@@ -406,13 +427,18 @@ class Resolver {
   // For each column, the first position in the piece order whose piece starts at or after it.
   void starts() {
     const uint32_t nc = cols_.n;
-    pfirst_.assign(size_t(nc) + 1, 0);
+    pfirst_.resize(size_t(nc) + 1);
     const size_t n = order_.empty() ? m0_ : order_.size();
-    size_t k = 0;
-    for (uint32_t c = 0; c <= nc; ++c) {
-      while (k < n && span_[order_.empty() ? k : order_[k]].first < c) ++k;
-      pfirst_[c] = k;
-    }
+    parallel_chunks(size_t(nc) + 1, threads_, 64, [&](size_t b, size_t e, unsigned) {
+      for (size_t c = b; c < e; ++c) {  // a binary search over the pieces' first columns (ascending)
+        size_t lo = 0, hi = n;
+        while (lo < hi) {
+          const size_t mid = lo + (hi - lo) / 2;
+          if (span_[piece_at(mid)].first < c) lo = mid + 1; else hi = mid;
+        }
+        pfirst_[c] = lo;
+      }
+    });
   }
 
   // Rounds 2 and later: the alive pieces in order of their first column, the Steiner vertices by column,
@@ -423,18 +449,23 @@ class Resolver {
     auto by_first = [&](uint32_t i, uint32_t j) {
       return span_[i].first != span_[j].first ? span_[i].first < span_[j].first : i < j;
     };
-    std::vector<uint32_t> prepared, made;
-    prepared.reserve(m0_);
-    for (size_t k = 0; k < m0_; ++k) {
-      const uint32_t p = prepared_order_.empty() ? uint32_t(k) : prepared_order_[k];
-      if (alive_[p]) prepared.push_back(p);
-    }
+    auto prepared_at = [&](size_t k) { return prepared_order_.empty() ? uint32_t(k) : prepared_order_[k]; };
+    const std::vector<uint32_t> prepared = compact<uint32_t>(
+        m0_, [&](size_t k) { return size_t(alive_[prepared_at(k)]); },
+        [&](size_t k, uint32_t* to) {
+          if (alive_[prepared_at(k)]) *to++ = prepared_at(k);
+          return to;
+        });
+    std::vector<uint32_t> made;
     for (uint32_t p = m0_; p < sr_->size(); ++p)
       if (alive_[p]) made.push_back(p);
     std::sort(made.begin(), made.end(), by_first);
+    const std::vector<size_t> at = places(prepared.data(), prepared.size(), made, [&](uint32_t i, uint32_t j) {
+      return span_[i].first < span_[j].first;
+    });
     order_.resize(prepared.size() + made.size());
-    std::merge(prepared.begin(), prepared.end(), made.begin(), made.end(), order_.begin(),
-               [&](uint32_t i, uint32_t j) { return span_[i].first < span_[j].first; });
+    spread(prepared.size(), at, threads_, [&](size_t i, size_t to) { order_[to] = prepared[i]; });
+    for (size_t j = 0; j < made.size(); ++j) order_[at[j] + j] = made[j];
     starts();
     const uint32_t nc = cols_.n;
     std::vector<uint32_t> steiner(steiner_.size());
@@ -798,7 +829,7 @@ class Resolver {
     // arithmetic of triangulate_cgal.
     const uint32_t ns = uint32_t(steiner_.size());
     std::vector<uint32_t> along(ns, kNone);
-    for (uint32_t p = 0; p < seg_.size(); ++p)
+    for (uint32_t p = m0_; p < seg_.size(); ++p)  // the prepared constraints end at prepared vertices
       if (alive_[p])
         for (uint32_t w : seg_[p])
           if (w >= n0_) along[w - n0_] = std::min(along[w - n0_], origin_[p]);
@@ -811,32 +842,27 @@ class Resolver {
       const double t = len > 0 ? std::min(1.0, std::hypot(v.x - a.x, v.y - a.y) / len) : 0.0;
       v.z = a.z + t * (b.z - a.z);
     }
-    // Canonical vertex order: the Steiner vertices, sorted, merged into the prepared ones. Steiner vertex k
-    // (in that order) goes before the prepared vertex at[k] (none equals it), so it lands at at[k] + k and
-    // prepared vertex i moves up by the number of at[] <= i; the copies run on all cores (2M vertices took
-    // ~20 ms on one).
+    // Canonical vertex order: the Steiner vertices, sorted, merged into the prepared ones (none equal), on all
+    // cores (2M vertices took ~20 ms on one).
     std::vector<uint32_t> order(ns);
     std::iota(order.begin(), order.end(), 0u);
     auto less = [](const Point3& p, const Point3& q) { return p.x != q.x ? p.x < q.x : p.y < q.y; };
     std::sort(order.begin(), order.end(),
               [&](uint32_t i, uint32_t j) { return less(steiner_[i], steiner_[j]); });
-    std::vector<uint32_t> at(ns);
-    for (uint32_t k = 0; k < ns; ++k)
-      at[k] = uint32_t(std::lower_bound(v_.begin(), v_.begin() + n0_, steiner_[order[k]], less) - v_.begin());
-    std::vector<uint32_t> renum(size_t(n0_) + ns);
+    std::vector<Point3> sorted(ns);
+    for (uint32_t k = 0; k < ns; ++k) sorted[k] = steiner_[order[k]];
+    const std::vector<size_t> at = places(v_.data(), n0_, sorted, less);
+    RawVector<uint32_t> renum;
+    resize_unwritten(renum, size_t(n0_) + ns);
     resize_unwritten(out.vertices, renum.size());
     Point3* V = out.vertices.data();
-    parallel_chunks(n0_, threads_, 1 << 16, [&](size_t b, size_t e, unsigned) {
-      size_t k = size_t(std::upper_bound(at.begin(), at.end(), uint32_t(b)) - at.begin());
-      for (size_t i = b; i < e; ++i) {
-        while (k < ns && at[k] <= i) ++k;
-        renum[i] = uint32_t(i + k);
-        V[i + k] = v_[i];
-      }
+    spread(n0_, at, threads_, [&](size_t i, size_t to) {
+      renum[i] = uint32_t(to);
+      V[to] = v_[i];
     });
     for (uint32_t k = 0; k < ns; ++k) {
-      renum[n0_ + order[k]] = at[k] + k;
-      V[at[k] + k] = steiner_[order[k]];
+      renum[n0_ + order[k]] = uint32_t(at[k] + k);
+      V[at[k] + k] = sorted[k];
     }
 
     // Constraints: the prepared ones left whole keep their sorted order (renumbering keeps the (x, y)
@@ -860,8 +886,10 @@ class Resolver {
     if (pieces.empty()) {
       cs = std::move(kept);
     } else {
-      cs.resize(kept.size() + pieces.size());
-      std::merge(kept.begin(), kept.end(), pieces.begin(), pieces.end(), cs.begin());
+      const std::vector<size_t> where = places(kept.data(), kept.size(), pieces, std::less<Edge>());
+      resize_touched(cs, kept.size() + pieces.size());
+      spread(kept.size(), where, threads_, [&](size_t i, size_t to) { cs[to] = kept[i]; });
+      for (size_t j = 0; j < pieces.size(); ++j) cs[where[j] + j] = pieces[j];
     }
     cs.erase(std::unique(cs.begin(), cs.end()), cs.end());
   }

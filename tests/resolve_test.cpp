@@ -649,6 +649,31 @@ TEST(Resolve, LargeInputSweptByManyThreads) {
   EXPECT_GE(o.resolved.split_at_vertices, 2u);
 }
 
+TEST(Resolve, RingAcrossContours) {
+  // The regions workload in small: a boundary ring crossing contour lines among scattered points. Its pieces
+  // are new in every column of the later rounds, but only where it passes: the rest of each column is left
+  // out of those rounds. A point at the middle of a segment of each contour (on it or a rounding off it).
+  InputSet in;
+  std::mt19937_64 rng(51);
+  for (int i = 0; i < 20000; ++i)
+    in.points.push_back({std::floor(unit_double(rng) * 1e6) / 1e3, std::floor(unit_double(rng) * 1e6) / 1e3, 1});
+  for (int j = 1; j < 40; ++j) {
+    Polyline l;
+    for (int k = 0; k <= 100; ++k)
+      l.points.push_back({k * 10.0, 25.0 * j + 5 * std::sin(k * 0.7 + j), double(j)});
+    in.points.push_back({(l.points[7].x + l.points[8].x) / 2, (l.points[7].y + l.points[8].y) / 2, 0});
+    in.lines.push_back(std::move(l));
+  }
+  Polyline ring;
+  for (int k = 0; k <= 180; ++k) {
+    const double a = 2 * std::acos(-1.0) * (k % 180) / 180 + 0.0123;
+    ring.points.push_back({500.5 + 400 * std::cos(a), 500.25 + 400 * std::sin(a), 0});
+  }
+  in.lines.push_back(std::move(ring));
+  const Outcome o = check_all(prepare(in));
+  EXPECT_GT(o.resolved.steiner_points, 50u);
+}
+
 TEST(Resolve, NonCrossingInputIsReturnedUnchanged) {
   InputSet in = uniform_points(20000, 11);
   add_dt_edge_constraints(in, 3000, 0.2, 12);
