@@ -23,6 +23,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <streambuf>
+#include <thread>
 #include <vector>
 
 namespace cdtgpu {
@@ -285,13 +286,19 @@ void write_replacing(const std::string& path, const Target& t,
     disarm_temp();
     fail(path, "write failed (close)", err);
   }
+  // The replaced file's pages and blocks are freed when the last reference to it goes, inside the rename
+  // unless something holds it open: held here, they are freed by a close on a thread of its own, beside
+  // what comes next (33-57 ms for a 125 MB PLY on the H100 machine's disk).
+  const int replaced = t.exists ? ::open(t.path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK) : -1;
   if (::rename(tmp.c_str(), t.path.c_str()) != 0) {
     const int err = errno;
+    if (replaced >= 0) ::close(replaced);
     ::unlink(tmp.c_str());
     disarm_temp();
     fail(path, "cannot rename " + tmp + " into place", err);
   }
   disarm_temp();
+  if (replaced >= 0) std::thread([replaced] { ::close(replaced); }).detach();
 }
 
 }  // namespace

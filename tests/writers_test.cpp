@@ -5,12 +5,14 @@
 #include <unistd.h>
 
 #include <bit>
+#include <chrono>
 #include <cfloat>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <thread>
 #include <tuple>
 
 #include "core/error.hpp"
@@ -290,6 +292,25 @@ TEST_F(WritersTest, AWriterThatThrowsMidwayLeavesNoFileAndKeepsTheOldOne) {
   EXPECT_THROW(write_mesh_file(bad, crs, {MeshFormat::Obj, false, false}, path("tin.obj")), std::runtime_error);
   EXPECT_EQ(slurp(path("tin.obj")), "old\n");
   EXPECT_EQ(entries(), std::vector<std::string>{"tin.obj"});
+}
+
+TEST_F(WritersTest, ReplacedFilesAreReleased) {
+  // The file a write replaces is closed on a thread of its own after the rename (its pages and blocks are
+  // freed there): none of its descriptors may stay open, and every name holds its last contents.
+  auto descriptors = [] {
+    return size_t(std::distance(fs::directory_iterator("/proc/self/fd"), fs::directory_iterator{}));
+  };
+  const Mesh mesh = random_mesh(20000, 5);
+  const WriteOptions ply{MeshFormat::Ply, false, false};
+  write_mesh_file(mesh, Crs{}, ply, path("a.ply"));
+  const std::string first = slurp(path("a.ply"));
+  const size_t before = descriptors();
+  for (int i = 0; i < 20; ++i) write_mesh_file(mesh, Crs{}, ply, path("a.ply"));
+  for (int wait = 0; wait < 500 && descriptors() > before; ++wait)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_EQ(descriptors(), before);
+  EXPECT_EQ(slurp(path("a.ply")), first);
+  EXPECT_EQ(entries(), std::vector<std::string>{"a.ply"});
 }
 
 TEST_F(WritersTest, PrjIsWrittenBesideTheMeshWhenTheCrsHasWkt) {
