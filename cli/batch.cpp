@@ -26,8 +26,8 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-// Jobs held at once: one being read, one being prepared, one on the device, one being written.
-constexpr std::ptrdiff_t kInFlight = 4;
+// Jobs held at once: one being read, one on the device, one being written.
+constexpr std::ptrdiff_t kInFlight = 3;
 
 struct BatchJob {
   size_t index = 0;  // in file order
@@ -145,7 +145,7 @@ int run_batch(const BatchOptions& options) {
   }
   GpuStarts gpus;  // one device for every job
   if (lines.size() >= kBatchWarmJobs) gpus.auto_min_points = batch_auto_min_points();
-  JobQueue to_prepare, to_device, to_writer;
+  JobQueue to_device, to_writer;
   std::counting_semaphore<kInFlight> slots(kInFlight);
   Written written;
   std::mutex summary_mutex;
@@ -158,7 +158,7 @@ int run_batch(const BatchOptions& options) {
            (failed_lines.empty() ? "" : " (" + std::to_string(failed_lines.size()) + " failed)");
   });
 
-  // Reading: the line's options, the output checks, the inputs read.
+  // Reading: the line's options, the output checks, the inputs read and prepared.
   std::thread reader([&] {
     for (size_t i = 0; i < lines.size(); ++i) {
       slots.acquire();
@@ -183,18 +183,8 @@ int run_batch(const BatchOptions& options) {
         start_gpu_early(job, gpus);
         read_job(job);
         choose_backend(job, gpus);
+        prepare_job(job);
       });
-      to_prepare.push(std::move(b));
-    }
-    to_prepare.push(nullptr);
-  });
-
-  // Preparing (the duplicate merge, the constraints) beside the next job's reading: on the H100 machine a
-  // 2M + 500K job read in ~55 ms and prepared in ~40, one after the other on the reading thread, which was
-  // then the slowest stage.
-  std::thread preparer([&] {
-    while (std::unique_ptr<BatchJob> b = to_prepare.pop()) {
-      stage(*b, [&] { prepare_job(b->job); });
       to_device.push(std::move(b));
     }
     to_device.push(nullptr);
@@ -242,7 +232,6 @@ int run_batch(const BatchOptions& options) {
   }
   to_writer.push(nullptr);
   reader.join();
-  preparer.join();
   writer.join();
   progress.stop();
   gpus.leave_for_exit();
