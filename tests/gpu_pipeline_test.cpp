@@ -53,8 +53,9 @@ gpu::GpuCdtStats expect_equal_to_cgal(const std::string& name, const InputSet& i
   gpu::GpuCdtStats stats;
   CdtResult got = cdt().triangulate(p, &stats);
   EXPECT_EQ(got.steiner_points, ref.steiner_points) << name;
-  // The Delaunay build beside the resolve stage used the prepared vertices; Steiner vertices need a second.
-  EXPECT_EQ(stats.delaunay_built_twice, got.mesh.vertices.size() != p.vertices.size()) << name;
+  // The Delaunay build beside the resolve stage uses the prepared vertices, or the resolved ones when the resolve
+  // is done or has found crossings first: a second build only where Steiner vertices came after the first.
+  EXPECT_TRUE(!stats.delaunay_built_twice || got.mesh.vertices.size() != p.vertices.size()) << name;
   EXPECT_EQ(got.mesh.vertices.size(), ref.mesh.vertices.size()) << name;
   EXPECT_TRUE(got.mesh.vertices == ref.mesh.vertices) << name << ": vertices differ";
   EXPECT_EQ(got.mesh.triangles.size(), ref.mesh.triangles.size()) << name;
