@@ -152,13 +152,16 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   return result;
 }
 
-void GpuCdt::constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s) const {
+void GpuCdt::constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,
+                       bool tiles) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
   //    constraints: the Delaunay triangulation is the answer.
   auto t = Clock::now();
   if (tri.num_slots > 0 && !constraints.empty()) {
-    inserter_.insert(tri, constraints, &s.constraints, constraint_options);
+    ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, constraint_options);
+    // Tiles: kept for the next tile (each allocated and freed 4 bytes a slot, 1 GB a tile at 1B points).
+    if (tiles && edges.flags.buffer) cache_.give("cdt constrained bits", std::move(edges.flags));
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
   }
@@ -224,7 +227,7 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
   } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
   cache_.grow_by = tile_cache_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &tile_cache_, &staging);
-  constrain(tri, job.segments, s);
+  constrain(tri, job.segments, s, /*tiles=*/true);
   auto t = Clock::now();
   double ms = 0;
   f.border = finals_.mark(tri, job.rect, cache_, &ms);
@@ -238,6 +241,7 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
   tile_cache_.give("points", std::move(tri.points));
   tile_cache_.give("tri_verts", std::move(tri.verts));
   tile_cache_.give("tri_nbrs", std::move(tri.nbrs));
+  if (tri.vertex_slots.buffer) cache_.give(kPoints4[0], std::move(tri.vertex_slots));  // the build's loc
   s.wall_total_ms = ms_since(t_all);
   return count;
 }

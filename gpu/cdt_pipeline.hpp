@@ -104,7 +104,9 @@ class GpuCdt {
   GpuTriangulation delaunay_of(std::span<const Point3> all, std::span<const uint32_t> ids, GpuCdtStats& s,
                                BufferCache* keep = nullptr, const HostStaging* staged = nullptr) const;
   // Stage 3: the constraints inserted.
-  void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s) const;
+  // tiles: the inserter's flags stay in the cache for the next tile.
+  void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,
+                 bool tiles = false) const;
   // Stage 4: the triangles downloaded in canonical order into `storage`.
   Triangles download_sorted(GpuTriangulation& tri, GpuCdtStats& s, Triangles storage) const;
 

@@ -264,7 +264,9 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
 
   ConstrainedEdges result;
   result.num_slots = slots;
-  result.flags = create_buffer(ctx_, uint64_t(slots) * 4, "cdt constrained bits");
+  // From the cache: a caller that takes tiles gives it back for the next one (GpuCdt::constrain).
+  result.flags = cache ? cache->take(ctx_, "cdt constrained bits", uint64_t(slots) * 4)
+                       : create_buffer(ctx_, uint64_t(slots) * 4, "cdt constrained bits");
 
   std::vector<uint32_t> cons_host(2 * size_t(m));
   for (uint32_t i = 0; i < m; ++i) {
