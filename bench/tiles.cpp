@@ -219,7 +219,6 @@ int run_tiles(const BenchOptions& o) {
       const double memory_before = gpu::memory_ms();
       results.push_back(time_row("tiled", backend, o.runs, [&](Row& r) {
         sum = gpu::GpuCdtStats{};
-        devices.reserve_memory(gpu_tile);  // as cdtgpu triangulate: beside the resolve and the plan
         tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(o.tiles_in_flight * users.size()), tri.finalize,
                    tri.reserve);
       }));

@@ -175,12 +175,11 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
   };
   const uint64_t tile = gpu_tile_points(start.context(), job.prepared.vertices.size(), options.max_tile_points);
   if (tile >= 3 && job.prepared.vertices.size() > tile) {
+    ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
+    stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
     try {
       const gpu::TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
       const uint64_t tile_here = options.max_tile_points >= 0 ? tile : std::min(tile, devices.max_tile_points());
-      devices.reserve_memory(std::min<uint64_t>(tile_here, job.prepared.vertices.size()));  // beside resolve, plan
-      ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
-      stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
       gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
       return triangulate_in_tiles(job, std::move(in), tile_here, tiles.triangulate,
                                   unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),

@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
-#include <future>
 #include <utility>
 
 #include "core/parallel.hpp"
@@ -82,21 +81,6 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
     }
     b.budget = ctx.memory_budget;
     b.charged = req.size;
-    if (ctx.pool_ready.valid()) ctx.pool_ready.wait();
-    if (ctx.device_pool && (req.memoryTypeBits & (1u << ctx.device_pool->type())))
-      if (const auto at = ctx.device_pool->take(req.size, req.alignment)) {
-        VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, ctx.device_pool->memory(), *at));
-        b.pool = ctx.device_pool;
-        b.pool_offset = *at;
-        b.pool_size = req.size;
-        if (addressed) {
-          VkBufferDeviceAddressInfo info{};
-          info.sType = VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO;
-          info.buffer = b.buffer;
-          b.address = vkGetBufferDeviceAddress(ctx.device, &info);
-        }
-        return b;
-      }
   }
   VkResult r = vkAllocateMemory(ctx.device, &ai, nullptr, &b.memory);
   if (r != VK_SUCCESS)
@@ -185,11 +169,7 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
   if (this == &o) return *this;
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
   if (memory) vkFreeMemory(device, memory, nullptr);
-  if (pool) pool->give(pool_offset, pool_size);
   if (budget) budget->used.fetch_sub(charged);
-  pool = std::move(o.pool);
-  pool_offset = std::exchange(o.pool_offset, 0);
-  pool_size = std::exchange(o.pool_size, 0);
   device = o.device;
   budget = std::move(o.budget);
   charged = std::exchange(o.charged, 0);
@@ -203,33 +183,10 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
 
 double memory_ms() { return double(memory_ns.load()) * 1e-6; }
 
-void reserve_device_pool(const Context& ctx, VkDeviceSize bytes) {
-  if (!bytes || ctx.memory_budget->limit || ctx.pool_ready.valid() || ctx.device_pool) return;
-  // The memory type of a device-local storage buffer (every buffer make() creates has the same usage).
-  Buffer probe = make(ctx, 4, "pool type probe", false);
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(ctx.device, probe.buffer, &req);
-  const uint32_t type = memory_type(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
-  const VkDeviceSize heap = ctx.memory.memoryHeaps[ctx.memory.memoryTypes[type].heapIndex].size;
-  bytes = std::min(bytes, heap / 4 * 3);
-  ctx.pool_ready = std::async(std::launch::async, [&ctx, bytes, type] {
-                     try {
-                       MemoryClock clock;
-                       const auto t0 = std::chrono::steady_clock::now();
-                       ctx.device_pool = std::make_shared<MemoryPool>(ctx, bytes, type);
-                       spdlog::debug("device memory pool: {:.0f} MB allocated in {:.1f} ms", bytes / 1e6,
-                                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-                     } catch (const DeviceError& e) {  // buffers allocate their own memory
-                       spdlog::debug("device memory pool of {:.0f} MB refused: {}", bytes / 1e6, e.what());
-                     }
-                   }).share();
-}
-
 Buffer::~Buffer() {
   MemoryClock clock;
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
   if (memory) vkFreeMemory(device, memory, nullptr);
-  if (pool) pool->give(pool_offset, pool_size);
   if (budget) budget->used.fetch_sub(charged);
   if (memory && size >= kLoggedBytes)
     spdlog::debug("buffer '{}': {:.0f} MB freed in {:.1f} ms", name, size / 1e6,

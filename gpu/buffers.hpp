@@ -17,7 +17,6 @@
 
 #include "core/touched.hpp"
 #include "gpu/context.hpp"
-#include "gpu/memory_pool.hpp"
 
 namespace cdtgpu::gpu {
 
@@ -32,10 +31,6 @@ struct Buffer {
   std::string name;
   std::shared_ptr<MemoryBudget> budget;  // device-local buffers: the context's budget, given back when freed
   VkDeviceSize charged = 0;
-  // A range of the context's memory pool instead of `memory` of its own (gpu/memory_pool.hpp), given back when
-  // freed.
-  std::shared_ptr<MemoryPool> pool;
-  VkDeviceSize pool_offset = 0, pool_size = 0;
 
   Buffer() = default;
   Buffer(Buffer&& o) noexcept;
@@ -52,12 +47,6 @@ Buffer create_addressed_buffer(const Context& ctx, VkDeviceSize bytes, const std
 
 // Milliseconds the process has spent allocating and freeing buffer memory (device and staging), all threads.
 double memory_ms();
-
-// Starts allocating `bytes` of device memory on a thread of its own, from which later buffers of `ctx` take
-// ranges (gpu/memory_pool.hpp); they wait for it first. Tiles call it with their largest tile's estimate while
-// the host resolves and plans. None where CDTGPU_DEVICE_MEMORY_LIMIT caps the context, where one is held
-// already, or where the device refuses the block (buffers then allocate their own, as without).
-void reserve_device_pool(const Context& ctx, VkDeviceSize bytes);
 
 // Synchronous copies through a host-visible staging buffer (each waits for the queue to finish).
 // A host-visible buffer, mapped for its whole life: the context's own (upload, download) or one a caller keeps

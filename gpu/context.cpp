@@ -1,6 +1,5 @@
 // Instance, device choice and logical device; see context.hpp.
 #include "gpu/context.hpp"
-#include "gpu/memory_pool.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -325,9 +324,7 @@ namespace {
 void release(Context& c) {
   if (c.device) {
     vkDeviceWaitIdle(c.device);
-    if (c.pool_ready.valid()) c.pool_ready.wait();
     c.staging.reset();
-    c.device_pool.reset();
     c.temp_pool.reset();
     save_cache(c);
     if (c.pool) vkDestroyCommandPool(c.device, c.pool, nullptr);
@@ -367,8 +364,6 @@ Context& Context::operator=(Context&& o) noexcept {
   messages_ = std::move(o.messages_);
   o.messages_ = std::make_unique<std::vector<std::string>>();
   staging = std::move(o.staging);
-  pool_ready = std::move(o.pool_ready);
-  device_pool = std::move(o.device_pool);
   temp_pool = std::move(o.temp_pool);
   pipeline_cache = std::exchange(o.pipeline_cache, VK_NULL_HANDLE);
   pipeline_cache_file = std::move(o.pipeline_cache_file);

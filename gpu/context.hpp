@@ -11,7 +11,6 @@
 
 #include <atomic>
 #include <cstdint>
-#include <future>
 #include <memory>
 #include <string>
 #include <vector>
@@ -74,8 +73,6 @@ struct MemoryBudget {
 // The cap from the environment: 0 when unset; DeviceError when it is not a byte count.
 uint64_t device_memory_limit_from_env();
 
-class MemoryPool;
-
 struct Context {
   VkInstance instance = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
@@ -113,10 +110,6 @@ struct Context {
   // The host-visible staging buffer upload() and download() reuse (gpu/buffers.cpp; grown as needed, freed
   // before the device): allocating and pinning host memory for every copy cost more than the copy itself.
   mutable std::shared_ptr<void> staging;
-  // Device memory allocated ahead on a thread of its own (reserve_device_pool in gpu/buffers.hpp), from which
-  // buffers take ranges; create_buffer waits for the future before it looks.
-  mutable std::shared_future<void> pool_ready;
-  mutable std::shared_ptr<MemoryPool> device_pool;
   // Small scratch buffers Recorder::temp() hands out and takes back at submit (gpu/recorder.cpp): the constraint
   // rounds' scans made ~60 allocations per triangulation, each a driver call.
   mutable std::shared_ptr<void> temp_pool;

@@ -210,13 +210,6 @@ uint64_t TileDevices::max_tile_points() const {
   return smallest;
 }
 
-void TileDevices::reserve_memory(uint64_t points) const {
-  // A tile's peak was 193 bytes a point on the H200 (25.9 GB for 134M points), plus room for the buffers that
-  // regrow by an eighth as tiles come larger.
-  constexpr uint64_t kPoolBytesPerPoint = 224;
-  for (const GpuCdt* c : cdts_) reserve_device_pool(c->context(), points * kPoolBytesPerPoint);
-}
-
 std::string TileDevices::names() const {
   std::string names;
   for (const GpuCdt* c : cdts_)

@@ -42,9 +42,6 @@ class TileDevices {
   void open(const std::vector<size_t>& indices, const ContextOptions& options);
   const std::vector<const GpuCdt*>& cdts() const { return cdts_; }
   uint64_t max_tile_points() const;  // the smallest device's
-  // Starts allocating on each device, on threads of their own, the memory that tiles of `points` take
-  // (reserve_device_pool, gpu/buffers.hpp): to call before the host's resolve and plan, which it then overlaps.
-  void reserve_memory(uint64_t points) const;
   std::string names() const;         // "NAME (INDEX), ..."
 
  private:
