@@ -670,8 +670,28 @@ TEST(Resolve, RingAcrossContours) {
     ring.points.push_back({500.5 + 400 * std::cos(a), 500.25 + 400 * std::sin(a), 0});
   }
   in.lines.push_back(std::move(ring));
+  // A segment from the origin across contours and ring: its first piece runs from (0, 0) to its first
+  // Steiner vertex S, rounded off the segment.
+  in.lines.push_back(line({{0, 0, 0}, {900.3, 700.7, 9}}));
   const Outcome o = check_all(prepare(in));
   EXPECT_GT(o.resolved.steiner_points, 50u);
+  // Points at S / 2 and S / 4 lie exactly on that piece (halving is exact) but not on the segment: only a later
+  // round, among the new pieces of a column full of old ones, can find them.
+  const Point3* s = nullptr;
+  for (const Edge& c : o.resolved.constraints)
+    for (int k = 0; k < 2; ++k) {
+      const Point3& a = o.resolved.vertices[c[k]];
+      const Point3& b = o.resolved.vertices[c[1 - k]];
+      if (a.x == 0 && a.y == 0 && b.y > 0) s = &b;
+    }
+  ASSERT_NE(s, nullptr);
+  ASSERT_NE(pred::orient2d(XY{0, 0}, XY{900.3, 700.7}, XY{s->x, s->y}), 0) << "S rounded onto the segment";
+  for (int k : {1, 2}) in.points.push_back({std::ldexp(s->x, -k), std::ldexp(s->y, -k), 0});
+  Checks checks;
+  checks.reference = false;  // as in CascadesAfterRounding: CGAL's own mesh of such inputs is not a CDT
+  checks.verify = false;
+  const Outcome cascade = check_all(prepare(in), checks);
+  EXPECT_GE(cascade.resolved.split_at_vertices, o.resolved.split_at_vertices + 2);
 }
 
 TEST(Resolve, NonCrossingInputIsReturnedUnchanged) {
