@@ -124,21 +124,23 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   //    resolved vertices unless constraints cross somewhere; then the triangulation is built again from those.
   //    Of the resolved vertices where the resolve is done already (it often is when the device was slower to
   //    start) or has found crossings (a second build costs more than the wait).
+  auto wait = [&] {
+    const auto t = Clock::now();
+    ResolvedInput r = resolving.get();
+    record_stage(s, "resolve wait", t);
+    return r;
+  };
   const bool resolved = resolving.wait_for(std::chrono::seconds(0)) == std::future_status::ready ||
                         (progress && progress->crossings.load() == 1);
-  auto t = Clock::now();
-  ResolvedInput in = resolved ? resolving.get() : ResolvedInput{};
-  if (resolved) record_stage(s, "resolve wait", t);
+  ResolvedInput in = resolved ? wait() : ResolvedInput{};
   GpuTriangulation tri = delaunay_of(resolved ? in.vertices : prepared.vertices, {}, s);
   if (!resolved) {
-    t = Clock::now();
-    in = resolving.get();
-    record_stage(s, "resolve wait", t);
-  }
-  if (!resolved && in.vertices.size() != prepared.vertices.size()) {  // resolve only ever adds vertices
-    tri = GpuTriangulation();
-    tri = delaunay_of(in.vertices, {}, s);
-    s.delaunay_built_twice = true;
+    in = wait();
+    if (in.vertices.size() != prepared.vertices.size()) {  // resolve only ever adds vertices
+      tri = GpuTriangulation();
+      tri = delaunay_of(in.vertices, {}, s);
+      s.delaunay_built_twice = true;
+    }
   }
   if (in.vertices.size() > room) triangles = triangle_storage(in.vertices.size());
   s.split_at_vertices = in.split_at_vertices;
@@ -160,8 +162,7 @@ void GpuCdt::constrain(GpuTriangulation& tri, const std::vector<Edge>& constrain
   auto t = Clock::now();
   if (tri.num_slots > 0 && !constraints.empty()) {
     ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, constraint_options);
-    // Tiles: kept for the next tile (each allocated and freed 4 bytes a slot, 1 GB a tile at 1B points).
-    if (tiles && edges.flags.buffer) cache_.give("cdt constrained bits", std::move(edges.flags));
+    if (tiles) inserter_.recycle(std::move(edges));  // its flags, for the next tile
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
   }

@@ -22,6 +22,7 @@ using namespace layout;
 
 namespace {
 
+constexpr const char* kFlagsKey = "cdt constrained bits";  // the result's flags, in the cache (recycle)
 constexpr uint32_t kMaxBatch = 64;  // rounds per command buffer once the first batches did not finish
 
 uint64_t groups(uint64_t items) { return (items + CDT_WG - 1) / CDT_WG; }
@@ -232,6 +233,10 @@ struct ConstraintInserter::Scratch {
 
 ConstraintInserter::~ConstraintInserter() = default;
 
+void ConstraintInserter::recycle(ConstrainedEdges&& edges) const {
+  if (cache && edges.flags.buffer) cache->give(kFlagsKey, std::move(edges.flags));
+}
+
 void ConstraintInserter::release() const { scratch_.reset(); }
 
 ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<const Edge> constraints,
@@ -264,9 +269,9 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
 
   ConstrainedEdges result;
   result.num_slots = slots;
-  // From the cache: a caller that takes tiles gives it back for the next one (GpuCdt::constrain).
-  result.flags = cache ? cache->take(ctx_, "cdt constrained bits", uint64_t(slots) * 4)
-                       : create_buffer(ctx_, uint64_t(slots) * 4, "cdt constrained bits");
+  // From the cache: what recycle() gave back.
+  result.flags = cache ? cache->take(ctx_, kFlagsKey, uint64_t(slots) * 4)
+                       : create_buffer(ctx_, uint64_t(slots) * 4, kFlagsKey);
 
   std::vector<uint32_t> cons_host(2 * size_t(m));
   for (uint32_t i = 0; i < m; ++i) {

@@ -113,6 +113,9 @@ class ConstraintInserter {
                           const ConstraintOptions& options = {}) const;
   // Frees the scratch buffers kept since the last call.
   void release() const;
+  // Puts a result's flags into `cache` for the next call's (tiles: 4 bytes a slot, 1 GB a tile at 1B points,
+  // allocated and freed per tile otherwise). Without a cache they are freed.
+  void recycle(ConstrainedEdges&& edges) const;
 
   // Where the scratch lives between calls; null: a cache of its own. Per-point and per-slot buffers use the
   // shared keys of gpu/buffers.hpp, so a cache shared with the Delaunay build reuses its buffers.
