@@ -94,6 +94,7 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
       TriangulateOptions options = triangulate_options(tri);
       options.device = device;
       options.sharing = mpi.sharing();
+      options.input.read.share = mpi.read_share();
       // Ranks of one host take a GPU each (their local rank's), unless --device or --devices says otherwise.
       if (mpi.ranks() > 1 && options.backend != "cgal" && options.device.empty() && options.devices.empty()) {
         const std::vector<size_t> gpus = gpu::select_devices(gpu::list_devices(), "all");

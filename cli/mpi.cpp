@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
+#include <cstring>
 #include <cstdlib>
 #include <string>
 
@@ -47,6 +49,19 @@ std::vector<std::vector<uint32_t>> gather_at_rank0(std::vector<uint32_t> mine, i
   }
   return all;
 }
+
+// Every rank's bytes to every rank, in rank order: each rank in turn broadcasts its own, in pieces a 32-bit
+// MPI count takes.
+void all_bytes(const char* mine, char* all, const std::vector<uint64_t>& sizes, int rank) {
+  constexpr uint64_t kPiece = uint64_t(1) << 30;
+  char* at = all;
+  for (size_t r = 0; r < sizes.size(); ++r) {
+    if (int(r) == rank && sizes[r]) std::memcpy(at, mine, sizes[r]);
+    for (uint64_t done = 0; done < sizes[r]; done += kPiece)
+      MPI_Bcast(at + done, int(std::min(kPiece, sizes[r] - done)), MPI_BYTE, int(r), MPI_COMM_WORLD);
+    at += sizes[r];
+  }
+}
 #endif
 
 }  // namespace
@@ -71,6 +86,16 @@ MpiSession::MpiSession(int* argc, char*** argv) {
     const int rank = sharing_.rank, ranks = sharing_.ranks;
     sharing_.gather = [rank, ranks](std::vector<uint32_t> mine) {
       return gather_at_rank0(std::move(mine), rank, ranks);
+    };
+    read_share_.index = uint32_t(rank);
+    read_share_.count = uint32_t(ranks);
+    read_share_.all_sizes = [ranks](uint64_t mine) {
+      std::vector<uint64_t> all(size_t(ranks), 0);
+      MPI_Allgather(&mine, 1, MPI_UINT64_T, all.data(), 1, MPI_UINT64_T, MPI_COMM_WORLD);
+      return all;
+    };
+    read_share_.all_bytes = [rank](const char* mine, char* all, const std::vector<uint64_t>& sizes) {
+      cdtgpu::all_bytes(mine, all, sizes, rank);
     };
   }
 #else

@@ -1,5 +1,6 @@
-// Several processes through MPI (issue 29): under `mpirun -n R cdtgpu triangulate ...` (or srun) every rank
-// reads and prepares the whole input, the ranks share the first level's tiles (core/tiles.hpp, TileSharing:
+// Several processes through MPI (issue 29): under `mpirun -n R cdtgpu triangulate ...` (or srun) each rank
+// reads its share of the inputs and all join them (io/read_share.hpp); every rank prepares the whole input; the
+// ranks share the first level's tiles (core/tiles.hpp, TileSharing:
 // rank r takes tiles r, r + R, ...), rank 0 gathers their results, merges, and alone writes the outputs.
 // Built with MPI when CMake finds it (CDTGPU_MPI); a build without it refuses to run under mpirun instead of
 // running R copies of the whole job. A rank that fails ends every rank (MPI_Abort), so no output is written.
@@ -7,12 +8,14 @@
 //   int main(int argc, char** argv) {
 //     MpiSession mpi(&argc, &argv);          // MPI_Init only when mpirun / srun started us
 //     options.sharing = mpi.sharing();        // null for one process
+//     options.input.read.share = mpi.read_share();
 //     ...; if (code && mpi.ranks() > 1) mpi.abort(code);
 //   }
 #pragma once
 #include <string>
 
 #include "core/tiles.hpp"
+#include "io/read_share.hpp"
 
 namespace cdtgpu {
 
@@ -30,6 +33,8 @@ class MpiSession {
   int local_rank() const { return local_rank_; }
   // The tiles' sharing among the ranks; null for one process.
   const TileSharing* sharing() const { return sharing_.ranks > 1 ? &sharing_ : nullptr; }
+  // The inputs' reading shared among the ranks (rank r reads share r, io/read_share.hpp); null for one process.
+  const ReadShare* read_share() const { return sharing_.ranks > 1 ? &read_share_ : nullptr; }
   // Ends every rank with `code` (MPI_Abort): the others may be waiting for this one.
   [[noreturn]] void abort(int code) const;
   // Why this process cannot run (started by mpirun without MPI in the build); empty when it can.
@@ -37,6 +42,7 @@ class MpiSession {
 
  private:
   TileSharing sharing_;
+  ReadShare read_share_;
   std::string host_, refusal_;
   int local_rank_ = 0;
   bool initialised_ = false;

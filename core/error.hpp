@@ -10,9 +10,10 @@ namespace cdtgpu {
 // Bad input: the message names the file and, where known, the record or line. Exit code 2.
 struct InputError : std::runtime_error {
   InputError(const std::string& file, uint64_t record, const std::string& what)
-      : std::runtime_error(message(file, record, what)), file(file), record(record) {}
+      : std::runtime_error(message(file, record, what)), file(file), record(record), detail(what) {}
   std::string file;
-  uint64_t record;  // 0 when the error is about the whole file
+  uint64_t record;     // 0 when the error is about the whole file
+  std::string detail;  // the message without the file and record
 
  private:
   // Built with += : GCC 12 gives a false -Wrestrict warning on `":" + std::to_string(n)` here.

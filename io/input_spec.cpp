@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "core/error.hpp"
+#include "io/read_share.hpp"
 
 namespace cdtgpu {
 
@@ -139,6 +140,37 @@ InputSpec parse_input_spec(const std::string& arg) {
   return spec;
 }
 
+namespace {
+
+// One input read in shares (io/read_share.hpp): this process's share into a piece of its own, then every
+// share's piece joined into `in`. Formats without a share reader are read whole by one process: input k by
+// process k % count, stdin by the first (the one mpirun gives it to).
+template <typename Read>
+void read_share(const InputSpec& spec, const std::string& ext, ReadOptions options, Read&& read, InputSet& in) {
+  const ReadShare& share = *options.share;
+  const bool by_records = ext == ".xyz" || ext == ".csv" || ext == ".txt" || ext == ".shp" || ext == ".las";
+  const size_t input = in.sources.size();  // each input adds one source
+  const uint32_t owner = spec.path == "-" ? 0 : uint32_t(input % share.count);
+  InputSet piece;
+  piece.nan_for_missing_z = in.nan_for_missing_z;
+  piece.sources = in.sources;
+  if (by_records) {
+    read(options, piece);
+  } else if (owner == share.index) {
+    options.share = nullptr;
+    read(options, piece);
+  } else {
+    piece.sources.push_back(spec.path == "-" ? "<stdin>" : spec.path);
+  }
+  in.sources = piece.sources;
+  const size_t before = in.points.size() + in.lines.size();
+  const PointClassCounts classes = join_shares(piece, share, in);
+  if (in.points.size() + in.lines.size() == before)
+    throw InputError(spec.path, 0, ext == ".las" ? las_nothing_kept(classes) : "no geometry");
+}
+
+}  // namespace
+
 std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const ReadOptions& defaults,
                                    InputSet& in) {
   std::vector<InputPart> parts;
@@ -161,12 +193,18 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
     InputPart part;
     part.points_begin = in.points.size();
     part.lines_begin = in.lines.size();
-    if (ext == ".las")
-      read_las(spec.path, spec.las.value_or(LasFilter{}), in);
-    else if (spec.z_field || !shapefile)
-      read_input(spec.path, options, in);  // its own field (required), or not a shapefile
+    auto read = [&](const ReadOptions& options, InputSet& to) {
+      if (ext == ".las")
+        read_las(spec.path, spec.las.value_or(LasFilter{}), to, options.share);
+      else if (spec.z_field || !shapefile)
+        read_input(spec.path, options, to);  // its own field (required), or not a shapefile
+      else
+        global.read(spec.path, to);
+    };
+    if (defaults.share)
+      read_share(spec, ext, options, read, in);
     else
-      global.read(spec.path, in);
+      read(options, in);
     if (spec.role == Role::vertices) {
       for (size_t i = part.lines_begin; i < in.lines.size(); ++i)
         in.points.insert(in.points.end(), in.lines[i].points.begin(), in.lines[i].points.end());

@@ -31,6 +31,7 @@
 #include "core/repair.hpp"
 #include "core/touched.hpp"
 #include "io/mapped_files.hpp"
+#include "io/read_share.hpp"
 #include "io/text_source.hpp"
 
 namespace cdtgpu {
@@ -269,7 +270,21 @@ struct RangeCounts {
 
 }  // namespace
 
-void read_las(const std::string& path, const LasFilter& filter, InputSet& in) {
+std::string las_nothing_kept(const PointClassCounts& counts) {
+  uint64_t n = 0;  // every point is kept or skipped under its class
+  std::string classes;
+  for (const auto& [cls, count] : counts.by_class) {
+    n += count.kept + count.skipped;
+    if (count.skipped)
+      classes += (classes.empty() ? "" : ", ") + std::to_string(cls) + " (" + std::to_string(count.skipped) + ")";
+  }
+  return n == 0 ? std::string("no geometry (the header gives 0 points)")
+                : "no point passes the filters (" + std::to_string(n) + " points; by class: " + classes +
+                      "; withheld: " + std::to_string(counts.withheld) +
+                      "; other returns: " + std::to_string(counts.other_returns) + ")";
+}
+
+void read_las(const std::string& path, const LasFilter& filter, InputSet& in, const ReadShare* share) {
   if (!files::is_file(path)) throw InputError(path, 0, "no such file");
   const files::Open file(files::open(path));
   if (!file) throw InputError(path, 0, "cannot read: " + std::string(std::strerror(errno)));
@@ -281,10 +296,13 @@ void read_las(const std::string& path, const LasFilter& filter, InputSet& in) {
   in.sources.push_back(path);
   const char* points = bytes.data() + h.point_offset;
   const uint64_t n = h.point_count;
-  const uint64_t per_range =
-      std::max<uint64_t>(1 << 16, n / (4 * std::max(1u, std::thread::hardware_concurrency())) + 1);
+  // With a share (io/read_share.hpp): its point records only.
+  const auto [share_begin, share_end] = share ? share->range(n) : std::pair<uint64_t, uint64_t>(0, n);
+  const uint64_t per_range = std::max<uint64_t>(
+      1 << 16, (share_end - share_begin) / (4 * std::max(1u, std::thread::hardware_concurrency())) + 1);
   std::vector<Chunk> ranges;
-  for (uint64_t first = 0; first < n; first += per_range) ranges.push_back({first, std::min(n, first + per_range), 0});
+  for (uint64_t first = share_begin; first < share_end; first += per_range)
+    ranges.push_back({first, std::min(share_end, first + per_range), 0});
 
   // Pass 1: what each range keeps.
   std::vector<RangeCounts> counts(ranges.size());
@@ -314,27 +332,19 @@ void read_las(const std::string& path, const LasFilter& filter, InputSet& in) {
       total.skipped[cls] += counts[k].skipped[cls];
     }
   }
-  if (at.back() == at.front()) {
-    std::string classes;
+  PointClassCounts mine;  // this input's, for the message when nothing passes
+  for (PointClassCounts* pc : {&mine, &in.point_classes}) {
+    pc->any = true;
+    pc->withheld += total.withheld;
+    pc->other_returns += total.other_returns;
+    pc->other_classes += total.other_classes;
     for (int cls = 0; cls < 256; ++cls)
-      if (total.skipped[cls])
-        classes += (classes.empty() ? "" : ", ") + std::to_string(cls) + " (" + std::to_string(total.skipped[cls]) + ")";
-    throw InputError(path, 0,
-                     n == 0 ? std::string("no geometry (the header gives 0 points)")
-                            : "no point passes the filters (" + std::to_string(n) + " points; by class: " + classes +
-                                  "; withheld: " + std::to_string(total.withheld) +
-                                  "; other returns: " + std::to_string(total.other_returns) + ")");
+      if (total.kept[cls] + total.skipped[cls]) {
+        pc->by_class[cls].kept += total.kept[cls];
+        pc->by_class[cls].skipped += total.skipped[cls];
+      }
   }
-  PointClassCounts& pc = in.point_classes;
-  pc.any = true;
-  pc.withheld += total.withheld;
-  pc.other_returns += total.other_returns;
-  pc.other_classes += total.other_classes;
-  for (int cls = 0; cls < 256; ++cls)
-    if (total.kept[cls] + total.skipped[cls]) {
-      pc.by_class[cls].kept += total.kept[cls];
-      pc.by_class[cls].skipped += total.skipped[cls];
-    }
+  if (at.back() == at.front() && !share) throw InputError(path, 0, las_nothing_kept(mine));
 
   // Pass 2: the kept points, in file order, each range into its own slice.
   resize_unwritten(in.points, at.back());  // written on all cores, the earlier inputs kept

@@ -51,6 +51,12 @@ LasHeader parse_las_header(std::string_view bytes, const std::string& name);
 // Reads the points that pass the filter as loose vertices (memory-mapped, decoded on all cores), the CRS from
 // the OGC WKT VLR (record 2112) or the GeoTIFF GeoKeyDirectory VLR (34735) into in.source_crs_wkt when none was
 // recorded yet, and the counts per class into in.point_classes.
-void read_las(const std::string& path, const LasFilter& filter, InputSet& in);
+// With a share (io/read_share.hpp): its point records only, and no check that some point passed (the caller's,
+// once the shares are joined: las_nothing_kept).
+struct ReadShare;
+void read_las(const std::string& path, const LasFilter& filter, InputSet& in, const ReadShare* share = nullptr);
+
+// Why an input of these counts (a LAS file's points, by class) gave no point.
+std::string las_nothing_kept(const PointClassCounts& counts);
 
 }  // namespace cdtgpu

@@ -26,6 +26,7 @@
 #include "core/error.hpp"
 #include "core/repair.hpp"
 #include "io/mapped_files.hpp"
+#include "io/read_share.hpp"
 #include "io/readers.hpp"
 #include "io/text_source.hpp"
 
@@ -452,9 +453,12 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
   // a handle, and a handle per range was 64 of them on 16 cores).
   const int per_chunk =
       std::max(4096, count / int(4 * std::max(1u, std::thread::hardware_concurrency())) + 1);
+  // With a share (io/read_share.hpp): its records only.
+  const auto [share_begin, share_end] =
+      options.share ? options.share->range(uint64_t(count)) : std::pair<uint64_t, uint64_t>(0, uint64_t(count));
   std::vector<Chunk> chunks;
-  for (int first = 0; first < count; first += per_chunk)
-    chunks.push_back({size_t(first), size_t(std::min(count, first + per_chunk)), 0});
+  for (int first = int(share_begin); first < int(share_end); first += per_chunk)
+    chunks.push_back({size_t(first), size_t(std::min(int(share_end), first + per_chunk)), 0});
   std::vector<InputSet> parts(chunks.size());
   struct Handles {
     std::unique_ptr<SHPInfo, ShpClose> shp;
@@ -477,7 +481,7 @@ void read_shapefile(const std::string& path, const ReadOptions& options, InputSe
   });
   append_parts(in, parts);
   read_prj(base, in);
-  if (in.points.size() + in.lines.size() == before) throw InputError(path, 0, "no geometry");
+  if (!options.share && in.points.size() + in.lines.size() == before) throw InputError(path, 0, "no geometry");
 }
 
 }  // namespace cdtgpu

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <tbb/parallel_for.h>
@@ -18,6 +19,7 @@
 #include "core/error.hpp"
 #include "core/repair.hpp"
 #include "core/touched.hpp"
+#include "io/read_share.hpp"
 #include "io/readers.hpp"
 #include "io/text_source.hpp"
 
@@ -122,17 +124,21 @@ void for_each_line(std::string_view text, size_t begin, size_t end, F&& f) {
 
 }  // namespace
 
-void read_xyz_text(std::string_view text, const std::string& name, InputSet& in) {
-  const uint32_t source = add_source(in, name);
-  const size_t before = in.points.size() + in.lines.size();
+namespace {
+
+// Reads the points of `text` (whole lines) into `in`, line numbers from 1. Its first line with content is a
+// header when its first field is not a number and header_allowed() says it may be one.
+void read_xyz_lines(std::string_view text, const std::function<bool()>& header_allowed, uint32_t source,
+                    const std::string& name, InputSet& in) {
   // The first line with content, alone: it may be a header. Every later line is a point, blank or a comment.
   uint64_t line_no = 0;
   size_t rest = text.size();
   for_each_line(text, 0, text.size(), [&](const char* b, const char* e) {
     ++line_no;
     Point3 p;
-    const XyzLine kind = parse_xyz_line(b, e, true, line_no, name, p);
+    XyzLine kind = parse_xyz_line(b, e, true, line_no, name, p);
     if (kind == XyzLine::skip) return true;
+    if (kind == XyzLine::header && !header_allowed()) kind = parse_xyz_line(b, e, false, line_no, name, p);
     if (kind == XyzLine::point) add_point(in, source, line_no, p);
     rest = std::min(text.size(), size_t(e - text.data()) + 1);
     return false;
@@ -151,7 +157,39 @@ void read_xyz_text(std::string_view text, const std::string& name, InputSet& in)
     });
   });
   append_parts(in, parts);
-  require_geometry(in, before, name);
+}
+
+// Whether some line of text has content (not blank, not a comment).
+bool has_content(std::string_view text) {
+  bool found = false;
+  for_each_line(text, 0, text.size(), [&](const char* b, const char* e) {
+    while (b < e && is_space(*b)) ++b;
+    found = b < e && *b != '#';
+    return !found;
+  });
+  return found;
+}
+
+}  // namespace
+
+void read_xyz_text(std::string_view text, const std::string& name, InputSet& in, const ReadShare* share) {
+  const uint32_t source = add_source(in, name);
+  const size_t before = in.points.size() + in.lines.size();
+  if (!share) {
+    read_xyz_lines(text, [] { return true; }, source, name, in);
+    require_geometry(in, before, name);
+    return;
+  }
+  // A share of the lines; whether some share has points is for the caller to say once they are joined. Only
+  // errors need the lines before the share: its line numbers count from its own start.
+  const auto [begin, end] = share_lines(text, *share);
+  const std::string_view prefix = text.substr(0, begin);
+  try {
+    read_xyz_lines(text.substr(begin, end - begin), [&] { return !has_content(prefix); }, source, name, in);
+  } catch (const InputError& e) {
+    if (begin == 0 || e.record == 0) throw;
+    throw InputError(name, e.record + uint64_t(std::count(prefix.begin(), prefix.end(), '\n')), e.detail);
+  }
 }
 
 void read_xyz(std::istream& text, const std::string& name, InputSet& in) {

@@ -59,7 +59,9 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
   else if (ext == ".wkt")
     read_mapped(path, read_wkt_text, in);
   else if (ext == ".xyz" || ext == ".csv" || ext == ".txt")
-    read_mapped(path, read_xyz_text, in);
+    read_mapped(path, [&](std::string_view text, const std::string& name, InputSet& set) {
+      read_xyz_text(text, name, set, options.share);
+    }, in);
   else if (ext == ".asc")
     read_mapped(path, read_ascii_grid_text, in);
   else if (ext == ".tif" || ext == ".tiff")
@@ -69,7 +71,7 @@ void read_input(const std::string& path, const ReadOptions& options, InputSet& i
       read_geojson_text(text, name, options.z_field, set);
     }, in);
   else if (ext == ".las")
-    read_las(path, LasFilter{}, in);
+    read_las(path, LasFilter{}, in, options.share);
   else if (ext == ".laz")
     throw InputError(path, 0,
                      "LAZ (compressed LAS) is not read: decompress it first, e.g. `laszip -i in.laz -o out.las` "

@@ -10,8 +10,12 @@
 
 namespace cdtgpu {
 
+struct ReadShare;  // io/read_share.hpp
+
 struct ReadOptions {
   std::string z_field;  // DBF attribute giving z (shapefiles), or GeoJSON feature property; empty: from geometry
+  // Read only this share of each input, among several processes (io/read_share.hpp); null: everything.
+  const ReadShare* share = nullptr;
 };
 
 // Dispatches on the extension (.shp, .wkt, .xyz/.csv/.txt, .asc, .tif/.tiff: io/geotiff.hpp, .geojson/.json,
@@ -49,7 +53,8 @@ void read_wkt(std::istream& text, const std::string& name, InputSet& in);
 void read_xyz(std::istream& text, const std::string& name, InputSet& in);
 // The same on a whole text (a mapped file): parsed on all cores, with the same results and messages.
 void read_wkt_text(std::string_view text, const std::string& name, InputSet& in);
-void read_xyz_text(std::string_view text, const std::string& name, InputSet& in);
+// With a share: its lines only, no "no geometry" check (the caller's, once the shares are joined).
+void read_xyz_text(std::string_view text, const std::string& name, InputSet& in, const ReadShare* share = nullptr);
 void read_ascii_grid(std::istream& text, const std::string& name, InputSet& in);
 // The same on text in memory, parsed on all cores.
 void read_ascii_grid_text(std::string_view text, const std::string& name, InputSet& in);

@@ -1,13 +1,17 @@
 // cdtgpu triangulate under mpirun (cli/mpi.hpp, issue 29): 2 and 3 ranks on this machine, the CPU backend in tiny
-// tiles, give the single process's bytes, with constraints through every rank's tiles, regions and --max-edge;
-// a rank killed before it hands over its tiles ends the run with a non-zero exit and the old output intact.
+// tiles, give the single process's bytes, with constraints through every rank's tiles, regions and --max-edge,
+// and with the inputs read in shares (LAS, shapefile, CSV: io/read_share.hpp); a bad line in a later rank's
+// share is named as the single process names it; a rank killed before it hands over its tiles ends the run with
+// a non-zero exit and the old output intact.
 // Skips when the build has no MPI.
 #include <gtest/gtest.h>
+#include <shapefil.h>
 
 #include <cstdlib>
 #include <string>
 
 #include "tests/binary_test.hpp"
+#include "tests/las_writer.hpp"
 
 namespace {
 
@@ -74,6 +78,50 @@ TEST_F(Mpi, GpuRanksGiveTheSingleProcessBytes) {
   const Result r = mpirun(2, "triangulate " + inputs() + " --backend gpu --max-tile-points 60 -o " + path("gpu.ply"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(slurp(path("gpu.ply")) == slurp(path("one.ply")));
+}
+
+TEST_F(Mpi, RanksReadSharesOfLasShapefileAndText) {
+  cdtgpu::test::LasFile las;  // ground (class 2) and vegetation (class 5), MGA zone 56
+  las.vlrs.push_back(cdtgpu::test::geokeys_vlr(3072, 28356));
+  for (int i = 0; i < 600; ++i)
+    las.points.push_back({.X = 300 + (i * 7919) % 19400, .Y = 300 + (i * 104729) % 19400, .Z = 100000 + i * 37 % 5000,
+                          .cls = uint8_t(i % 4 == 0 ? 5 : 2)});
+  write("ground.las", cdtgpu::test::las_bytes(las));
+  const std::string base = path("roads");
+  SHPHandle shp = SHPCreate(base.c_str(), SHPT_ARCZ);
+  for (int i = 0; i < 12; ++i) {
+    double x[3] = {500004.5 + i * 15, 500050.25 + i * 11, 500190.5 - i * 3}, y[3] = {6000010.5 + i * 14, 6000100.5, 6000190.5 - i * 13};
+    double z[3] = {101, 102, 103};
+    SHPObject* o = SHPCreateSimpleObject(SHPT_ARCZ, 3, x, y, z);
+    SHPWriteObject(shp, -1, o);
+    SHPDestroyObject(o);
+  }
+  SHPClose(shp);
+  const std::string args = path("dem.csv") + " " + path("ground.las") + ":class=2 " + base + ".shp " +
+                           path("lines.wkt") + " " + path("area.wkt") + ":role=boundary --backend cgal";
+  ASSERT_EQ(run("triangulate " + args + " -o " + path("one.ply") + " -q").code, 0);
+  for (int ranks : {2, 3}) {
+    const std::string out = path("shares" + std::to_string(ranks) + ".ply");
+    const Result r = mpirun(ranks, "triangulate " + args + " --max-tile-points 60 -o " + out);
+    ASSERT_EQ(r.code, 0) << ranks << " ranks: " << r.err;
+    EXPECT_TRUE(slurp(out) == slurp(path("one.ply"))) << ranks << " ranks";
+  }
+  // A bad line in the last third of the text: in rank 1's share of two, rank 2's of three.
+  std::string dem = cdtgpu::test::jittered_dem_csv(5);
+  dem.insert(dem.find('\n', dem.size() * 5 / 6) + 1, "500001,6000001,high\n");
+  write("dem.csv", dem);
+  const Result one = run("triangulate " + args + " -o " + path("bad.ply"));
+  ASSERT_EQ(one.code, 2);
+  const size_t at = one.err.find("dem.csv:");
+  ASSERT_NE(at, std::string::npos) << one.err;
+  const std::string message = one.err.substr(at, one.err.find('\n', at) - at);
+  EXPECT_NE(message.find("column 3 is not a number: 'high'"), std::string::npos) << message;
+  for (int ranks : {2, 3}) {
+    const Result r = mpirun(ranks, "triangulate " + args + " -o " + path("bad.ply"));
+    EXPECT_NE(r.code, 0) << ranks;
+    EXPECT_NE(r.err.find(message), std::string::npos) << ranks << " ranks: " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("bad.ply")));
 }
 
 TEST_F(Mpi, AKilledRankEndsTheRunAndKeepsTheOldOutput) {

@@ -1,0 +1,165 @@
+#include "io/read_share.hpp"
+
+#include <cstring>
+#include <type_traits>
+
+#include "core/touched.hpp"
+#include "io/text_source.hpp"
+
+namespace cdtgpu {
+
+namespace {
+
+// A piece's lines and counts as bytes; its points go separately, straight into the joined array.
+class Writer {
+ public:
+  template <typename T>
+  void put(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const char* p = reinterpret_cast<const char*>(&v);
+    bytes_.insert(bytes_.end(), p, p + sizeof v);
+  }
+  void put_bytes(const void* p, size_t n) {
+    const char* c = static_cast<const char*>(p);
+    bytes_.insert(bytes_.end(), c, c + n);
+  }
+  const std::vector<char>& bytes() const { return bytes_; }
+
+ private:
+  std::vector<char> bytes_;
+};
+
+class Reader {
+ public:
+  Reader(const char* p, const char* end) : p_(p), end_(end) {}
+  template <typename T>
+  T get() {
+    T v;
+    get_bytes(&v, sizeof v);
+    return v;
+  }
+  void get_bytes(void* out, size_t n) {
+    if (size_t(end_ - p_) < n) throw std::runtime_error("read share: a share's bytes end early");
+    std::memcpy(out, p_, n);
+    p_ += n;
+  }
+
+ private:
+  const char* p_;
+  const char* end_;
+};
+
+std::vector<char> pack(const InputSet& piece) {
+  Writer w;
+  w.put(uint64_t(piece.lines.size()));
+  for (const Polyline& line : piece.lines) {
+    w.put(uint64_t(line.points.size()));
+    w.put(uint8_t(line.closed));
+    w.put(line.source);
+    w.put(line.record);
+    w.put_bytes(line.points.data(), line.points.size() * sizeof(Point3));
+  }
+  const Repairs& r = piece.repairs;
+  for (uint64_t v : {r.repeated_vertices, r.rings_closed, r.degenerate_lines, r.null_shapes, r.nodata_cells}) w.put(v);
+  const PointClassCounts& pc = piece.point_classes;
+  w.put(uint8_t(pc.any));
+  for (uint64_t v : {pc.withheld, pc.other_returns, pc.other_classes, uint64_t(pc.by_class.size())}) w.put(v);
+  for (const auto& [cls, count] : pc.by_class) {
+    w.put(int32_t(cls));
+    w.put(count.kept);
+    w.put(count.skipped);
+  }
+  w.put(uint64_t(piece.source_crs_wkt.size()));
+  w.put_bytes(piece.source_crs_wkt.data(), piece.source_crs_wkt.size());
+  return w.bytes();
+}
+
+InputSet unpack(Reader& r) {
+  InputSet piece;
+  piece.lines.resize(r.get<uint64_t>());
+  for (Polyline& line : piece.lines) {
+    line.points.resize(r.get<uint64_t>());
+    line.closed = r.get<uint8_t>() != 0;
+    line.source = r.get<uint32_t>();
+    line.record = r.get<uint64_t>();
+    r.get_bytes(line.points.data(), line.points.size() * sizeof(Point3));
+  }
+  Repairs& rep = piece.repairs;
+  for (uint64_t* v : {&rep.repeated_vertices, &rep.rings_closed, &rep.degenerate_lines, &rep.null_shapes,
+                      &rep.nodata_cells})
+    *v = r.get<uint64_t>();
+  PointClassCounts& pc = piece.point_classes;
+  pc.any = r.get<uint8_t>() != 0;
+  pc.withheld = r.get<uint64_t>();
+  pc.other_returns = r.get<uint64_t>();
+  pc.other_classes = r.get<uint64_t>();
+  for (uint64_t k = r.get<uint64_t>(); k > 0; --k) {
+    const int cls = r.get<int32_t>();
+    PointClassCounts::Count& c = pc.by_class[cls];
+    c.kept = r.get<uint64_t>();
+    c.skipped = r.get<uint64_t>();
+  }
+  piece.source_crs_wkt.resize(r.get<uint64_t>());
+  r.get_bytes(piece.source_crs_wkt.data(), piece.source_crs_wkt.size());
+  return piece;
+}
+
+// The first line start at or after byte `at` (a line starts at 0 or after a '\n').
+size_t line_start(std::string_view text, size_t at) {
+  if (at == 0 || at >= text.size()) return std::min(at, text.size());
+  const size_t nl = text.find('\n', at - 1);
+  return nl == std::string_view::npos ? text.size() : nl + 1;
+}
+
+}  // namespace
+
+std::pair<size_t, size_t> share_lines(std::string_view text, const ReadShare& share) {
+  const auto [first, last] = share.range(text.size());
+  return {line_start(text, first), line_start(text, last)};
+}
+
+PointClassCounts join_shares(InputSet& piece, const ReadShare& share, InputSet& in) {
+  // Points: every share's, in share order, at the end of in.points.
+  const std::vector<uint64_t> point_bytes = share.all_sizes(piece.points.size() * sizeof(Point3));
+  uint64_t total = 0;
+  for (uint64_t b : point_bytes) total += b;
+  const size_t at = in.points.size();
+  resize_unwritten(in.points, at + total / sizeof(Point3));
+  share.all_bytes(reinterpret_cast<const char*>(piece.points.data()), reinterpret_cast<char*>(in.points.data() + at),
+                  point_bytes);
+  piece.points = {};
+
+  // Lines and counts, packed.
+  const std::vector<char> mine = pack(piece);
+  const std::vector<uint64_t> sizes = share.all_sizes(mine.size());
+  uint64_t all_size = 0;
+  for (uint64_t s : sizes) all_size += s;
+  std::vector<char> all(all_size);
+  share.all_bytes(mine.data(), all.data(), sizes);
+  std::vector<InputSet> pieces;
+  const char* p = all.data();
+  for (uint64_t s : sizes) {
+    Reader r(p, p + s);
+    pieces.push_back(unpack(r));
+    p += s;
+  }
+  PointClassCounts input_classes;
+  for (const InputSet& part : pieces) {
+    if (in.source_crs_wkt.empty()) in.source_crs_wkt = part.source_crs_wkt;
+    for (PointClassCounts* to : {&input_classes, &in.point_classes}) {
+      const PointClassCounts& pc = part.point_classes;
+      to->any = to->any || pc.any;
+      to->withheld += pc.withheld;
+      to->other_returns += pc.other_returns;
+      to->other_classes += pc.other_classes;
+      for (const auto& [cls, count] : pc.by_class) {
+        to->by_class[cls].kept += count.kept;
+        to->by_class[cls].skipped += count.skipped;
+      }
+    }
+  }
+  append_parts(in, pieces);  // lines and repairs
+  return input_classes;
+}
+
+}  // namespace cdtgpu
