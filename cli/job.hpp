@@ -17,6 +17,7 @@
 #include "gpu/contours.hpp"
 #include "gpu/raster.hpp"
 #include "io/readers.hpp"
+#include "io/tiles_dir.hpp"
 #include "io/writers.hpp"
 
 namespace cdtgpu {
@@ -46,6 +47,7 @@ struct TriangulateOptions {
   std::string tiles_out;         // the mesh as one file per tile plus index.geojson (io/tiles_dir.hpp); empty: none
   std::string devices;           // GPUs for tiled runs (gpu/devices.hpp); empty: all hardware GPUs when tiled
   const TileSharing* sharing = nullptr;  // tiles shared among MPI ranks (cli/mpi.hpp); null: one process
+  const TilesDirSharing* tiles_sharing = nullptr;  // --tiles-out's files written by every rank; null: here
 };
 
 class GpuStart;

@@ -95,6 +95,7 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
       options.device = device;
       options.sharing = mpi.sharing();
       options.input.read.share = mpi.read_share();
+      options.tiles_sharing = mpi.tiles_dir();
       // Ranks of one host take a GPU each (their local rank's), unless --device or --devices says otherwise.
       if (mpi.ranks() > 1 && options.backend != "cgal" && options.device.empty() && options.devices.empty()) {
         const std::vector<size_t> gpus = gpu::select_devices(gpu::list_devices(), "all");

@@ -50,6 +50,71 @@ std::vector<std::vector<uint32_t>> gather_at_rank0(std::vector<uint32_t> mine, i
   return all;
 }
 
+// Bytes point to point, in pieces a 32-bit MPI count takes; the receiver learns the size first.
+constexpr int kTilesTag = 3;
+void send_bytes(const void* p, uint64_t n, int to) {
+  constexpr uint64_t kPiece = uint64_t(1) << 30;
+  MPI_Send(&n, 1, MPI_UINT64_T, to, kTilesTag, MPI_COMM_WORLD);
+  for (uint64_t at = 0; at < n; at += kPiece)
+    MPI_Send(static_cast<const char*>(p) + at, int(std::min(kPiece, n - at)), MPI_BYTE, to, kTilesTag, MPI_COMM_WORLD);
+}
+template <typename Vec>
+void recv_into(Vec& v, int from) {
+  constexpr uint64_t kPiece = uint64_t(1) << 30;
+  uint64_t n = 0;
+  MPI_Recv(&n, 1, MPI_UINT64_T, from, kTilesTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  v.resize(n / sizeof(v[0]));
+  char* p = reinterpret_cast<char*>(v.data());
+  for (uint64_t at = 0; at < n; at += kPiece)
+    MPI_Recv(p + at, int(std::min(kPiece, n - at)), MPI_BYTE, from, kTilesTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+}
+
+// --tiles-out's files written by every rank (io/tiles_dir.hpp): rank 0 hands each rank its pieces.
+TilesDirSharing tiles_dir_sharing(int rank, int ranks, const std::string& host) {
+  TilesDirSharing s;
+  s.rank = rank;
+  s.ranks = ranks;
+  s.send = [](int to, const std::string& fresh, const std::vector<std::pair<size_t, const MeshPiece*>>& pieces) {
+    send_bytes(fresh.data(), fresh.size(), to);
+    const uint64_t n = pieces.size();
+    send_bytes(&n, sizeof n, to);
+    for (const auto& [t, piece] : pieces) {
+      const double head[5] = {double(t), piece->x0, piece->y0, piece->x1, piece->y1};
+      send_bytes(head, sizeof head, to);
+      send_bytes(piece->mesh.vertices.data(), piece->mesh.vertices.size() * sizeof(Point3), to);
+      send_bytes(piece->mesh.triangles.data(), piece->mesh.triangles.size() * sizeof(Triangle), to);
+    }
+  };
+  s.receive = [] {
+    std::pair<std::string, std::vector<std::pair<size_t, MeshPiece>>> got;
+    recv_into(got.first, 0);
+    std::vector<uint64_t> n;
+    recv_into(n, 0);
+    for (uint64_t k = 0; k < n.at(0); ++k) {
+      std::vector<double> head;
+      recv_into(head, 0);
+      MeshPiece piece;
+      piece.x0 = head.at(1), piece.y0 = head.at(2), piece.x1 = head.at(3), piece.y1 = head.at(4);
+      recv_into(piece.mesh.vertices, 0);
+      recv_into(piece.mesh.triangles, 0);
+      got.second.emplace_back(size_t(head[0]), std::move(piece));
+    }
+    return got;
+  };
+  s.outcomes = [rank, ranks, host](const std::string& mine) {
+    const std::string said = mine.empty() ? "" : "rank " + std::to_string(rank) + " on " + host + ": " + mine;
+    std::vector<std::string> all;
+    if (rank != 0) {
+      send_bytes(said.data(), said.size(), 0);
+      return all;
+    }
+    all.push_back(said);
+    for (int r = 1; r < ranks; ++r) recv_into(all.emplace_back(), r);
+    return all;
+  };
+  return s;
+}
+
 // Every rank's bytes to every rank, in rank order: each rank in turn broadcasts its own, in pieces a 32-bit
 // MPI count takes.
 void all_bytes(const char* mine, char* all, const std::vector<uint64_t>& sizes, int rank) {
@@ -78,8 +143,10 @@ MpiSession::MpiSession(int* argc, char*** argv) {
     }
 #ifdef CDTGPU_MPI
   if (launched > 1) {
+    // One thread at a time calls MPI: the main thread, or the one writing the mesh beside the derived outputs
+    // (--tiles-out's files shared among the ranks).
     int provided = 0;
-    MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);  // MPI calls come from the main thread only
+    MPI_Init_thread(argc, argv, MPI_THREAD_SERIALIZED, &provided);
     initialised_ = true;
     MPI_Comm_rank(MPI_COMM_WORLD, &sharing_.rank);
     MPI_Comm_size(MPI_COMM_WORLD, &sharing_.ranks);
@@ -97,6 +164,7 @@ MpiSession::MpiSession(int* argc, char*** argv) {
     read_share_.all_bytes = [rank](const char* mine, char* all, const std::vector<uint64_t>& sizes) {
       cdtgpu::all_bytes(mine, all, sizes, rank);
     };
+    if (provided >= MPI_THREAD_SERIALIZED) tiles_dir_ = tiles_dir_sharing(rank, ranks, host_);
   }
 #else
   (void)argc;

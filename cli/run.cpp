@@ -23,9 +23,11 @@ int run_triangulate(const TriangulateOptions& options) {
   choose_backend(job, gpus);
   prepare_job(job);
   triangulate_job(job);
-  // Under MPI the other ranks have handed their tiles to rank 0, which finishes and writes alone.
+  // Under MPI the other ranks have handed their tiles to rank 0, which finishes and writes; they write only
+  // their share of --tiles-out's files, which rank 0 hands them.
   if (options.sharing && options.sharing->rank != 0) {
     release_job(job, &gpus);
+    if (options.tiles_sharing && !options.tiles_out.empty()) write_shared_tiles(job.crs, job.write, *options.tiles_sharing);
     return 0;
   }
   apply_job_regions(job);

@@ -474,7 +474,7 @@ uint64_t write_mesh_files(const Job& job) {
   // Pieces as large as the run's tiles, else a million points a file.
   const uint64_t piece = options.max_tile_points > 0 ? uint64_t(options.max_tile_points) : 1'000'000;
   const std::vector<MeshPiece> pieces = split_mesh(job.result.mesh, piece);
-  write_tiles_dir(pieces, job.crs, job.write, options.tiles_out);
+  write_tiles_dir(pieces, job.crs, job.write, options.tiles_out, options.tiles_sharing);
   return pieces.size();
 }
 

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -15,7 +17,21 @@
 namespace cdtgpu {
 namespace fs = std::filesystem;
 
-namespace {}  // namespace
+namespace {
+
+std::string tile_name(size_t t, const WriteOptions& options) {
+  char name[32];
+  std::snprintf(name, sizeof name, "tile_%04zu%s", t + 1, mesh_extension(options.format));
+  return name;
+}
+
+// Test hook (tests/mpi_test): this process's tile files fail to write, as a full disk would make them.
+void fail_for_tests(int rank) {
+  if (const char* r = std::getenv("CDTGPU_MPI_TEST_FAIL_TILE_WRITE"); r && std::atoi(r) == rank)
+    throw std::runtime_error("write failed (CDTGPU_MPI_TEST_FAIL_TILE_WRITE)");
+}
+
+}  // namespace
 
 std::string tiles_dir_path(const std::string& dir) {
   const fs::path target = fs::path(dir).lexically_normal();
@@ -23,7 +39,7 @@ std::string tiles_dir_path(const std::string& dir) {
 }
 
 void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const WriteOptions& options,
-                     const std::string& dir) {
+                     const std::string& dir, const TilesDirSharing* sharing) {
   const fs::path clean = tiles_dir_path(dir);
   std::error_code ec;
   if (fs::exists(clean, ec) && !fs::is_directory(clean, ec))
@@ -32,12 +48,28 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
   fs::remove_all(fresh, ec);
   fs::create_directories(fresh);
   try {
+    const int ranks = sharing ? sharing->ranks : 1;
+    if (sharing)
+      for (int r = 1; r < ranks; ++r) {
+        std::vector<std::pair<size_t, const MeshPiece*>> theirs;
+        for (size_t t = size_t(r); t < pieces.size(); t += size_t(ranks)) theirs.emplace_back(t, &pieces[t]);
+        sharing->send(r, fresh.string(), theirs);
+      }
+    std::string mine;
+    try {
+      if (sharing) fail_for_tests(0);
+      for (size_t t = 0; t < pieces.size(); t += size_t(ranks))
+        write_mesh_file(pieces[t].mesh, crs, options, (fresh / tile_name(t, options)).string());
+    } catch (const std::exception& e) {
+      if (!sharing) throw;
+      mine = e.what();
+    }
+    if (sharing)
+      for (const std::string& why : sharing->outcomes(mine))
+        if (!why.empty()) throw std::runtime_error("--tiles-out " + dir + ": " + why);
     nlohmann::json features = nlohmann::json::array();
     for (size_t t = 0; t < pieces.size(); ++t) {
       const MeshPiece& p = pieces[t];
-      char name[32];
-      std::snprintf(name, sizeof name, "tile_%04zu%s", t + 1, mesh_extension(options.format));
-      write_mesh_file(p.mesh, crs, options, (fresh / name).string());
       features.push_back(
           {{"type", "Feature"},
            {"geometry",
@@ -45,7 +77,7 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
              {"coordinates", {{{p.x0, p.y0}, {p.x1, p.y0}, {p.x1, p.y1}, {p.x0, p.y1}, {p.x0, p.y0}}}}}},
            {"properties",
             {{"tile", t + 1},
-             {"file", name},
+             {"file", tile_name(t, options)},
              {"vertices", p.mesh.vertices.size()},
              {"triangles", p.mesh.triangles.size()}}}});
     }
@@ -62,6 +94,19 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
     fs::remove_all(fresh, ec);
     throw;
   }
+}
+
+void write_shared_tiles(const Crs& crs, const WriteOptions& options, const TilesDirSharing& sharing) {
+  auto [fresh, pieces] = sharing.receive();
+  std::string mine;
+  try {
+    fail_for_tests(sharing.rank);
+    for (const auto& [t, piece] : pieces)
+      write_mesh_file(piece.mesh, crs, options, (fs::path(fresh) / tile_name(t, options)).string());
+  } catch (const std::exception& e) {
+    mine = e.what();
+  }
+  sharing.outcomes(mine);
 }
 
 Mesh read_tiles_dir(const std::string& dir) {

@@ -8,6 +8,10 @@
 #include <shapefil.h>
 
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
 #include <string>
 
 #include "tests/binary_test.hpp"
@@ -43,7 +47,7 @@ class Mpi : public cdtgpu::test::BinaryTest {
   }
   Result mpirun(int ranks, const std::string& args, const std::string& env = "") const {
 #ifdef CDTGPU_TEST_MPI
-    const std::string pass = env.empty() ? "" : " -x CDTGPU_MPI_TEST_KILL_RANK";
+    const std::string pass = env.empty() ? "" : " -x " + env.substr(0, env.find('='));  // env: "NAME=value 
     // Under a time limit: after a rank is killed, Debian's mpiexec now and then waits on a futex for good with
     // every rank gone (seen twice in 2026-11-26's runs, 30 minutes and more), which would hang the suite.
     return run_shell(env + "timeout -k 10 300 " + std::string(MPIEXEC) + " --oversubscribe" + pass + " -n " +
@@ -122,6 +126,40 @@ TEST_F(Mpi, RanksReadSharesOfLasShapefileAndText) {
     EXPECT_NE(r.err.find(message), std::string::npos) << ranks << " ranks: " << r.err;
   }
   EXPECT_FALSE(std::filesystem::exists(path("bad.ply")));
+}
+
+// Every file of a --tiles-out folder, by name.
+std::map<std::string, std::string> folder_files(const std::string& dir) {
+  std::map<std::string, std::string> files;
+  if (!std::filesystem::is_directory(dir)) return files;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    std::ifstream in(e.path(), std::ios::binary);
+    files[e.path().filename().string()] = std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  return files;
+}
+
+TEST_F(Mpi, EveryRankWritesItsTileFiles) {
+  const std::string args = "triangulate " + inputs() + " --backend cgal --max-tile-points 60 -q --tiles-out ";
+  ASSERT_EQ(run(args + path("one")).code, 0);
+  const auto one = folder_files(path("one"));
+  ASSERT_GE(one.size(), 5u);  // the index and several tiles: every rank has some to write
+  for (int ranks : {2, 3}) {
+    const std::string dir = path("ranks" + std::to_string(ranks));
+    const Result r = mpirun(ranks, args + dir);
+    ASSERT_EQ(r.code, 0) << ranks << " ranks: " << r.err;
+    EXPECT_TRUE(folder_files(dir) == one) << ranks << " ranks";
+  }
+  // Rank 1's files fail to write: the run fails naming it, and the old folder stays as it was.
+  std::filesystem::create_directories(path("old"));
+  write("old/keep.txt", "the old folder\n");
+  const Result r = mpirun(3, args + path("old"), "CDTGPU_MPI_TEST_FAIL_TILE_WRITE=1 ");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("rank 1 on "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("CDTGPU_MPI_TEST_FAIL_TILE_WRITE"), std::string::npos) << r.err;
+  EXPECT_EQ(folder_files(path("old")), (std::map<std::string, std::string>{{"keep.txt", "the old folder\n"}}));
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find("old.tmp-"), std::string::npos) << e.path();
 }
 
 TEST_F(Mpi, AKilledRankEndsTheRunAndKeepsTheOldOutput) {
