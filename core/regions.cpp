@@ -17,6 +17,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cfloat>
@@ -24,6 +25,7 @@
 #include <deque>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -144,13 +146,14 @@ HalfEdges half_edges(const Mesh& mesh) {
 // Marks the mesh edges along the constraints: kConstrained, plus kRegion for region edges. Without `all`, only
 // the region edges (the nesting levels need no other; trimming needs every constraint): a boundary and a hole
 // over 500K contour segments walk 1K segments, not 500K.
-void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std::vector<uint8_t>& region,
-                      bool all, const HalfEdges& e, BigArray<uint8_t>& flag) {
+// mesh_of[i]: the mesh vertex of prepared vertex i; is_input[m]: whether mesh vertex m is one of them (the
+// others are Steiner vertices).
+void mesh_vertices_of(const Mesh& mesh, const PreparedInput& prepared, BigArray<uint32_t>& mesh_of,
+                      BigArray<uint8_t>& is_input) {
   const Points& mv = mesh.vertices;
   const uint32_t V = uint32_t(mv.size());
-  auto P = [&](uint32_t v) { return P2(mv[v].x, mv[v].y); };
-  BigArray<uint8_t> is_input(V, 0);
-  BigArray<uint32_t> mesh_of(prepared.vertices.size());
+  is_input = BigArray<uint8_t>(V, 0);
+  mesh_of = BigArray<uint32_t>(prepared.vertices.size());
   // Both vertex lists are sorted by (x, y): each block finds its first vertex by bisection, then merges.
   std::atomic<size_t> missing{SIZE_MAX};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, prepared.vertices.size(), kGrain),
@@ -172,6 +175,16 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
                     });
   if (missing != SIZE_MAX)
     throw std::logic_error("regions: input vertex " + std::to_string(missing.load()) + " is not in the mesh");
+}
+
+void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std::vector<uint8_t>& region,
+                      bool all, const HalfEdges& e, BigArray<uint8_t>& flag) {
+  const Points& mv = mesh.vertices;
+  const uint32_t V = uint32_t(mv.size());
+  auto P = [&](uint32_t v) { return P2(mv[v].x, mv[v].y); };
+  BigArray<uint8_t> is_input;
+  BigArray<uint32_t> mesh_of;
+  mesh_vertices_of(mesh, prepared, mesh_of, is_input);
 
   std::atomic<size_t> uncovered{SIZE_MAX};  // the smallest failing constraint, whatever the schedule
   each(prepared.constraints.size(), [&](size_t c) {
@@ -415,6 +428,100 @@ uint64_t trim(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& fla
   });
 }
 
+// --max-edge alone (no boundary or hole): a trimmed triangle is entered across one of its edges, so it has a
+// long one, and only the long half-edges need pairing (a sort of them, not the twins of every half-edge). A
+// constraint stops the trimming on the long mesh edges along it, which are its own edge when every long
+// constraint is one mesh edge. Sets keep (0: trimmed) and returns how many were trimmed; nullopt when this
+// path does not apply (a long constraint split by vertices on it, or so many long edges that pairing them all
+// is the general path's work): the caller then takes that path, which walks the constraints.
+std::optional<uint64_t> trim_long_edges(const Mesh& mesh, const PreparedInput& prepared, double max_edge,
+                                        BigArray<uint8_t>& keep) {
+  const Triangles& ts = mesh.triangles;
+  const Points& mv = mesh.vertices;
+  const size_t T = ts.size();
+  const double limit2 = max_edge * max_edge;
+  auto is_long = [&](uint32_t a, uint32_t b) {
+    const double dx = mv[b].x - mv[a].x, dy = mv[b].y - mv[a].y;
+    return dx * dx + dy * dy > limit2;  // the same either way round: the general path's test
+  };
+  tbb::enumerable_thread_specific<std::vector<Open>> local;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
+    auto& mine = local.local();
+    for (size_t t = r.begin(); t < r.end(); ++t)
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = ts[t][k], b = ts[t][(k + 1) % 3];
+        if (is_long(a, b)) mine.push_back({key(std::min(a, b), std::max(a, b)), uint32_t(3 * t + k)});
+      }
+  });
+  std::vector<Open> longs;
+  for (auto& v : local) {
+    if (longs.size() + v.size() > T / 4) return std::nullopt;  // pairing them all: the general path's work
+    longs.insert(longs.end(), v.begin(), v.end());
+  }
+  tbb::parallel_sort(longs.begin(), longs.end());
+  auto is_mesh_edge = [&](uint64_t edge) {
+    const auto it = std::lower_bound(longs.begin(), longs.end(), Open{edge, 0});
+    return it != longs.end() && it->edge == edge;
+  };
+
+  // The long constraints, each of which must be a mesh edge.
+  BigArray<uint32_t> mesh_of;
+  BigArray<uint8_t> is_input;
+  mesh_vertices_of(mesh, prepared, mesh_of, is_input);
+  tbb::enumerable_thread_specific<std::vector<uint64_t>> long_constraints;
+  std::atomic<bool> split{false};
+  each(prepared.constraints.size(), [&](size_t c) {
+    const uint32_t a = mesh_of[prepared.constraints[c][0]], b = mesh_of[prepared.constraints[c][1]];
+    if (!is_long(a, b)) return;
+    const uint64_t edge = key(std::min(a, b), std::max(a, b));
+    if (is_mesh_edge(edge))
+      long_constraints.local().push_back(edge);
+    else
+      split.store(true, std::memory_order_relaxed);
+  });
+  if (split) return std::nullopt;
+  std::vector<uint64_t> constrained;
+  for (const auto& v : long_constraints) constrained.insert(constrained.end(), v.begin(), v.end());
+  tbb::parallel_sort(constrained.begin(), constrained.end());
+
+  // The triangles with a long open edge, joined across such edges; those with one on the hull are seeds.
+  std::vector<uint32_t> cand;  // sorted triangle ids
+  std::vector<std::array<uint32_t, 2>> joins;
+  std::vector<uint32_t> seeds;
+  for (size_t i = 0; i < longs.size();) {
+    size_t j = i + 1;
+    while (j < longs.size() && longs[j].edge == longs[i].edge) ++j;
+    if (j - i > 2) throw std::logic_error("regions: a mesh edge with more than two triangles");
+    if (!std::binary_search(constrained.begin(), constrained.end(), longs[i].edge)) {
+      for (size_t k = i; k < j; ++k) cand.push_back(longs[k].h / 3);
+      if (j - i == 1)
+        seeds.push_back(longs[i].h / 3);
+      else
+        joins.push_back({longs[i].h / 3, longs[i + 1].h / 3});
+    }
+    i = j;
+  }
+  std::sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  auto index = [&](uint32_t t) { return uint32_t(std::lower_bound(cand.begin(), cand.end(), t) - cand.begin()); };
+  std::vector<uint32_t> parent(cand.size());
+  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto root = [&](uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& [t, u] : joins) {
+    const uint32_t a = root(index(t)), b = root(index(u));
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  std::vector<uint8_t> seeded(cand.size(), 0);
+  for (uint32_t t : seeds) seeded[root(index(t))] = 1;
+  uint64_t trimmed = 0;
+  for (uint32_t i = 0; i < cand.size(); ++i)
+    if (seeded[root(i)]) keep[cand[i]] = 0, ++trimmed;
+  return trimmed;
+}
+
 // used[v]: whether v is a corner of a kept triangle. Each vertex is written by one thread, or marks from
 // every thread would share cache lines: the triangles starting in a block of vertices mark their corners in
 // that block (a corner is never below the start) and leave the few beyond it to a second pass.
@@ -553,6 +660,25 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
     passes += fmt::format(" {} {:.1f} ms", name, std::chrono::duration<double, std::milli>(t - t0).count());
     t0 = t;
   };
+  if (!regions) {
+    BigArray<uint8_t> keep(T, 1);
+    if (const std::optional<uint64_t> trimmed = trim_long_edges(mesh, prepared, rules.max_edge, keep)) {
+      lap("long edges");
+      stats.triangles_trimmed = *trimmed;
+      if (*trimmed) {
+        HalfEdges e;
+        starts(mesh.triangles, uint32_t(V), e);
+        BigArray<uint32_t> renumber(V), scratch(3 * T);
+        Points vertices = kept_vertices(mesh, used_vertices(mesh.triangles, e, keep), renumber);
+        keep_triangles(mesh.triangles, keep, renumber, scratch);
+        stats.vertices_removed = V - vertices.size();
+        mesh.vertices = std::move(vertices);
+        lap("compaction");
+      }
+      spdlog::debug("regions:{}", passes);
+      return stats;
+    }
+  }
   HalfEdges e = half_edges(mesh);
   lap("half-edges");
   BigArray<uint8_t> flag(3 * T, 0);

@@ -363,6 +363,42 @@ TEST(Regions, MaxEdgeStopsAtConstraints) {
   expect_same(oracle(layers, 12), ours(layers, 12), "coastline with a hole");
 }
 
+// --max-edge without boundaries or holes pairs only the long edges (core/regions.cpp, trim_long_edges), and
+// falls back to the walk when a long constraint is not one mesh edge or most edges are long. Both match the
+// oracle: breakline rings reaching beyond the hull (constrained hull edges), ring sides through input points
+// (constraints split at them), a limit under which most edges are long, one over every edge; and on one and
+// two threads the same bytes.
+TEST(Regions, MaxEdgeAloneMatchesTheOracleOnEveryPath) {
+  std::vector<Layer> layers = coastline();
+  layers.push_back({Role::breakline, {}, {square(150, 100, 30)}, {}});
+  layers.push_back({Role::breakline, {}, {{{60, -10, 0}, {140, -10, 0}, {140, 30, 0}, {60, 30, 0}}}, {}});
+  layers.push_back({Role::breakline, {}, {polygon(40, 150, 28, 5, 0.3)}, {}});
+  for (const bool on_sides : {false, true})
+    for (double max_edge : {0.5, 4.0, 9.0, 14.0, 40.0, 1000.0}) {
+    // Points on the sides of the first square and of the ring beyond the hull: those long constraints are
+    // several mesh edges each.
+    if (on_sides && max_edge == 0.5)
+      layers.push_back({Role::vertices, {{150, 70, 0}, {165, 70, 0}, {180, 100, 0}, {100, -10, 0}, {140, 12, 0}}, {}, {}});
+    const std::string what = "max-edge " + std::to_string(max_edge) + (on_sides ? ", points on sides" : "");
+    RegionStats s;
+    Mesh all;
+    const Mesh m = ours(layers, max_edge, &s, &all);
+    expect_same(oracle(layers, max_edge), m, what);
+    EXPECT_EQ(all.triangles.size() - m.triangles.size(), s.triangles_trimmed) << what;
+    if (max_edge == 9.0) EXPECT_GT(s.triangles_trimmed, 20u) << what;
+    Built b = build(layers);
+    PreparedInput p = prepare(b.in);
+    const RegionRules rules = region_rules(b.in, b.parts, p, max_edge);
+    for (int threads : {1, 2}) {
+      Mesh again = all;
+      tbb::task_arena arena(threads);
+      arena.execute([&] { apply_regions(again, p, rules); });
+      EXPECT_EQ(again.triangles, m.triangles) << what << ", " << threads << " threads";
+      EXPECT_EQ(again.vertices, m.vertices) << what << ", " << threads << " threads";
+    }
+  }
+}
+
 TEST(Regions, CanonicalOrderKept) {
   const std::vector<Layer> layers = lake_with_island();
   Mesh m = ours(layers);
