@@ -431,11 +431,11 @@ uint64_t trim(const Mesh& mesh, const HalfEdges& e, const BigArray<uint8_t>& fla
 // --max-edge alone (no boundary or hole): a trimmed triangle is entered across one of its edges, so it has a
 // long one, and only the long half-edges need pairing (a sort of them, not the twins of every half-edge). A
 // constraint stops the trimming on the long mesh edges along it, which are its own edge when every long
-// constraint is one mesh edge. Sets keep (0: trimmed) and returns how many were trimmed; nullopt when this
+// constraint is one mesh edge. Returns the trimmed triangles, in order; nullopt when this
 // path does not apply (a long constraint split by vertices on it, or so many long edges that pairing them all
 // is the general path's work): the caller then takes that path, which walks the constraints.
-std::optional<uint64_t> trim_long_edges(const Mesh& mesh, const PreparedInput& prepared, double max_edge,
-                                        BigArray<uint8_t>& keep) {
+std::optional<std::vector<uint32_t>> trim_long_edges(const Mesh& mesh, const PreparedInput& prepared,
+                                                     double max_edge) {
   const Triangles& ts = mesh.triangles;
   const Points& mv = mesh.vertices;
   const size_t T = ts.size();
@@ -516,10 +516,74 @@ std::optional<uint64_t> trim_long_edges(const Mesh& mesh, const PreparedInput& p
   }
   std::vector<uint8_t> seeded(cand.size(), 0);
   for (uint32_t t : seeds) seeded[root(index(t))] = 1;
-  uint64_t trimmed = 0;
+  std::vector<uint32_t> trimmed;
   for (uint32_t i = 0; i < cand.size(); ++i)
-    if (seeded[root(i)]) keep[cand[i]] = 0, ++trimmed;
+    if (seeded[root(i)]) trimmed.push_back(cand[i]);
   return trimmed;
+}
+
+// Drops the few triangles `dropped` (in order) and the vertices left in no triangle. Only their corners can be
+// left so: each is counted among all triangles and among the dropped. Both lists keep their order and the
+// renumbering is monotone, so the mesh stays canonical. Returns how many vertices went.
+uint64_t drop_few(Mesh& mesh, const std::vector<uint32_t>& dropped) {
+  Triangles& ts = mesh.triangles;
+  const size_t T = ts.size(), V = mesh.vertices.size();
+  std::vector<uint32_t> corners;
+  for (uint32_t t : dropped) corners.insert(corners.end(), ts[t].begin(), ts[t].end());
+  std::sort(corners.begin(), corners.end());
+  corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+  std::vector<uint64_t> is_corner((V + 63) / 64, 0);
+  for (uint32_t v : corners) is_corner[v / 64] |= uint64_t(1) << (v % 64);
+  auto index = [&](uint32_t v) { return size_t(std::lower_bound(corners.begin(), corners.end(), v) - corners.begin()); };
+  std::vector<std::atomic<uint32_t>> in_all(corners.size());
+  std::vector<uint32_t> in_dropped(corners.size(), 0);
+  for (uint32_t t : dropped)
+    for (uint32_t v : ts[t]) ++in_dropped[index(v)];
+  each(T, [&](size_t t) {
+    for (uint32_t v : ts[t])
+      if (is_corner[v / 64] >> (v % 64) & 1) in_all[index(v)].fetch_add(1, std::memory_order_relaxed);
+  });
+  std::vector<uint32_t> gone;  // vertices left in no triangle, in order
+  for (size_t i = 0; i < corners.size(); ++i)
+    if (in_all[i].load() == in_dropped[i]) gone.push_back(corners[i]);
+  auto renumber = [&](uint32_t v) {
+    return gone.empty() ? v : v - uint32_t(std::upper_bound(gone.begin(), gone.end(), v) - gone.begin());
+  };
+  // Kept triangles, block by block, each block at its offset: its start less the dropped before it.
+  constexpr size_t kBlock = 1 << 16;
+  Triangles kept;
+  resize_unwritten(kept, T - dropped.size());
+  tbb::parallel_for(size_t(0), (T + kBlock - 1) / kBlock, [&](size_t b) {
+    const size_t t0 = b * kBlock, t1 = std::min(T, t0 + kBlock);
+    auto d = std::lower_bound(dropped.begin(), dropped.end(), uint32_t(t0));
+    size_t at = t0 - size_t(d - dropped.begin());
+    for (size_t t = t0; t < t1; ++t) {
+      if (d != dropped.end() && *d == t) {
+        ++d;
+        continue;
+      }
+      kept[at++] = {renumber(ts[t][0]), renumber(ts[t][1]), renumber(ts[t][2])};
+    }
+  });
+  ts = std::move(kept);
+  if (!gone.empty()) {
+    Points vertices;
+    resize_unwritten(vertices, V - gone.size());
+    tbb::parallel_for(size_t(0), (V + kBlock - 1) / kBlock, [&](size_t b) {
+      const size_t v0 = b * kBlock, v1 = std::min(V, v0 + kBlock);
+      auto g = std::lower_bound(gone.begin(), gone.end(), uint32_t(v0));
+      size_t at = v0 - size_t(g - gone.begin());
+      for (size_t v = v0; v < v1; ++v) {
+        if (g != gone.end() && *g == v) {
+          ++g;
+          continue;
+        }
+        vertices[at++] = mesh.vertices[v];
+      }
+    });
+    mesh.vertices = std::move(vertices);
+  }
+  return gone.size();
 }
 
 // used[v]: whether v is a corner of a kept triangle. Each vertex is written by one thread, or marks from
@@ -660,25 +724,17 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
     passes += fmt::format(" {} {:.1f} ms", name, std::chrono::duration<double, std::milli>(t - t0).count());
     t0 = t;
   };
-  if (!regions) {
-    BigArray<uint8_t> keep(T, 1);
-    if (const std::optional<uint64_t> trimmed = trim_long_edges(mesh, prepared, rules.max_edge, keep)) {
+  if (!regions)
+    if (const std::optional<std::vector<uint32_t>> trimmed = trim_long_edges(mesh, prepared, rules.max_edge)) {
       lap("long edges");
-      stats.triangles_trimmed = *trimmed;
-      if (*trimmed) {
-        HalfEdges e;
-        starts(mesh.triangles, uint32_t(V), e);
-        BigArray<uint32_t> renumber(V), scratch(3 * T);
-        Points vertices = kept_vertices(mesh, used_vertices(mesh.triangles, e, keep), renumber);
-        keep_triangles(mesh.triangles, keep, renumber, scratch);
-        stats.vertices_removed = V - vertices.size();
-        mesh.vertices = std::move(vertices);
+      stats.triangles_trimmed = trimmed->size();
+      if (!trimmed->empty()) {
+        stats.vertices_removed = drop_few(mesh, *trimmed);
         lap("compaction");
       }
       spdlog::debug("regions:{}", passes);
       return stats;
     }
-  }
   HalfEdges e = half_edges(mesh);
   lap("half-edges");
   BigArray<uint8_t> flag(3 * T, 0);

@@ -373,6 +373,8 @@ TEST(Regions, MaxEdgeAloneMatchesTheOracleOnEveryPath) {
   layers.push_back({Role::breakline, {}, {square(150, 100, 30)}, {}});
   layers.push_back({Role::breakline, {}, {{{60, -10, 0}, {140, -10, 0}, {140, 30, 0}, {60, 30, 0}}}, {}});
   layers.push_back({Role::breakline, {}, {polygon(40, 150, 28, 5, 0.3)}, {}});
+  // A lone point in the bay: every triangle around it is trimmed, and it goes too.
+  layers.push_back({Role::vertices, {{100, 100, 0}}, {}, {}});
   for (const bool on_sides : {false, true})
     for (double max_edge : {0.5, 4.0, 9.0, 14.0, 40.0, 1000.0}) {
     // Points on the sides of the first square and of the ring beyond the hull: those long constraints are
@@ -386,6 +388,8 @@ TEST(Regions, MaxEdgeAloneMatchesTheOracleOnEveryPath) {
     expect_same(oracle(layers, max_edge), m, what);
     EXPECT_EQ(all.triangles.size() - m.triangles.size(), s.triangles_trimmed) << what;
     if (max_edge == 9.0) EXPECT_GT(s.triangles_trimmed, 20u) << what;
+    if (max_edge == 9.0) EXPECT_EQ(s.vertices_removed, 1u) << what;
+    EXPECT_EQ(all.vertices.size() - m.vertices.size(), s.vertices_removed) << what;
     Built b = build(layers);
     PreparedInput p = prepare(b.in);
     const RegionRules rules = region_rules(b.in, b.parts, p, max_edge);
