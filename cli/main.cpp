@@ -149,6 +149,7 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
 int main(int argc, char** argv) {
   MpiSession mpi(&argc, &argv);
   const int code = run_cli(argc, argv, mpi);
-  if (code != 0 && mpi.ranks() > 1) mpi.abort(code);  // the other ranks may be waiting for this one
+  // The other ranks may be waiting for this one, unless they are done.
+  if (code != 0 && mpi.ranks() > 1 && !mpi.others_done()) mpi.abort(code);
   return code;
 }

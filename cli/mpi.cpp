@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <csignal>
 #include <cstring>
 #include <cstdlib>
@@ -70,7 +71,7 @@ void recv_into(Vec& v, int from) {
 }
 
 // --tiles-out's files written by every rank (io/tiles_dir.hpp): rank 0 hands each rank its pieces.
-TilesDirSharing tiles_dir_sharing(int rank, int ranks, const std::string& host) {
+TilesDirSharing tiles_dir_sharing(int rank, int ranks, const std::string& host, std::atomic<bool>& others_done) {
   TilesDirSharing s;
   s.rank = rank;
   s.ranks = ranks;
@@ -101,7 +102,7 @@ TilesDirSharing tiles_dir_sharing(int rank, int ranks, const std::string& host) 
     }
     return got;
   };
-  s.outcomes = [rank, ranks, host](const std::string& mine) {
+  s.outcomes = [rank, ranks, host, &others_done](const std::string& mine) {
     const std::string said = mine.empty() ? "" : "rank " + std::to_string(rank) + " on " + host + ": " + mine;
     std::vector<std::string> all;
     if (rank != 0) {
@@ -110,6 +111,7 @@ TilesDirSharing tiles_dir_sharing(int rank, int ranks, const std::string& host) 
     }
     all.push_back(said);
     for (int r = 1; r < ranks; ++r) recv_into(all.emplace_back(), r);
+    others_done = true;  // every other rank has said its last word and only finalises
     return all;
   };
   return s;
@@ -164,7 +166,7 @@ MpiSession::MpiSession(int* argc, char*** argv) {
     read_share_.all_bytes = [rank](const char* mine, char* all, const std::vector<uint64_t>& sizes) {
       cdtgpu::all_bytes(mine, all, sizes, rank);
     };
-    if (provided >= MPI_THREAD_SERIALIZED) tiles_dir_ = tiles_dir_sharing(rank, ranks, host_);
+    if (provided >= MPI_THREAD_SERIALIZED) tiles_dir_ = tiles_dir_sharing(rank, ranks, host_, others_done_);
   }
 #else
   (void)argc;

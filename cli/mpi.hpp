@@ -14,6 +14,7 @@
 //     ...; if (code && mpi.ranks() > 1) mpi.abort(code);
 //   }
 #pragma once
+#include <atomic>
 #include <string>
 
 #include "core/tiles.hpp"
@@ -43,6 +44,9 @@ class MpiSession {
   const TilesDirSharing* tiles_dir() const { return tiles_dir_.ranks > 1 ? &tiles_dir_ : nullptr; }
   // Ends every rank with `code` (MPI_Abort): the others may be waiting for this one.
   [[noreturn]] void abort(int code) const;
+  // True once no other rank waits for this one (rank 0 has their --tiles-out outcomes): a failure then ends
+  // this rank alone, with MPI_Finalize, which mpirun survives better than an abort.
+  bool others_done() const { return others_done_; }
   // Why this process cannot run (started by mpirun without MPI in the build); empty when it can.
   std::string refusal() const { return refusal_; }
 
@@ -50,6 +54,7 @@ class MpiSession {
   TileSharing sharing_;
   ReadShare read_share_;
   TilesDirSharing tiles_dir_;
+  std::atomic<bool> others_done_{false};
   std::string host_, refusal_;
   int local_rank_ = 0;
   bool initialised_ = false;
