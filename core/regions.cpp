@@ -146,13 +146,13 @@ HalfEdges half_edges(const Mesh& mesh) {
 // Marks the mesh edges along the constraints: kConstrained, plus kRegion for region edges. Without `all`, only
 // the region edges (the nesting levels need no other; trimming needs every constraint): a boundary and a hole
 // over 500K contour segments walk 1K segments, not 500K.
-// mesh_of[i]: the mesh vertex of prepared vertex i; is_input[m]: whether mesh vertex m is one of them (the
-// others are Steiner vertices).
+// mesh_of[i]: the mesh vertex of prepared vertex i; is_input[m], if asked for: whether mesh vertex m is one of
+// them (the others are Steiner vertices).
 void mesh_vertices_of(const Mesh& mesh, const PreparedInput& prepared, BigArray<uint32_t>& mesh_of,
-                      BigArray<uint8_t>& is_input) {
+                      BigArray<uint8_t>* is_input = nullptr) {
   const Points& mv = mesh.vertices;
   const uint32_t V = uint32_t(mv.size());
-  is_input = BigArray<uint8_t>(V, 0);
+  if (is_input) *is_input = BigArray<uint8_t>(V, 0);
   mesh_of = BigArray<uint32_t>(prepared.vertices.size());
   // Both vertex lists are sorted by (x, y): each block finds its first vertex by bisection, then merges.
   std::atomic<size_t> missing{SIZE_MAX};
@@ -170,7 +170,7 @@ void mesh_vertices_of(const Mesh& mesh, const PreparedInput& prepared, BigArray<
                           return;
                         }
                         mesh_of[i] = m;
-                        is_input[m] = 1;  // input vertices are distinct: one writer per byte
+                        if (is_input) (*is_input)[m] = 1;  // input vertices are distinct: one writer per byte
                       }
                     });
   if (missing != SIZE_MAX)
@@ -184,7 +184,7 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
   auto P = [&](uint32_t v) { return P2(mv[v].x, mv[v].y); };
   BigArray<uint8_t> is_input;
   BigArray<uint32_t> mesh_of;
-  mesh_vertices_of(mesh, prepared, mesh_of, is_input);
+  mesh_vertices_of(mesh, prepared, mesh_of, &is_input);
 
   std::atomic<size_t> uncovered{SIZE_MAX};  // the smallest failing constraint, whatever the schedule
   each(prepared.constraints.size(), [&](size_t c) {
@@ -466,8 +466,7 @@ std::optional<std::vector<uint32_t>> trim_long_edges(const Mesh& mesh, const Pre
 
   // The long constraints, each of which must be a mesh edge.
   BigArray<uint32_t> mesh_of;
-  BigArray<uint8_t> is_input;
-  mesh_vertices_of(mesh, prepared, mesh_of, is_input);
+  mesh_vertices_of(mesh, prepared, mesh_of);
   tbb::enumerable_thread_specific<std::vector<uint64_t>> long_constraints;
   std::atomic<bool> split{false};
   each(prepared.constraints.size(), [&](size_t c) {
@@ -504,22 +503,39 @@ std::optional<std::vector<uint32_t>> trim_long_edges(const Mesh& mesh, const Pre
   std::sort(cand.begin(), cand.end());
   cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
   auto index = [&](uint32_t t) { return uint32_t(std::lower_bound(cand.begin(), cand.end(), t) - cand.begin()); };
-  std::vector<uint32_t> parent(cand.size());
-  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-  auto root = [&](uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  for (const auto& [t, u] : joins) {
-    const uint32_t a = root(index(t)), b = root(index(u));
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
+  Forest forest(cand.size());  // over the candidates' indices
+  forest.init(0, cand.size());
+  for (const auto& [t, u] : joins) forest.unite_alone(index(t), index(u));
+  const BigArray<uint32_t> root = std::move(forest).roots();
   std::vector<uint8_t> seeded(cand.size(), 0);
-  for (uint32_t t : seeds) seeded[root(index(t))] = 1;
+  for (uint32_t t : seeds) seeded[root[index(t)]] = 1;
   std::vector<uint32_t> trimmed;
   for (uint32_t i = 0; i < cand.size(); ++i)
-    if (seeded[root(i)]) trimmed.push_back(cand[i]);
+    if (seeded[root[i]]) trimmed.push_back(cand[i]);
   return trimmed;
+}
+
+// The items of `in` but those at the sorted indices `removed`, each through `map`, in order: block by block,
+// each block at its start less the removed before it.
+template <class T, class F>
+RawVector<T> without(const RawVector<T>& in, const std::vector<uint32_t>& removed, F&& map) {
+  constexpr size_t kBlock = 1 << 16;
+  const size_t n = in.size();
+  RawVector<T> out;
+  resize_unwritten(out, n - removed.size());
+  tbb::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t b) {
+    const size_t i0 = b * kBlock, i1 = std::min(n, i0 + kBlock);
+    auto r = std::lower_bound(removed.begin(), removed.end(), uint32_t(i0));
+    size_t at = i0 - size_t(r - removed.begin());
+    for (size_t i = i0; i < i1; ++i) {
+      if (r != removed.end() && *r == i) {
+        ++r;
+        continue;
+      }
+      out[at++] = map(in[i]);
+    }
+  });
+  return out;
 }
 
 // Drops the few triangles `dropped` (in order) and the vertices left in no triangle. Only their corners can be
@@ -549,40 +565,8 @@ uint64_t drop_few(Mesh& mesh, const std::vector<uint32_t>& dropped) {
   auto renumber = [&](uint32_t v) {
     return gone.empty() ? v : v - uint32_t(std::upper_bound(gone.begin(), gone.end(), v) - gone.begin());
   };
-  // Kept triangles, block by block, each block at its offset: its start less the dropped before it.
-  constexpr size_t kBlock = 1 << 16;
-  Triangles kept;
-  resize_unwritten(kept, T - dropped.size());
-  tbb::parallel_for(size_t(0), (T + kBlock - 1) / kBlock, [&](size_t b) {
-    const size_t t0 = b * kBlock, t1 = std::min(T, t0 + kBlock);
-    auto d = std::lower_bound(dropped.begin(), dropped.end(), uint32_t(t0));
-    size_t at = t0 - size_t(d - dropped.begin());
-    for (size_t t = t0; t < t1; ++t) {
-      if (d != dropped.end() && *d == t) {
-        ++d;
-        continue;
-      }
-      kept[at++] = {renumber(ts[t][0]), renumber(ts[t][1]), renumber(ts[t][2])};
-    }
-  });
-  ts = std::move(kept);
-  if (!gone.empty()) {
-    Points vertices;
-    resize_unwritten(vertices, V - gone.size());
-    tbb::parallel_for(size_t(0), (V + kBlock - 1) / kBlock, [&](size_t b) {
-      const size_t v0 = b * kBlock, v1 = std::min(V, v0 + kBlock);
-      auto g = std::lower_bound(gone.begin(), gone.end(), uint32_t(v0));
-      size_t at = v0 - size_t(g - gone.begin());
-      for (size_t v = v0; v < v1; ++v) {
-        if (g != gone.end() && *g == v) {
-          ++g;
-          continue;
-        }
-        vertices[at++] = mesh.vertices[v];
-      }
-    });
-    mesh.vertices = std::move(vertices);
-  }
+  ts = without(ts, dropped, [&](const Triangle& t) { return Triangle{renumber(t[0]), renumber(t[1]), renumber(t[2])}; });
+  if (!gone.empty()) mesh.vertices = without(mesh.vertices, gone, [](const Point3& p) { return p; });
   return gone.size();
 }
 
