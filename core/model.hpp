@@ -46,6 +46,17 @@ struct PointClassCounts {
   std::map<int, Count> by_class;
   uint64_t withheld = 0, other_returns = 0, other_classes = 0;
   bool any = false;  // some LAS input was read
+
+  void add(const PointClassCounts& o) {
+    any = any || o.any;
+    withheld += o.withheld;
+    other_returns += o.other_returns;
+    other_classes += o.other_classes;
+    for (const auto& [cls, c] : o.by_class) {
+      by_class[cls].kept += c.kept;
+      by_class[cls].skipped += c.skipped;
+    }
+  }
 };
 
 struct InputSet {

@@ -333,17 +333,13 @@ void read_las(const std::string& path, const LasFilter& filter, InputSet& in, co
     }
   }
   PointClassCounts mine;  // this input's, for the message when nothing passes
-  for (PointClassCounts* pc : {&mine, &in.point_classes}) {
-    pc->any = true;
-    pc->withheld += total.withheld;
-    pc->other_returns += total.other_returns;
-    pc->other_classes += total.other_classes;
-    for (int cls = 0; cls < 256; ++cls)
-      if (total.kept[cls] + total.skipped[cls]) {
-        pc->by_class[cls].kept += total.kept[cls];
-        pc->by_class[cls].skipped += total.skipped[cls];
-      }
-  }
+  mine.any = true;
+  mine.withheld = total.withheld;
+  mine.other_returns = total.other_returns;
+  mine.other_classes = total.other_classes;
+  for (int cls = 0; cls < 256; ++cls)
+    if (total.kept[cls] + total.skipped[cls]) mine.by_class[cls] = {total.kept[cls], total.skipped[cls]};
+  in.point_classes.add(mine);
   if (at.back() == at.front() && !share) throw InputError(path, 0, las_nothing_kept(mine));
 
   // Pass 2: the kept points, in file order, each range into its own slice.

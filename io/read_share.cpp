@@ -146,18 +146,9 @@ PointClassCounts join_shares(InputSet& piece, const ReadShare& share, InputSet& 
   PointClassCounts input_classes;
   for (const InputSet& part : pieces) {
     if (in.source_crs_wkt.empty()) in.source_crs_wkt = part.source_crs_wkt;
-    for (PointClassCounts* to : {&input_classes, &in.point_classes}) {
-      const PointClassCounts& pc = part.point_classes;
-      to->any = to->any || pc.any;
-      to->withheld += pc.withheld;
-      to->other_returns += pc.other_returns;
-      to->other_classes += pc.other_classes;
-      for (const auto& [cls, count] : pc.by_class) {
-        to->by_class[cls].kept += count.kept;
-        to->by_class[cls].skipped += count.skipped;
-      }
-    }
+    input_classes.add(part.point_classes);
   }
+  in.point_classes.add(input_classes);
   append_parts(in, pieces);  // lines and repairs
   return input_classes;
 }
