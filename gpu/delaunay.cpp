@@ -25,6 +25,18 @@ using namespace layout;
 
 namespace {
 
+// The build's own buffers that a caller's cache keeps between builds (tiles): taken by kept(), given back in
+// number_back under the same keys.
+constexpr const char* kPtsKey = "dt pts";
+constexpr const char* kPermKey = "dt perm";
+constexpr const char* kReduceKey = "dt reduce";
+constexpr const char* kGrantedKey = "dt granted";
+constexpr const char* kGrantedAtKey = "dt granted positions";
+constexpr const char* kRanksKey = "dt ranks";
+constexpr const char* kCountersKey = "dt counters";
+constexpr const char* kArgsKey = "dt args";
+constexpr const char* kScanSumsKey = "dt scan sums";
+
 uint64_t groups(uint64_t n) { return (n + DT_WG - 1) / DT_WG; }
 
 uint32_t slot_capacity(uint32_t n) { return 2 * n - 2; }  // 2(n + 1) - 4: a sphere with n + 1 vertices
@@ -295,7 +307,7 @@ GpuTriangulation DelaunayBuilder::build(Buffer points, uint32_t n, DelaunayStats
 // triangles.
 bool DelaunayBuilder::first_triangle(State& st) const {
   const uint32_t n = st.n;
-  st.reduce = kept(st, "dt reduce", 4 * sizeof(uint64_t));
+  st.reduce = kept(st, kReduceKey, 4 * sizeof(uint64_t));
   st.readback = create_readback(ctx_, std::max<size_t>(DT_COUNTERS * 4, 64), &st.host);
   st.begin("start");
   st.rec.fill(st.reduce, 0xFFFFFFFFu);
@@ -377,10 +389,8 @@ void DelaunayBuilder::start(State& st) const {
                     cache ? SortScratch{&sort_keys, &sort_payload} : SortScratch{});
   // Not from the cache: kept there, they would add 20 B/pt to the later stages' peak (the constraint
   // inserter, the canonical sort).
-  st.pts = st.keep ? st.keep->take(ctx_, "dt pts", uint64_t(n) * 16, "dt points (build numbering)")
-                   : create_buffer(ctx_, uint64_t(n) * 16, "dt points (build numbering)");
-  st.perm = st.keep ? st.keep->take(ctx_, "dt perm", uint64_t(n) * 4, "dt canonical ids")
-                    : create_buffer(ctx_, uint64_t(n) * 4, "dt canonical ids");
+  st.pts = kept(st, kPtsKey, uint64_t(n) * 16, "dt points (build numbering)");
+  st.perm = kept(st, kPermKey, uint64_t(n) * 4, "dt canonical ids");
   st.rec.dispatch_groups(renumber_, {st.tri.points, st.list, st.loc, st.pts, st.perm, st.tri.verts}, init,
                          groups(n));
   st.end();
@@ -394,12 +404,12 @@ void DelaunayBuilder::start(State& st) const {
   st.partner = scratch(kSlots4[0], uint64_t(slots) * 4, "dt partner");
   st.flip[1] = scratch(kSlots4[2], uint64_t(slots) * 4, "dt flip list 1");
   st.bids = scratch(kSlots4[3], uint64_t(slots) * 4, "dt bid list");
-  st.granted = kept(st, "dt granted", 2 * align_up(rank_words(slots) * 4));
-  st.granted_at = kept(st, "dt granted positions", 2 * align_up(rank_words(n) * 4));
-  st.ranks = kept(st, "dt ranks", ranks_words(n) * 4);
-  st.counters = kept(st, "dt counters", DT_COUNTERS * 4);
-  st.args = kept(st, "dt args", DT_ARGS_WORDS * 4);
-  st.scan_sums = kept(st, "dt scan sums", scan_scratch_bytes(slots));
+  st.granted = kept(st, kGrantedKey, 2 * align_up(rank_words(slots) * 4));
+  st.granted_at = kept(st, kGrantedAtKey, 2 * align_up(rank_words(n) * 4));
+  st.ranks = kept(st, kRanksKey, ranks_words(n) * 4);
+  st.counters = kept(st, kCountersKey, DT_COUNTERS * 4);
+  st.args = kept(st, kArgsKey, DT_ARGS_WORDS * 4);
+  st.scan_sums = kept(st, kScanSumsKey, scan_scratch_bytes(slots));
   st.list_len = n;
   st.left = n - 3;
   st.used = 4;
@@ -665,23 +675,22 @@ void DelaunayBuilder::number_back(State& st) const {
                          groups(std::max<uint64_t>(n, uint64_t(st.used) * 3)));
   st.end();
   submit(st, false);
-  if (st.keep) {
-    st.keep->give("dt pts", std::move(st.pts));
-    st.keep->give("dt perm", std::move(st.perm));
-    // The build's own small buffers too: a tile allocated and freed them all (the device's allocations
-    // serialise between devices: 14 s of 34 at 1B points on two).
-    for (auto& [key, b] : {std::pair<const char*, Buffer*>{"dt granted", &st.granted}, {"dt granted positions", &st.granted_at},
-                           {"dt ranks", &st.ranks}, {"dt counters", &st.counters}, {"dt args", &st.args},
-                           {"dt scan sums", &st.scan_sums}, {"dt reduce", &st.reduce}})
+  // The build's own buffers, small ones too: a tile allocated and freed them all (the device's allocations
+  // serialise between devices: 14 s of 34 at 1B points on two).
+  if (st.keep)
+    for (auto& [key, b] : {std::pair<const char*, Buffer*>{kPtsKey, &st.pts}, {kPermKey, &st.perm},
+                           {kGrantedKey, &st.granted}, {kGrantedAtKey, &st.granted_at}, {kRanksKey, &st.ranks},
+                           {kCountersKey, &st.counters}, {kArgsKey, &st.args}, {kScanSumsKey, &st.scan_sums},
+                           {kReduceKey, &st.reduce}})
       if (b->buffer) st.keep->give(key, std::move(*b));
-  }
   st.pts = Buffer{};
   st.perm = Buffer{};
 }
 
 // A buffer of the build's own from the caller's cache (tiles: kept from one tile to the next), or made.
-Buffer DelaunayBuilder::kept(State& st, const char* key, uint64_t bytes) const {
-  return st.keep ? st.keep->take(ctx_, key, bytes, key) : create_buffer(ctx_, bytes, key);
+Buffer DelaunayBuilder::kept(State& st, const char* key, uint64_t bytes, const char* name) const {
+  if (!name) name = key;
+  return st.keep ? st.keep->take(ctx_, key, bytes, name) : create_buffer(ctx_, bytes, name);
 }
 
 // A scratch buffer back to the cache under `key`, or freed.

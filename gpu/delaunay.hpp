@@ -134,7 +134,7 @@ class DelaunayBuilder {
   void number_back(State& st) const;
   void submit(State& st, bool counters) const;
   Buffer scratch(const char* key, uint64_t bytes, const char* name) const;
-  Buffer kept(State& st, const char* key, uint64_t bytes) const;
+  Buffer kept(State& st, const char* key, uint64_t bytes, const char* name = nullptr) const;
   void release(Buffer& b, const char* key) const;
 
   const Context& ctx_;
