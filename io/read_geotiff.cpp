@@ -23,6 +23,7 @@
 #include "core/repair.hpp"
 #include "core/big_array.hpp"
 #include "io/geotiff.hpp"
+#include "io/geotiff_lib.hpp"
 #include "io/mapped_files.hpp"
 #include "io/tiff_memory.hpp"
 
@@ -201,7 +202,7 @@ int utm_code(int projection, int datum) {
 
 int key(GTIF* gt, geokey_t k) {
   unsigned short v = 0;
-  return GTIFKeyGetSHORT(gt, k, &v, 0, 1) == 1 ? int(v) : 0;
+  return tiff::geotiff_lib().key_get_short(gt, k, &v, 0, 1) == 1 ? int(v) : 0;
 }
 
 // Raster type and CRS from the GeoKeys (true: PixelIsPoint). The CRS becomes source_crs_wkt when no input
@@ -216,13 +217,13 @@ bool read_geokeys(tiff::Handle& h, const std::string& name, InputSet& in) {
   }
   GTIF* gt = tiff::geokeys(h);
   if (!gt || !h.message().empty()) {
-    if (gt) GTIFFree(gt);
+    if (gt) tiff::geotiff_lib().free(gt);
     throw InputError(name, 0, "its GeoKeys cannot be read: " + h.message());
   }
   const int raster = key(gt, GTRasterTypeGeoKey), model = key(gt, GTModelTypeGeoKey);
   const int pcs = key(gt, ProjectedCSTypeGeoKey), gcs = key(gt, GeographicTypeGeoKey);
   const int datum = key(gt, GeogGeodeticDatumGeoKey), projection = key(gt, ProjectionGeoKey);
-  GTIFFree(gt);
+  tiff::geotiff_lib().free(gt);
   std::string wkt;
   if (model == ModelTypeProjected) {
     const int code =

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "io/geotiff_lib.hpp"
 
 namespace cdtgpu::tiff {
 
@@ -97,7 +98,7 @@ void add_gdal_fields(TIFF* tif) {
 void init() {
   static std::once_flag once;
   std::call_once(once, [] {
-    XTIFFInitialize();
+    geotiff_lib().initialize();
     g_next_extender = TIFFSetTagExtender(add_gdal_fields);
     TIFFSetErrorHandler(nullptr);
     TIFFSetWarningHandler(nullptr);
@@ -118,7 +119,7 @@ TIFF* open(const char* name, const char* mode, State* s, uint64_t max_alloc) {
 
 void geotiff_message(GTIF* gt, int level, const char* fmt, ...) {
   if (level != LIBGEOTIFF_ERROR) return;
-  auto* s = static_cast<State*>(GTIFGetUserData(gt));
+  auto* s = static_cast<State*>(geotiff_lib().user_data(gt));
   va_list ap;
   va_start(ap, fmt);
   s->message = "GeoKeys: " + format(fmt, ap);
@@ -172,6 +173,6 @@ Handle open_write(bool bigtiff) {
   return h;
 }
 
-GTIF* geokeys(Handle& h) { return GTIFNewEx(h.tif_, geotiff_message, h.state_.get()); }
+GTIF* geokeys(Handle& h) { return geotiff_lib().new_ex(h.tif_, geotiff_message, h.state_.get()); }
 
 }  // namespace cdtgpu::tiff

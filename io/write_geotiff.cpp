@@ -15,6 +15,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/geotiff.hpp"
+#include "io/geotiff_lib.hpp"
 #include "io/gis_writers.hpp"
 #include "io/tiff_memory.hpp"
 
@@ -72,17 +73,18 @@ std::vector<std::vector<unsigned char>> compress_tiles(const Raster& r, uint32_t
 
 void set_geokeys(tiff::Handle& h, const Crs& crs) {
   GTIF* gt = tiff::geokeys(h);
+  const tiff::GeoTiffLib& g = tiff::geotiff_lib();
   if (!gt) throw std::runtime_error("libgeotiff: " + h.message());
-  GTIFKeySet(gt, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsPoint);
+  g.key_set(gt, GTRasterTypeGeoKey, TYPE_SHORT, 1, RasterPixelIsPoint);
   if (crs.epsg) {
-    GTIFKeySet(gt, GTModelTypeGeoKey, TYPE_SHORT, 1, ModelTypeProjected);
-    GTIFKeySet(gt, ProjectedCSTypeGeoKey, TYPE_SHORT, 1, crs.epsg);
-    GTIFKeySet(gt, ProjLinearUnitsGeoKey, TYPE_SHORT, 1, Linear_Meter);
+    g.key_set(gt, GTModelTypeGeoKey, TYPE_SHORT, 1, ModelTypeProjected);
+    g.key_set(gt, ProjectedCSTypeGeoKey, TYPE_SHORT, 1, crs.epsg);
+    g.key_set(gt, ProjLinearUnitsGeoKey, TYPE_SHORT, 1, Linear_Meter);
   }
   if (!crs.name.empty() && crs.name != "none")
-    GTIFKeySet(gt, GTCitationGeoKey, TYPE_ASCII, 0, crs.name.c_str());
-  const bool ok = GTIFWriteKeys(gt);
-  GTIFFree(gt);
+    g.key_set(gt, GTCitationGeoKey, TYPE_ASCII, 0, crs.name.c_str());
+  const bool ok = g.write_keys(gt);
+  g.free(gt);
   if (!ok) throw std::runtime_error("libgeotiff cannot write the GeoKeys: " + h.message());
 }
 
