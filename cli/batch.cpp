@@ -172,6 +172,7 @@ int run_batch(const BatchOptions& options) {
         if (!b->line.error.empty()) throw UsageError(b->line.error);
         job.options = parse_job_words(b->line.words, options.defaults);
         job.stage_progress = false;
+        job.keep_device_buffers = true;
         if (!options.stats_dir.empty())
           job.stats_copy = (fs::path(options.stats_dir) / (std::to_string(b->line.number) + ".json")).string();
         if (options.jobs == "-")
@@ -231,6 +232,7 @@ int run_batch(const BatchOptions& options) {
     to_writer.push(std::move(b));
   }
   to_writer.push(nullptr);
+  gpus.close_in_background();  // beside the last job's writing: the reader is done with the device too
   reader.join();
   writer.join();
   progress.stop();

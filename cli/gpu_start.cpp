@@ -101,11 +101,31 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
 }
 
 GpuStart::~GpuStart() {
+  if (closing_.joinable()) closing_.join();
   if (pending_.valid()) pending_.wait();
   if (ready_) ready_->cdt.reset();  // its passes before the context
 }
 
+void GpuStart::close_in_background() {
+  if (closing_.joinable()) return;
+  closing_ = std::thread([this] {
+    try {
+      if (pending_.valid()) ready_ = pending_.get();
+    } catch (...) {  // a start that failed has nothing to close
+      return;
+    }
+    if (!ready_) return;
+    gpu::store_pipeline_cache(ready_->ctx);
+    ready_->cdt.reset();  // its passes before the context
+    ready_.reset();
+  });
+}
+
 void GpuStart::leave_for_exit() {
+  if (closing_.joinable()) {
+    closing_.join();
+    return;
+  }
   if (pending_.valid()) {
     try {
       ready_ = pending_.get();
@@ -143,6 +163,11 @@ GpuStart& GpuStarts::start(const std::string& device, bool hardware_only, uint64
 void GpuStarts::leave_for_exit() {
   std::lock_guard lock(mutex_);
   for (auto& [key, s] : starts_) s->leave_for_exit();
+}
+
+void GpuStarts::close_in_background() {
+  std::lock_guard lock(mutex_);
+  for (auto& [key, s] : starts_) s->close_in_background();
 }
 
 }  // namespace cdtgpu

@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "gpu/cdt_pipeline.hpp"
@@ -45,6 +46,11 @@ class GpuStart {
   // For a process about to exit: saves the pipeline cache and leaves the device, its buffers and pipelines to
   // the operating system. Tearing them down took ~75 ms on the H100 machine, as long as a 2M-point CDT.
   void leave_for_exit();
+  // For a process whose device work is done: saves the pipeline cache and tears the device down on a thread of
+  // its own, beside the writing of the outputs; leave_for_exit then waits for it. No call to cdt() or
+  // context() may follow. Left to the operating system, the teardown made the exit of a 2M-point run 45 ms
+  // longer on the H100 machine (65 ms against 20 for the CGAL backend).
+  void close_in_background();
   // Host milliseconds of the start's parts: instance and device, queueing every pipeline, staging memory.
   double context_ms = 0, pipelines_ms = 0, staging_ms = 0;
 
@@ -56,6 +62,7 @@ class GpuStart {
   std::future<std::unique_ptr<Ready>> pending_;
   std::unique_ptr<Ready> ready_;
   std::exception_ptr failed_;
+  std::thread closing_;
 };
 
 // The GPU starts of one process, one per (device, hardware_only), each made when first asked for and kept for
@@ -69,6 +76,8 @@ class GpuStarts {
   GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points);
   // GpuStart::leave_for_exit for each.
   void leave_for_exit();
+  // GpuStart::close_in_background for each.
+  void close_in_background();
 
  private:
   std::mutex mutex_;

@@ -56,6 +56,7 @@ struct Job {
   TriangulateOptions options;
   bool stage_progress = true;  // a progress line per long stage on a terminal (a batch draws its own)
   std::string stats_copy;      // a second --stats file (batch --stats-dir); empty: none
+  bool keep_device_buffers = false;  // a batch: the device's buffers stay for the next job (gpu::GpuCdt)
 
   // check_job
   WriteOptions write;                   // with the format decided

@@ -31,7 +31,7 @@ int run_triangulate(const TriangulateOptions& options) {
     return 0;
   }
   apply_job_regions(job);
-  derive_and_write_outputs(job);
+  derive_and_write_outputs(job, [&] { gpus.close_in_background(); });
   count_results(job);
   release_job(job, &gpus);
   write_job_stats(job);

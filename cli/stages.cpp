@@ -148,6 +148,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
   RunStats& stats = job.stats;
   GpuStart& start = *job.start;
   gpu::GpuCdt& cdt = start.cdt();
+  cdt.keep_buffers = job.keep_device_buffers;
   cdt.delaunay().initial_dt = job.options.initial_dt == "voronoi" ? gpu::DelaunayBuilder::Start::voronoi
                                                                   : gpu::DelaunayBuilder::Start::insertion;
   stats.stage_ms.emplace_back("gpu start: context (own thread)", start.context_ms);
@@ -500,9 +501,10 @@ void write_outputs(Job& job) {
   });
 }
 
-void derive_and_write_outputs(Job& job) {
+void derive_and_write_outputs(Job& job, const std::function<void()>& device_done) {
   const TriangulateOptions& options = job.options;
   if (options.grid_out.empty() && options.contours_out.empty() && options.preview.empty()) {
+    if (device_done) device_done();
     write_outputs(job);
     return;
   }
@@ -523,6 +525,7 @@ void derive_and_write_outputs(Job& job) {
     mesh.wait();
     throw;
   }
+  if (device_done) device_done();
   timed(job, "write", [&] {
     const uint64_t tile_files = mesh.get();
     if (!options.tiles_out.empty()) job.stats.counts["tile_files"] = tile_files;

@@ -22,6 +22,8 @@
 // InputError / UsageError, a device that fails a forced GPU run throws gpu::DeviceError; auto falls back to the
 // CPU with the same bytes.
 #pragma once
+#include <functional>
+
 #include "cli/gpu_start.hpp"
 #include "cli/job.hpp"
 
@@ -37,7 +39,8 @@ void apply_job_regions(Job& job);
 void derive_outputs(Job& job);
 void write_outputs(Job& job);
 // A single run's derive_outputs + write_outputs, the mesh written on a thread of its own meanwhile.
-void derive_and_write_outputs(Job& job);
+// `device_done` is called once the device has no more work (before the writing, or beside it).
+void derive_and_write_outputs(Job& job, const std::function<void()>& device_done = {});
 void count_results(Job& job);
 // Frees the job's data (timed as "release"); `exiting`: the process ends after this job, so the GPU's
 // pipelines are saved and the device is left to the operating system (GpuStart::leave_for_exit).

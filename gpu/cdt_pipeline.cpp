@@ -133,12 +133,14 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   const bool resolved = resolving.wait_for(std::chrono::seconds(0)) == std::future_status::ready ||
                         (progress && progress->crossings.load() == 1);
   ResolvedInput in = resolved ? wait() : ResolvedInput{};
-  GpuTriangulation tri = delaunay_of(resolved ? in.vertices : prepared.vertices, {}, s);
+  BufferCache* kept = keep_buffers ? &kept_ : nullptr;
+  GpuTriangulation tri = delaunay_of(resolved ? in.vertices : prepared.vertices, {}, s, kept);
   if (!resolved) {
     in = wait();
     if (in.vertices.size() != prepared.vertices.size()) {  // resolve only ever adds vertices
+      if (kept) keep(tri);
       tri = GpuTriangulation();
-      tri = delaunay_of(in.vertices, {}, s);
+      tri = delaunay_of(in.vertices, {}, s, kept);
       s.delaunay_built_twice = true;
     }
   }
@@ -148,21 +150,29 @@ CdtResult GpuCdt::triangulate(const PreparedInput& prepared, std::future<Resolve
   result.steiner_points = in.steiner_points;
   result.mesh.vertices = std::move(in.vertices);
 
-  constrain(tri, in.constraints, s);
+  constrain(tri, in.constraints, s, keep_buffers);
   result.mesh.triangles = download_sorted(tri, s, triangles.get());
+  if (kept) keep(tri);
   s.wall_total_ms = ms_since(t_all);
   return result;
 }
 
+void GpuCdt::keep(GpuTriangulation& tri) const {
+  kept_.give("points", std::move(tri.points));
+  kept_.give("tri_verts", std::move(tri.verts));
+  kept_.give("tri_nbrs", std::move(tri.nbrs));
+  if (tri.vertex_slots.buffer) cache_.give(kPoints4[0], std::move(tri.vertex_slots));  // the build's loc
+}
+
 void GpuCdt::constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,
-                       bool tiles) const {
+                       bool keep) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
   //    constraints: the Delaunay triangulation is the answer.
   auto t = Clock::now();
   if (tri.num_slots > 0 && !constraints.empty()) {
     ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, constraint_options);
-    if (tiles) inserter_.recycle(std::move(edges));  // its flags, for the next tile
+    if (keep) inserter_.recycle(std::move(edges));  // its flags, for the next tile or run
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
   }
@@ -226,9 +236,9 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
     std::shared_ptr<void> own;
     ~Restore() { ctx.staging = std::move(own); }
   } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
-  cache_.grow_by = tile_cache_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
-  GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &tile_cache_, &staging);
-  constrain(tri, job.segments, s, /*tiles=*/true);
+  cache_.grow_by = kept_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
+  GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &kept_, &staging);
+  constrain(tri, job.segments, s, /*keep=*/true);
   auto t = Clock::now();
   double ms = 0;
   f.border = finals_.mark(tri, job.rect, cache_, &ms);
@@ -239,10 +249,7 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
   add_gpu(s, "", {{"canonical order", ms}});
   copy_to_staging(ctx_, tri.nbrs, staging, uint64_t(count) * sizeof(Triangle));
   record_stage(s, "download", t);
-  tile_cache_.give("points", std::move(tri.points));
-  tile_cache_.give("tri_verts", std::move(tri.verts));
-  tile_cache_.give("tri_nbrs", std::move(tri.nbrs));
-  if (tri.vertex_slots.buffer) cache_.give(kPoints4[0], std::move(tri.vertex_slots));  // the build's loc
+  keep(tri);
   s.wall_total_ms = ms_since(t_all);
   return count;
 }

@@ -1,8 +1,11 @@
 // Instance, device choice and logical device; see context.hpp.
 #include "gpu/context.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
@@ -383,8 +386,15 @@ uint64_t device_memory_limit_from_env() {
 Context create_context(const ContextOptions& options) {
   Context ctx;
   ctx.memory_budget->limit = device_memory_limit_from_env();
+  // Steps of the start in -v: it takes ~170 ms on the H100 machine, most of a small run.
+  auto t = std::chrono::steady_clock::now();
+  auto step = [&t](const char* what) {
+    const auto now = std::chrono::steady_clock::now();
+    spdlog::debug("gpu start: {}: {:.1f} ms", what, std::chrono::duration<double, std::milli>(now - t).count());
+    t = now;
+  };
   bool want = options.validation || env_validation();
-  bool have = validation_layer_available();
+  bool have = want && validation_layer_available();  // the loader reads every layer's manifest for it
   if (env_validation() && !have)
     throw DeviceError("CDTGPU_VALIDATION=1 but the layer VK_LAYER_KHRONOS_validation is not installed");
   ctx.validation = want && have;
@@ -398,6 +408,7 @@ Context create_context(const ContextOptions& options) {
   mi.pUserData = ctx.messages_.get();
 
   ctx.instance = make_instance(ctx.validation, &mi);
+  step("instance");
   if (ctx.validation) {
     auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
         vkGetInstanceProcAddr(ctx.instance, "vkCreateDebugUtilsMessengerEXT"));
@@ -416,6 +427,7 @@ Context create_context(const ContextOptions& options) {
   ctx.queue_family = static_cast<uint32_t>(compute_family(ctx.physical, nullptr));
   if (options.hardware_only && ctx.info.type == "cpu")
     throw DeviceError(ctx.info.name + " is a CPU Vulkan driver, not a GPU");
+  step("physical devices");
 
   float priority = 1.0f;
   VkDeviceQueueCreateInfo qi{};
@@ -452,6 +464,7 @@ Context create_context(const ContextOptions& options) {
   di.enabledExtensionCount = ctx.shader_stats ? 2 : 1;
   di.ppEnabledExtensionNames = exts;
   VK_CHECK(vkCreateDevice(ctx.physical, &di, nullptr, &ctx.device));
+  step("device");
   vkGetDeviceQueue(ctx.device, ctx.queue_family, 0, &ctx.queue);
   ctx.cmd_push_descriptor_set =
       reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(ctx.device, "vkCmdPushDescriptorSetKHR"));
@@ -478,6 +491,7 @@ Context create_context(const ContextOptions& options) {
     ctx.pipeline_cache_loaded = seed.size();
     ctx.pipeline_cache_hash = std::hash<std::string_view>{}({seed.data(), seed.size()});
   }
+  step("command pool and pipeline cache");
   return ctx;
 }
 

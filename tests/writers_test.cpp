@@ -295,20 +295,43 @@ TEST_F(WritersTest, AWriterThatThrowsMidwayLeavesNoFileAndKeepsTheOldOne) {
 }
 
 TEST_F(WritersTest, ReplacedFilesAreReleased) {
-  // The file a write replaces is closed on a thread of its own after the rename (its pages and blocks are
-  // freed there): none of its descriptors may stay open, and every name holds its last contents.
+  // The file a write replaces is handed to a short-lived child (/bin/true) that frees its pages and blocks as
+  // it exits: none of its descriptors may stay open here, every name holds its last contents, and the
+  // children are reaped as writes go on (not one zombie per replaced file).
   auto descriptors = [] {
     return size_t(std::distance(fs::directory_iterator("/proc/self/fd"), fs::directory_iterator{}));
+  };
+  auto children = [] {  // processes whose parent is this one, zombies included
+    size_t n = 0;
+    for (const auto& e : fs::directory_iterator("/proc")) {
+      const std::string name = e.path().filename().string();
+      if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+      std::ifstream stat(e.path() / "stat");
+      std::string line;
+      std::getline(stat, line);
+      const size_t close = line.rfind(')');
+      if (close == std::string::npos) continue;
+      std::istringstream rest(line.substr(close + 2));
+      std::string state;
+      long ppid = 0;
+      rest >> state >> ppid;
+      n += ppid == long(::getpid());
+    }
+    return n;
   };
   const Mesh mesh = random_mesh(20000, 5);
   const WriteOptions ply{MeshFormat::Ply, false, false};
   write_mesh_file(mesh, Crs{}, ply, path("a.ply"));
   const std::string first = slurp(path("a.ply"));
   const size_t before = descriptors();
-  for (int i = 0; i < 20; ++i) write_mesh_file(mesh, Crs{}, ply, path("a.ply"));
-  for (int wait = 0; wait < 500 && descriptors() > before; ++wait)
+  for (int i = 0; i < 20; ++i) {
+    write_mesh_file(mesh, Crs{}, ply, path("a.ply"));
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // time for the last child to exit
+  }
+  for (int wait = 0; wait < 500 && descriptors() > before; ++wait)  // without /bin/true: a thread closes it
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   EXPECT_EQ(descriptors(), before);
+  if (fs::exists("/bin/true")) EXPECT_LE(children(), 2u);
   EXPECT_EQ(slurp(path("a.ply")), first);
   EXPECT_EQ(entries(), std::vector<std::string>{"a.ply"});
 }
