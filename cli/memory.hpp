@@ -11,8 +11,9 @@
 namespace cdtgpu {
 
 // Resident bytes a `cdtgpu triangulate` run holds at its peak per input vertex, the largest measured (H100
-// machine, 16M points + 4M segments, 20M input vertices): GPU 177, GPU tiles 178, CGAL tiles 202; with regions
-// or --max-edge (GPU, --max-edge 20) 237 (docs/performance.md, "Host memory").
+// machine, 16M points + 4M segments, 20M input vertices, 2026-11-27, since the input is dropped after prepare):
+// GPU 158, GPU tiles 179, CGAL tiles 190, GPU --max-edge 20 158; boundaries and holes keep their rings, and were
+// 237 before (docs/performance.md, "Host memory").
 constexpr uint64_t kHostBytesPerPoint = 205;
 constexpr uint64_t kHostBytesPerPointRegions = 240;
 

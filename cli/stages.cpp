@@ -360,6 +360,13 @@ void prepare_job(Job& job) {
   add_point_class_counts(job.in.point_classes, job.stats);
   job.stats.crs = job.crs.name;
   job.stats.crs_epsg = job.crs.epsg;
+
+  // Later stages read only the rings of boundary and hole inputs (region_rules): the rest of what was read
+  // goes now. Kept to the end, it was a quarter of a large run's peak (80M vertices in tiles: 3.0 of 13 GB).
+  job.in.points = Points{};
+  const bool rings = std::any_of(job.parts.begin(), job.parts.end(),
+                                 [](const InputPart& p) { return p.role == Role::boundary || p.role == Role::hole; });
+  if (!rings) job.in.lines = std::vector<Polyline>{};
 }
 
 // The GPU is waited for as late as possible, so that its start (~160 ms on the H100 machine) overlaps the CPU's
@@ -387,7 +394,7 @@ void triangulate_job(Job& job) {
           job.start->cdt();
           job.gpu = true;
           if (job.options.backend == "auto")
-            job.backend_reason = std::to_string(point_count(job.in)) + " input points on a GPU";
+            job.backend_reason = std::to_string(job.prepared.input_points) + " input points on a GPU";
         } catch (const gpu::DeviceError& e) {
           if (job.options.backend == "gpu") throw;
           job.backend_reason = std::string("no GPU to use (") + e.what() + ")";
