@@ -85,17 +85,16 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
     gpu::ContextOptions options;
     options.device = device;
     options.hardware_only = hardware_only;
+    // The download of ~2n triangles of 12 bytes is the largest copy; an eighth more for the estimate's error.
+    // At most 1 GiB: beyond that the copies grow it themselves.
+    options.staging_bytes = std::min<uint64_t>(expected_points * 27, uint64_t(1) << 30);
+    options.staging_ms = &staging_ms;
     auto t = Clock::now();
     r->ctx = gpu::create_context(options);
     context_ms = ms(t);
     t = Clock::now();
     r->cdt = std::make_unique<gpu::GpuCdt>(r->ctx);  // queues every pipeline's compile
     pipelines_ms = ms(t);
-    t = Clock::now();
-    // The download of ~2n triangles of 12 bytes is the largest copy; an eighth more for the estimate's error.
-    // At most 1 GiB: beyond that the copies grow it themselves.
-    gpu::reserve_staging(r->ctx, std::min<uint64_t>(expected_points * 27, uint64_t(1) << 30));
-    staging_ms = ms(t);
     return r;
   });
 }

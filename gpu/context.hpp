@@ -51,6 +51,10 @@ struct ContextOptions {
   // Throw DeviceError instead of creating a device on a CPU Vulkan driver (lavapipe): `--backend auto` runs the
   // CGAL backend there, which is faster.
   bool hardware_only = false;
+  // Host-visible staging memory to reserve for upload() and download() (gpu/buffers.hpp), pinned on a thread
+  // of its own beside the command pool and the pipeline cache; its milliseconds into *staging_ms when given.
+  uint64_t staging_bytes = 0;
+  double* staging_ms = nullptr;
 };
 
 // Lists every physical device the loader sees (creates and destroys its own instance).
