@@ -34,6 +34,7 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
     spdlog::error("{}", mpi.refusal());
     return 2;
   }
+  if (!mpi.cpu_note().empty()) spdlog::warn("{}", mpi.cpu_note());
 
   CLI::App app{"cdtgpu: constrained Delaunay triangulation (TIN) of GIS contours, DEM points and footprints"};
   app.require_subcommand(1);

@@ -1,5 +1,6 @@
 #include "cli/mpi.hpp"
 
+#include <sched.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -131,6 +132,23 @@ void all_bytes(const char* mine, char* all, const std::vector<uint64_t>& sizes, 
 }
 #endif
 
+// The launcher's binding against this rank's share of the host: sched_getaffinity's CPUs against the host's
+// online CPUs (CDTGPU_HOST_CPUS stands for them in tests) over the ranks on the host.
+[[maybe_unused]] std::string binding_note(int local_ranks) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return "";
+  const long bound = CPU_COUNT(&set);
+  long host = sysconf(_SC_NPROCESSORS_ONLN);
+  if (const char* v = std::getenv("CDTGPU_HOST_CPUS"); v && *v) host = std::atol(v);
+  const long share = host / std::max(1, local_ranks);
+  if (bound * 2 > share) return "";
+  return "this rank may use " + std::to_string(bound) + " of the host's " + std::to_string(host) + " CPUs (" +
+         std::to_string(local_ranks) + " ranks on it could use " + std::to_string(share) +
+         " each): the launcher bound it. Every stage runs on those CPUs only; give mpirun --bind-to none "
+         "(Open MPI binds each rank to one core when -n is 2 or less), or srun --cpus-per-task";
+}
+
 }  // namespace
 
 MpiSession::MpiSession(int* argc, char*** argv) {
@@ -167,6 +185,13 @@ MpiSession::MpiSession(int* argc, char*** argv) {
       cdtgpu::all_bytes(mine, all, sizes, rank);
     };
     if (provided >= MPI_THREAD_SERIALIZED) tiles_dir_ = tiles_dir_sharing(rank, ranks, host_, others_done_);
+    MPI_Comm here;
+    int local = 1;
+    if (MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank, MPI_INFO_NULL, &here) == MPI_SUCCESS) {
+      MPI_Comm_size(here, &local);
+      MPI_Comm_free(&here);
+    }
+    cpu_note_ = binding_note(local);
   }
 #else
   (void)argc;

@@ -49,13 +49,16 @@ class MpiSession {
   bool others_done() const { return others_done_; }
   // Why this process cannot run (started by mpirun without MPI in the build); empty when it can.
   std::string refusal() const { return refusal_; }
+  // A warning when the launcher bound this rank to far fewer CPUs than its share of the host's (Open MPI
+  // binds each rank to one core when -n is 2 or less: every stage then ran 8-15x slower); empty otherwise.
+  std::string cpu_note() const { return cpu_note_; }
 
  private:
   TileSharing sharing_;
   ReadShare read_share_;
   TilesDirSharing tiles_dir_;
   std::atomic<bool> others_done_{false};
-  std::string host_, refusal_;
+  std::string host_, refusal_, cpu_note_;
   int local_rank_ = 0;
   bool initialised_ = false;
 };

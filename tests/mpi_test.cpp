@@ -45,15 +45,16 @@ class Mpi : public cdtgpu::test::BinaryTest {
     return path("dem.csv") + " " + path("lines.wkt") + " " + path("area.wkt") + ":role=boundary " + path("lake.wkt") +
            ":role=hole --max-edge 14";
   }
-  Result mpirun(int ranks, const std::string& args, const std::string& env = "") const {
+  // launcher: more options of mpiexec's own.
+  Result mpirun(int ranks, const std::string& args, const std::string& env = "", const std::string& launcher = "") const {
 #ifdef CDTGPU_TEST_MPI
     const std::string pass = env.empty() ? "" : " -x " + env.substr(0, env.find('='));  // env: "NAME=value 
     // Under a time limit: after a rank is killed, Debian's mpiexec now and then waits on a futex for good with
     // every rank gone (seen twice in 2026-11-26's runs, 30 minutes and more), which would hang the suite.
-    return run_shell(env + "timeout -k 10 300 " + std::string(MPIEXEC) + " --oversubscribe" + pass + " -n " +
-                     std::to_string(ranks) + " " + std::string(CDTGPU_BINARY) + " " + args);
+    return run_shell(env + "timeout -k 10 300 " + std::string(MPIEXEC) + " --oversubscribe" + pass + " " + launcher +
+                     " -n " + std::to_string(ranks) + " " + std::string(CDTGPU_BINARY) + " " + args);
 #else
-    (void)ranks, (void)args, (void)env;
+    (void)ranks, (void)args, (void)env, (void)launcher;
     return {-1, ""};
 #endif
   }
@@ -168,6 +169,20 @@ TEST_F(Mpi, AKilledRankEndsTheRunAndKeepsTheOldOutput) {
                           "CDTGPU_MPI_TEST_KILL_RANK=1 ");
   EXPECT_NE(r.code, 0) << r.err;
   EXPECT_EQ(slurp(path("old.ply")), "the old output\n");
+}
+
+// Open MPI binds each of two ranks to one core: on the 32-thread host every stage then ran 8-15x slower (a 64M-
+// point run took 52-66 s against 16 s unbound). A rank bound to far fewer CPUs than its share of the host says
+// so (CDTGPU_HOST_CPUS stands for a 16-CPU host); unbound ranks on this machine's real CPUs do not.
+TEST_F(Mpi, ARankBoundToOneCoreIsWarnedAbout) {
+  const std::string args = "triangulate " + path("dem.csv") + " --backend cgal -o " + path("b.ply");
+  const Result bound = mpirun(2, args, "CDTGPU_HOST_CPUS=16 ", "--bind-to core");
+  ASSERT_EQ(bound.code, 0) << bound.err;
+  EXPECT_NE(bound.err.find("of the host's 16 CPUs"), std::string::npos) << bound.err;
+  EXPECT_NE(bound.err.find("mpirun --bind-to none"), std::string::npos) << bound.err;
+  const Result free = mpirun(2, args, "", "--bind-to none");
+  ASSERT_EQ(free.code, 0) << free.err;
+  EXPECT_EQ(free.err.find("--bind-to none"), std::string::npos) << free.err;
 }
 
 TEST_F(Mpi, OnlyTriangulateRunsAsSeveralRanks) {
