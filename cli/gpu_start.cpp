@@ -114,9 +114,8 @@ void GpuStart::close_in_background() {
       return;
     }
     if (!ready_) return;
-    gpu::store_pipeline_cache(ready_->ctx);
     ready_->cdt.reset();  // its passes before the context
-    ready_.reset();
+    ready_.reset();       // the context saves its pipeline cache as it goes
   });
 }
 

@@ -111,6 +111,37 @@ TEST_F(Cli, GpuBackendWritesTheSameBytesAsCgal) {
   EXPECT_EQ(files_matching("y."), 0u);
 }
 
+// A run closes its device on a thread of its own once the device's work is done, beside the writing, and a
+// batch after its last job: the process must still wait for it, and the context saves the pipeline cache as it
+// goes. In a fresh cache folder (the driver's own shader cache left where it was, or lavapipe would compile
+// everything again) both leave the cache file behind.
+TEST_F(Cli, GpuRunsSaveThePipelineCacheBeforeTheyExit) {
+  write_terrain();
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  const char* home = std::getenv("HOME");
+  if (!xdg && !home) GTEST_SKIP() << "neither XDG_CACHE_HOME nor HOME is set: no pipeline cache";
+  const std::string old_cache = xdg ? xdg : std::string(home) + "/.cache";
+  if (!std::getenv("MESA_SHADER_CACHE_DIR")) setenv("MESA_SHADER_CACHE_DIR", (old_cache + "/mesa_shader_cache").c_str(), 1);
+  if (!std::getenv("__GL_SHADER_DISK_CACHE_PATH")) setenv("__GL_SHADER_DISK_CACHE_PATH", (old_cache + "/nvidia").c_str(), 1);
+  const std::string in = path("dem.csv") + " " + path("lines.wkt");
+  write("jobs.txt", in + " --backend gpu -o " + path("b.ply") + "\n");
+  auto cache_files = [&](const std::string& dir) {
+    size_t n = 0;
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+      n += e.is_regular_file() && e.path().filename().string().rfind("pipelines", 0) == 0 && e.file_size() > 0;
+    return n;
+  };
+  for (const std::string& how : {"triangulate " + in + " -q --backend gpu -o " + path("a.ply"), "batch " + path("jobs.txt") + " -q"}) {
+    const std::string dir = path(how.substr(0, 5) + "-cache");
+    fs::create_directories(dir);
+    setenv("XDG_CACHE_HOME", dir.c_str(), 1);
+    const Result r = run(how);
+    if (xdg) setenv("XDG_CACHE_HOME", xdg, 1); else unsetenv("XDG_CACHE_HOME");
+    ASSERT_EQ(r.code, 0) << how << ": " << r.err;
+    EXPECT_EQ(cache_files(dir), 1u) << how;
+  }
+}
+
 // --initial-dt voronoi (issue 30): the GPU Delaunay build from the digital Voronoi diagram writes the default's
 // bytes; it implies the GPU backend and is refused with CGAL's.
 TEST_F(Cli, VoronoiInitialDtWritesTheSameBytes) {
