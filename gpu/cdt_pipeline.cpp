@@ -165,14 +165,14 @@ void GpuCdt::keep(GpuTriangulation& tri) const {
 }
 
 void GpuCdt::constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,
-                       bool keep) const {
+                       bool recycle) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
   //    constraints: the Delaunay triangulation is the answer.
   auto t = Clock::now();
   if (tri.num_slots > 0 && !constraints.empty()) {
     ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, constraint_options);
-    if (keep) inserter_.recycle(std::move(edges));  // its flags, for the next tile or run
+    if (recycle) inserter_.recycle(std::move(edges));  // its flags, for the next tile or run
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
   }
@@ -238,7 +238,7 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
   } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
   cache_.grow_by = kept_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &kept_, &staging);
-  constrain(tri, job.segments, s, /*keep=*/true);
+  constrain(tri, job.segments, s, /*recycle=*/true);
   auto t = Clock::now();
   double ms = 0;
   f.border = finals_.mark(tri, job.rect, cache_, &ms);

@@ -108,9 +108,9 @@ class GpuCdt {
   GpuTriangulation delaunay_of(std::span<const Point3> all, std::span<const uint32_t> ids, GpuCdtStats& s,
                                BufferCache* keep = nullptr, const HostStaging* staged = nullptr) const;
   // Stage 3: the constraints inserted.
-  // keep: the inserter's flags stay in the cache for the next tile or run.
+  // recycle: the inserter's flags stay in the cache for the next tile or run.
   void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,
-                 bool keep = false) const;
+                 bool recycle = false) const;
   // The triangulation's buffers into kept_ (and the shared cache) for the next tile or run.
   void keep(GpuTriangulation& tri) const;
   // Stage 4: the triangles downloaded in canonical order into `storage`.
