@@ -15,6 +15,7 @@
 
 #include "cli/job_file.hpp"
 #include "cli/job_log.hpp"
+#include "cli/memory.hpp"
 #include "cli/progress.hpp"
 #include "cli/stages.hpp"
 #include "core/error.hpp"
@@ -31,6 +32,7 @@ constexpr std::ptrdiff_t kInFlight = 3;
 
 struct BatchJob {
   size_t index = 0;  // in file order
+  uint64_t memory = 0;  // what it holds of the MemoryGate
   JobLine line;
   std::string label;  // "line N"
   Job job;
@@ -60,6 +62,40 @@ class JobQueue {
   std::mutex mutex_;
   std::condition_variable cv_;
   std::deque<std::unique_ptr<BatchJob>> jobs_;
+};
+
+// The jobs in flight kept within the machine's memory together, by their estimates (the bytes a point that a
+// single run is checked by, cli/memory.hpp): a job is read once the jobs before it leave it room, or when it is
+// alone (one too large for the machine is refused by its own check). Three jobs of 40 % of the memory each would
+// otherwise be read at once and killed by the kernel.
+class MemoryGate {
+ public:
+  explicit MemoryGate(uint64_t budget) : budget_(budget) {}
+  // Waits for room for `bytes` (none: budget 0, the memory unknown); returns what it holds, for leave().
+  uint64_t enter(uint64_t bytes, const std::string& label) {
+    if (!budget_) return 0;
+    bytes = std::min(bytes, budget_);
+    std::unique_lock lock(mutex_);
+    if (used_ && used_ + bytes > budget_)
+      spdlog::debug("{}: waits for memory: about {} MB, {} MB held by the jobs before it, {} MB in all", label,
+                    bytes >> 20, used_ >> 20, budget_ >> 20);
+    cv_.wait(lock, [&] { return used_ == 0 || used_ + bytes <= budget_; });
+    used_ += bytes;
+    return bytes;
+  }
+  void leave(uint64_t bytes) {
+    {
+      std::lock_guard lock(mutex_);
+      used_ -= bytes;
+    }
+    cv_.notify_all();
+  }
+
+ private:
+  const uint64_t budget_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  uint64_t used_ = 0;
 };
 
 // Runs one stage of a job that has not failed; a failure is logged with the job's line and kept as its exit code
@@ -147,6 +183,8 @@ int run_batch(const BatchOptions& options) {
   if (lines.size() >= kBatchWarmJobs) gpus.auto_min_points = batch_auto_min_points();
   JobQueue to_device, to_writer;
   std::counting_semaphore<kInFlight> slots(kInFlight);
+  const HostMemory machine = host_memory();
+  MemoryGate memory(machine.available ? machine.available : machine.total);
   Written written;
   std::mutex summary_mutex;
   std::vector<int> failed_lines;
@@ -182,6 +220,7 @@ int run_batch(const BatchOptions& options) {
         written.wait_for_writers_of(job.input_paths);
         written.will_write(i, job.outputs);
         start_gpu_early(job, gpus);
+        b->memory = memory.enter(estimated_peak_bytes(job), b->label);
         read_job(job);
         choose_backend(job, gpus);
         prepare_job(job);
@@ -211,7 +250,9 @@ int run_batch(const BatchOptions& options) {
       else
         spdlog::info("{}: ok, {:.0f} ms, {} triangles", b->label, ms, job.stats.counts["triangles"].dump());
       const size_t index = b->index;
+      const uint64_t held = b->memory;
       b.reset();
+      memory.leave(held);
       written.done(index);
       slots.release();
     }

@@ -278,14 +278,27 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
     job.start = &gpus.start(options.device, hardware_only(options), estimate);
 }
 
-// Read and projected; what prepare_job needs next.
-void read_job(Job& job) {
-  std::vector<InputSpec> specs;
-  for (const std::string& arg : job.options.input.inputs) specs.push_back(parse_input_spec(arg));
+namespace {
+// Host bytes a point of this job may take at the run's peak (cli/memory.hpp).
+uint64_t bytes_per_point(const Job& job, const std::vector<InputSpec>& specs) {
   const bool regions = job.options.max_edge > 0 || std::any_of(specs.begin(), specs.end(), [](const InputSpec& s) {
                          return s.role == Role::boundary || s.role == Role::hole;
                        });
-  const uint64_t bytes = regions ? kHostBytesPerPointRegions : kHostBytesPerPoint;
+  return regions ? kHostBytesPerPointRegions : kHostBytesPerPoint;
+}
+std::vector<InputSpec> input_specs(const Job& job) {
+  std::vector<InputSpec> specs;
+  for (const std::string& arg : job.options.input.inputs) specs.push_back(parse_input_spec(arg));
+  return specs;
+}
+}  // namespace
+
+uint64_t estimated_peak_bytes(Job& job) { return estimated_points(job) * bytes_per_point(job, input_specs(job)); }
+
+// Read and projected; what prepare_job needs next.
+void read_job(Job& job) {
+  const std::vector<InputSpec> specs = input_specs(job);
+  const uint64_t bytes = bytes_per_point(job, specs);
   check_host_memory(estimated_points(job), bytes, "estimated from the input files");
   timed(job, "read", [&] { job.parts = read_inputs(specs, job.options.input.read, job.in); });
   check_host_memory(point_count(job.in), bytes, "read");

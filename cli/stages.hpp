@@ -32,6 +32,8 @@ namespace cdtgpu {
 void check_job(Job& job);
 void start_gpu_early(Job& job, GpuStarts& gpus);
 void read_job(Job& job);
+// The host memory the job may hold at its peak, from the files' sizes (cli/memory.hpp's bytes a point).
+uint64_t estimated_peak_bytes(Job& job);
 void choose_backend(Job& job, GpuStarts& gpus);
 void prepare_job(Job& job);
 void triangulate_job(Job& job);

@@ -277,6 +277,34 @@ TEST_F(Batch, TheBundledJobFileRuns) {
 // In a batch of kBatchWarmJobs jobs or more, auto counts the GPU's start-up once and wants the GPU from
 // kBatchAutoMinPoints points (here it falls back to CGAL where the machine has no hardware GPU, and says so);
 // a shorter batch and a single run keep the single run's rule. The bytes are the single run's either way.
+// The jobs in flight stay within the machine's memory together: on a "machine" (CDTGPU_HOST_MEMORY) that holds
+// one job's estimate but not two, each job waits for the one before it, and every job still writes its single
+// run's bytes. With the real machine's memory none waits.
+TEST_F(Batch, JobsInFlightStayWithinTheMachinesMemory) {
+  const std::string s = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
+  const std::string in = s + "dem.xyz '" + s + "contours.shp:z=ELEV' --backend cgal";
+  ASSERT_EQ(run("triangulate " + in + " -q -o " + q("single.ply")).code, 0);
+  std::vector<std::string> lines;
+  for (int k = 0; k < 4; ++k) lines.push_back(in + " -o " + q("m" + std::to_string(k) + ".ply"));
+  write_jobs("jobs.txt", lines);
+  // About 7.5K points estimated from the files, at 205 bytes each: 1.5 MB a job.
+  setenv("CDTGPU_HOST_MEMORY", "2000000", 1);
+  const Result tight = run("batch " + q("jobs.txt") + " -v");
+  unsetenv("CDTGPU_HOST_MEMORY");
+  ASSERT_EQ(tight.code, 0) << tight.err;
+  EXPECT_NE(tight.err.find("waits for memory"), std::string::npos) << tight.err;
+  for (int k = 2; k <= 4; ++k) {  // each job read only once the one before it is done
+    const size_t read = tight.err.find("line " + std::to_string(k) + ": read:");
+    const size_t before_done = tight.err.find("line " + std::to_string(k - 1) + ": ok");
+    ASSERT_NE(read, std::string::npos) << tight.err;
+    EXPECT_GT(read, before_done) << k << "\n" << tight.err;
+  }
+  for (int k = 0; k < 4; ++k) EXPECT_TRUE(slurp(path("m" + std::to_string(k) + ".ply")) == slurp(path("single.ply"))) << k;
+  const Result roomy = run("batch " + q("jobs.txt") + " -v");
+  ASSERT_EQ(roomy.code, 0) << roomy.err;
+  EXPECT_EQ(roomy.err.find("waits for memory"), std::string::npos) << roomy.err;
+}
+
 TEST_F(Batch, ManyJobsWantTheGpuForSmallerInputs) {
   using cdtgpu::kBatchWarmJobs;
   std::ostringstream xyz;
