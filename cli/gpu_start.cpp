@@ -105,14 +105,20 @@ GpuStart::~GpuStart() {
   if (ready_) ready_->cdt.reset();  // its passes before the context
 }
 
+// The start's outcome, once: the device ready, or its failure kept for cdt() to rethrow.
+void GpuStart::settle() {
+  if (ready_ || failed_ || !pending_.valid()) return;
+  try {
+    ready_ = pending_.get();
+  } catch (...) {
+    failed_ = std::current_exception();
+  }
+}
+
 void GpuStart::close_in_background() {
   if (closing_.joinable()) return;
   closing_ = std::thread([this] {
-    try {
-      if (pending_.valid()) ready_ = pending_.get();
-    } catch (...) {  // a start that failed has nothing to close
-      return;
-    }
+    settle();  // a start that failed has nothing to close
     if (!ready_) return;
     ready_->cdt.reset();  // its passes before the context
     ready_.reset();       // the context saves its pipeline cache as it goes
@@ -124,24 +130,14 @@ void GpuStart::leave_for_exit() {
     closing_.join();
     return;
   }
-  if (pending_.valid()) {
-    try {
-      ready_ = pending_.get();
-    } catch (...) {  // a start that failed has nothing to leave
-      return;
-    }
-  }
+  settle();  // a start that failed has nothing to leave
   if (!ready_) return;
   gpu::store_pipeline_cache(ready_->ctx);
   (void)ready_.release();  // deliberately never destroyed
 }
 
 gpu::GpuCdt& GpuStart::cdt() {
-  if (!ready_ && !failed_) try {
-      ready_ = pending_.get();
-    } catch (...) {
-      failed_ = std::current_exception();
-    }
+  settle();
   if (failed_) std::rethrow_exception(failed_);
   return *ready_->cdt;
 }

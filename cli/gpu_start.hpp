@@ -59,6 +59,7 @@ class GpuStart {
     gpu::Context ctx;
     std::unique_ptr<gpu::GpuCdt> cdt;
   };
+  void settle();
   std::future<std::unique_ptr<Ready>> pending_;
   std::unique_ptr<Ready> ready_;
   std::exception_ptr failed_;
