@@ -26,49 +26,39 @@ int launched_ranks() {
 }
 
 #ifdef CDTGPU_MPI
-// Point to point, in pieces a 32-bit MPI count takes: rank 0 receives every rank's pack in rank order.
+// Bytes point to point, in pieces a 32-bit MPI count takes; the receiver learns the size first.
+constexpr int kTilesTag = 3;
+void send_bytes(const void* p, uint64_t n, int to, int tag = kTilesTag) {
+  constexpr uint64_t kPiece = uint64_t(1) << 30;
+  MPI_Send(&n, 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD);
+  for (uint64_t at = 0; at < n; at += kPiece)
+    MPI_Send(static_cast<const char*>(p) + at, int(std::min(kPiece, n - at)), MPI_BYTE, to, tag, MPI_COMM_WORLD);
+}
+template <typename Vec>
+void recv_into(Vec& v, int from, int tag = kTilesTag) {
+  constexpr uint64_t kPiece = uint64_t(1) << 30;
+  uint64_t n = 0;
+  MPI_Recv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  v.resize(n / sizeof(v[0]));
+  char* p = reinterpret_cast<char*>(v.data());
+  for (uint64_t at = 0; at < n; at += kPiece)
+    MPI_Recv(p + at, int(std::min(kPiece, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+}
+
+// Rank 0 receives every rank's pack of its tiles, in rank order.
+constexpr int kGatherTag = 1;
 std::vector<std::vector<uint32_t>> gather_at_rank0(std::vector<uint32_t> mine, int rank, int ranks) {
-  constexpr uint64_t kPiece = uint64_t(1) << 26;
   // Fault injection for the tests: this rank dies before handing over its tiles.
   if (const char* kill = std::getenv("CDTGPU_MPI_TEST_KILL_RANK"); kill && std::atoi(kill) == rank)
     std::raise(SIGKILL);
   if (rank != 0) {
-    uint64_t n = mine.size();
-    MPI_Send(&n, 1, MPI_UINT64_T, 0, 1, MPI_COMM_WORLD);
-    for (uint64_t at = 0; at < n; at += kPiece)
-      MPI_Send(mine.data() + at, int(std::min(kPiece, n - at)), MPI_UINT32_T, 0, 2, MPI_COMM_WORLD);
+    send_bytes(mine.data(), mine.size() * sizeof(uint32_t), 0, kGatherTag);
     return {};
   }
   auto all = std::vector<std::vector<uint32_t>>(size_t(ranks));
   all[0] = std::move(mine);
-  for (int r = 1; r < ranks; ++r) {
-    uint64_t n = 0;
-    MPI_Recv(&n, 1, MPI_UINT64_T, r, 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-    all[size_t(r)].resize(n);
-    for (uint64_t at = 0; at < n; at += kPiece)
-      MPI_Recv(all[size_t(r)].data() + at, int(std::min(kPiece, n - at)), MPI_UINT32_T, r, 2, MPI_COMM_WORLD,
-               MPI_STATUS_IGNORE);
-  }
+  for (int r = 1; r < ranks; ++r) recv_into(all[size_t(r)], r, kGatherTag);
   return all;
-}
-
-// Bytes point to point, in pieces a 32-bit MPI count takes; the receiver learns the size first.
-constexpr int kTilesTag = 3;
-void send_bytes(const void* p, uint64_t n, int to) {
-  constexpr uint64_t kPiece = uint64_t(1) << 30;
-  MPI_Send(&n, 1, MPI_UINT64_T, to, kTilesTag, MPI_COMM_WORLD);
-  for (uint64_t at = 0; at < n; at += kPiece)
-    MPI_Send(static_cast<const char*>(p) + at, int(std::min(kPiece, n - at)), MPI_BYTE, to, kTilesTag, MPI_COMM_WORLD);
-}
-template <typename Vec>
-void recv_into(Vec& v, int from) {
-  constexpr uint64_t kPiece = uint64_t(1) << 30;
-  uint64_t n = 0;
-  MPI_Recv(&n, 1, MPI_UINT64_T, from, kTilesTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-  v.resize(n / sizeof(v[0]));
-  char* p = reinterpret_cast<char*>(v.data());
-  for (uint64_t at = 0; at < n; at += kPiece)
-    MPI_Recv(p + at, int(std::min(kPiece, n - at)), MPI_BYTE, from, kTilesTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
 }
 
 // --tiles-out's files written by every rank (io/tiles_dir.hpp): rank 0 hands each rank its pieces.
