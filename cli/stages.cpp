@@ -281,9 +281,8 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
 namespace {
 // Host bytes a point of this job may take at the run's peak (cli/memory.hpp).
 uint64_t bytes_per_point(const Job& job, const std::vector<InputSpec>& specs) {
-  const bool regions = job.options.max_edge > 0 || std::any_of(specs.begin(), specs.end(), [](const InputSpec& s) {
-                         return s.role == Role::boundary || s.role == Role::hole;
-                       });
+  const bool regions = job.options.max_edge > 0 ||
+                       std::any_of(specs.begin(), specs.end(), [](const InputSpec& s) { return is_region_role(s.role); });
   return regions ? kHostBytesPerPointRegions : kHostBytesPerPoint;
 }
 std::vector<InputSpec> input_specs(const Job& job) {
@@ -377,8 +376,8 @@ void prepare_job(Job& job) {
   // Later stages read only the rings of boundary and hole inputs (region_rules): the rest of what was read
   // goes now. Kept to the end, it was a quarter of a large run's peak (80M vertices in tiles: 3.0 of 13 GB).
   job.in.points = Points{};
-  const bool rings = std::any_of(job.parts.begin(), job.parts.end(),
-                                 [](const InputPart& p) { return p.role == Role::boundary || p.role == Role::hole; });
+  const bool rings =
+      std::any_of(job.parts.begin(), job.parts.end(), [](const InputPart& p) { return is_region_role(p.role); });
   if (!rings) job.in.lines = std::vector<Polyline>{};
 }
 

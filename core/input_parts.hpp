@@ -13,6 +13,8 @@ enum class Role : uint8_t {
   boundary,   // rings bound the domain: triangles outside are dropped (several: union; nesting: regions.hpp)
   hole,       // rings cut the domain: triangles inside are dropped
 };
+// Boundary and hole inputs: their rings make the regions (core/regions.hpp), which read them again after prepare.
+inline bool is_region_role(Role r) { return r == Role::boundary || r == Role::hole; }
 
 // z of an input's vertices beyond what the reader gives (geometry z, or the shapefile field --z-field / z=F).
 struct ZRule {

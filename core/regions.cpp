@@ -678,7 +678,7 @@ RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts
   std::vector<Polyline> rings;
   bool boundary = false;
   for (const InputPart& part : parts) {
-    if (part.role != Role::boundary && part.role != Role::hole) continue;
+    if (!is_region_role(part.role)) continue;
     for (size_t i = part.lines_begin; i < part.lines_end; ++i) rings.push_back(in.lines[i]);
     boundary |= part.role == Role::boundary && part.lines_end > part.lines_begin;
   }

@@ -212,7 +212,7 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
     }
     part.points_end = in.points.size();
     part.lines_end = in.lines.size();
-    if ((spec.role == Role::boundary || spec.role == Role::hole) && part.lines_end == part.lines_begin)
+    if (is_region_role(spec.role) && part.lines_end == part.lines_begin)
       throw UsageError(spec.path + ": role=" + (spec.role == Role::boundary ? "boundary" : "hole") +
                        " needs polygons (rings), and this input has only points");
     part.role = spec.role;
