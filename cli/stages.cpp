@@ -5,6 +5,7 @@
 #include <future>
 #include <optional>
 #include <thread>
+#include <utility>
 
 #include <spdlog/spdlog.h>
 
@@ -100,15 +101,45 @@ CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_point
   return r;
 }
 
-// The CPU backend: the reference CDT in one piece, or tiles on every core (`--max-tile-points`, or auto: core/tiles'
-// auto_cpu_tile_points). Both give the same bytes.
-CdtResult triangulate_cpu(Job& job) {
+// Whether a stage after the triangulation reads the prepared input: the regions (boundary and hole rings,
+// --max-edge) and the preview's constraint lines.
+bool prepared_read_later(const Job& job) {
+  return job.options.max_edge > 0 || !job.options.preview.empty() ||
+         std::any_of(job.parts.begin(), job.parts.end(), [](const InputPart& p) { return is_region_role(p.role); });
+}
+
+// The prepared vertices and segments, once the triangulation needs them no more and no later stage reads them:
+// 36 bytes a vertex of a tiled run's peak, beside the resolved copy the tiles read. Their counts are in the stats.
+void drop_prepared(Job& job) {
+  if (prepared_read_later(job)) return;
+  job.prepared.vertices = Points{};
+  job.prepared.constraints = std::vector<Edge>{};
+  job.prepared.constraint_line = std::vector<uint32_t>{};
+}
+
+// Whether the GPU run's resolve may take the prepared input instead of a copy: no later stage reads it
+// (drop_prepared) and the run is tiled on any device (--max-tile-points below its vertices, or more of them
+// than a device takes), so that no untiled GPU call or its CPU fallback needs it. At 1B points the copy was
+// 24 bytes a vertex of the resolve's peak.
+bool hand_over_prepared(const Job& job) {
   const uint64_t n = job.prepared.vertices.size();
+  const int64_t m = job.options.max_tile_points;
+  const bool tiled = m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device();
+  return tiled && !prepared_read_later(job);
+}
+
+// The CPU backend: the reference CDT in one piece, or tiles on every core (`--max-tile-points`, or auto: core/tiles'
+// auto_cpu_tile_points). Both give the same bytes. `resolved`: the input resolved already (the GPU's tiles
+// failed; the prepared input may be gone), tiled here too.
+CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
+  const uint64_t n = resolved ? resolved->vertices.size() : job.prepared.vertices.size();
   const int64_t max_tile_points = job.options.max_tile_points;
   const uint64_t tile = max_tile_points >= 0 ? uint64_t(max_tile_points)
                                              : auto_cpu_tile_points(n, std::thread::hardware_concurrency());
+  if (resolved) return triangulate_in_tiles(job, std::move(*resolved), tile < 3 ? 0 : tile, cgal_tile_triangulator());
   if (tile < 3 || n <= tile) return triangulate_cgal(job.prepared);
   ResolvedInput in = timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); });
+  drop_prepared(job);
   return triangulate_in_tiles(job, std::move(in), tile, cgal_tile_triangulator());
 }
 
@@ -143,8 +174,9 @@ gpu::TileDevices tile_devices(Job& job, GpuStart& start) {
 }
 
 // The GPU backend on a started device, the CPU's resolve stage running on other threads meanwhile.
+// `vertices`: the prepared input's, which may have gone to the resolve (hand_over_prepared).
 CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const ResolveProgress& progress,
-                          const double& resolve_ms) {
+                          const double& resolve_ms, uint64_t vertices) {
   RunStats& stats = job.stats;
   GpuStart& start = *job.start;
   gpu::GpuCdt& cdt = start.cdt();
@@ -164,7 +196,8 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
   if (!options.contours_out.empty()) job.gpu_contours.emplace(start.context(), cdt.primitives());
   // Called in a DeviceError's handler. Auto: the CPU computes the same triangulation (a device too small for
   // the input, or out of memory); a forced GPU rethrows.
-  auto on_cpu_instead = [&](const gpu::DeviceError& e) {
+  // `resolved`: the tiles' input, intact when they fail (triangulate_tiled moves from it only once done).
+  auto on_cpu_instead = [&](const gpu::DeviceError& e, ResolvedInput* resolved = nullptr) {
     if (options.backend == "gpu") throw;
     stats.backend = "cgal";
     stats.backend_reason = gpu_refused(e);
@@ -172,12 +205,13 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     job.gpu = false;
     job.gpu_raster.reset();
     job.gpu_contours.reset();
-    return triangulate_cpu(job);
+    return triangulate_cpu(job, resolved);
   };
-  const uint64_t tile = gpu_tile_points(start.context(), job.prepared.vertices.size(), options.max_tile_points);
-  if (tile >= 3 && job.prepared.vertices.size() > tile) {
+  const uint64_t tile = gpu_tile_points(start.context(), vertices, options.max_tile_points);
+  if (tile >= 3 && vertices > tile) {
     ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
     stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+    drop_prepared(job);
     try {
       const gpu::TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
       const uint64_t tile_here = options.max_tile_points >= 0 ? tile : std::min(tile, devices.max_tile_points());
@@ -186,7 +220,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
                                   unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
                                   std::move(tiles.reserve));
     } catch (const gpu::DeviceError& e) {
-      return on_cpu_instead(e);
+      return on_cpu_instead(e, &in);
     }
   }
   gpu::GpuCdtStats gs;
@@ -340,7 +374,16 @@ void choose_backend(Job& job, GpuStarts& gpus) {
 // The merge stays on the CPU even when the device is ready: on all 16 cores of the H100 machine it took 31-44 ms
 // for 2.5M points, the GPU's (gpu/dedupe, the same result) ~59 ms with its transfers.
 void prepare_job(Job& job) {
-  job.prepared = timed(job, "prepare", [&] { return prepare(job.in, merge_points); });
+  // Later stages read only the rings of boundary and hole inputs (region_rules): the rest of what was read
+  // goes as soon as prepare has copied it. Kept to the end, it was a quarter of a large run's peak (80M
+  // vertices in tiles: 3.0 of 13 GB).
+  const bool rings =
+      std::any_of(job.parts.begin(), job.parts.end(), [](const InputPart& p) { return is_region_role(p.role); });
+  auto drop_input = [&] {
+    job.in.points = Points{};
+    if (!rings) job.in.lines = std::vector<Polyline>{};
+  };
+  job.prepared = timed(job, "prepare", [&] { return prepare(job.in, merge_points, drop_input); });
   spdlog::info("CRS: {}", job.crs.name);
 
   const Repairs& r = job.in.repairs;
@@ -373,12 +416,6 @@ void prepare_job(Job& job) {
   job.stats.crs = job.crs.name;
   job.stats.crs_epsg = job.crs.epsg;
 
-  // Later stages read only the rings of boundary and hole inputs (region_rules): the rest of what was read
-  // goes now. Kept to the end, it was a quarter of a large run's peak (80M vertices in tiles: 3.0 of 13 GB).
-  job.in.points = Points{};
-  const bool rings =
-      std::any_of(job.parts.begin(), job.parts.end(), [](const InputPart& p) { return is_region_role(p.role); });
-  if (!rings) job.in.lines = std::vector<Polyline>{};
 }
 
 // The GPU is waited for as late as possible, so that its start (~160 ms on the H100 machine) overlaps the CPU's
@@ -392,10 +429,18 @@ void triangulate_job(Job& job) {
   double resolve_ms = 0;
   ResolveProgress progress;
   std::future<ResolvedInput> resolving;
+  const uint64_t vertices = job.prepared.vertices.size();
+  const bool handed_over = job.want_gpu && hand_over_prepared(job);
+  PreparedInput handed;  // its vertices and segments; the counts stay in job.prepared
+  if (handed_over) {
+    handed.vertices = std::move(job.prepared.vertices);
+    handed.constraints = std::move(job.prepared.constraints);
+    job.prepared.constraint_line = std::vector<uint32_t>{};
+  }
   if (job.want_gpu)
     resolving = std::async(std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
-      ResolvedInput r = resolve_constraints(job.prepared, progress);
+      ResolvedInput r = handed_over ? resolve_constraints(std::move(handed)) : resolve_constraints(job.prepared, progress);
       resolve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
     });
@@ -416,8 +461,12 @@ void triangulate_job(Job& job) {
     stats.backend = job.gpu ? "gpu" : "cgal";
     stats.backend_reason = job.backend_reason;
     spdlog::debug("backend {}: {}", stats.backend, job.backend_reason);
-    return job.gpu ? triangulate_gpu(job, resolving, progress, resolve_ms) : triangulate_cpu(job);
+    if (job.gpu) return triangulate_gpu(job, resolving, progress, resolve_ms, vertices);
+    if (!handed_over) return triangulate_cpu(job);
+    ResolvedInput in = resolving.get();  // no device after all: the CPU tiles what was resolved for it
+    return triangulate_cpu(job, &in);
   });
+  drop_prepared(job);
 }
 
 void apply_job_regions(Job& job) {
@@ -563,7 +612,7 @@ void count_results(Job& job) {
   c["triangles"] = result.mesh.triangles.size();
   job.stats.peak_host_bytes = peak_host_bytes();  // the process's: in a batch, the largest job's so far
   spdlog::info("{} vertices, {} triangles ({} constraints, {} Steiner points)", result.mesh.vertices.size(),
-               result.mesh.triangles.size(), job.prepared.constraints.size(), result.steiner_points);
+               result.mesh.triangles.size(), c["constraints"].get<uint64_t>(), result.steiner_points);
   if (job.gpu) {
     // Both are the process's totals: in a batch, every job's so far.
     job.stats.stage_ms.emplace_back("triangulate: pipeline waits", gpu::pipeline_wait_ms());

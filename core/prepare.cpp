@@ -35,7 +35,7 @@ struct SegmentKey {
 
 }  // namespace
 
-PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
+PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::function<void()>& gathered) {
   using Clock = std::chrono::steady_clock;
   auto t = Clock::now();
   auto phase = [&](const char* name) {
@@ -76,6 +76,15 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
       if (!std::isfinite(xy[2 * i]) || !std::isfinite(xy[2 * i + 1]) || !std::isfinite(z[i]))
         throw std::invalid_argument("prepare: vertex " + std::to_string(i) + " is not finite");
 
+  // Only the lines' sizes and closed flags are read from here on (line_at, seg_at).
+  auto segments_of = [&](const Polyline& l) -> uint64_t {
+    const uint64_t n = l.points.size();
+    return n < 2 ? 0 : (l.closed && n >= 3 ? n : n - 1);
+  };
+  std::vector<uint64_t> seg_at(in.lines.size() + 1, 0);
+  for (size_t li = 0; li < in.lines.size(); ++li) seg_at[li + 1] = seg_at[li] + segments_of(in.lines[li]);
+  const size_t lines = in.lines.size();
+  if (gathered) gathered();
   phase("gather");
   // The merged vertices: coordinates and z of their first occurrence; conflicts where a later z differs.
   const PointMerge m = merge(xy);
@@ -113,22 +122,16 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge) {
   z = {};
   phase("vertices");
 
-  // Segments of every polyline, the closing edge of every ring included: counted per line, then written on all
-  // cores (one thread took 7 s for 250M segments).
-  auto segments_of = [&](const Polyline& l) -> uint64_t {
-    const uint64_t n = l.points.size();
-    return n < 2 ? 0 : (l.closed && n >= 3 ? n : n - 1);
-  };
-  std::vector<uint64_t> seg_at(in.lines.size() + 1, 0);
-  for (size_t li = 0; li < in.lines.size(); ++li) seg_at[li + 1] = seg_at[li] + segments_of(in.lines[li]);
+  // Segments of every polyline, the closing edge of every ring included (counted per line above), written on
+  // all cores (one thread took 7 s for 250M segments).
   out.input_segments = seg_at.back();
   RawVector<SegmentKey> segs;
   resize_unwritten(segs, seg_at.back());
   std::atomic<uint64_t> zero_length{0};
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, in.lines.size()), [&](const tbb::blocked_range<size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, lines), [&](const tbb::blocked_range<size_t>& r) {
     uint64_t zero = 0;
     for (size_t li = r.begin(); li < r.end(); ++li) {
-      const uint64_t base = line_at[li], n = in.lines[li].points.size(), count = seg_at[li + 1] - seg_at[li];
+      const uint64_t base = line_at[li], n = line_at[li + 1] - base, count = seg_at[li + 1] - seg_at[li];
       for (uint64_t k = 0; k < count; ++k) {
         uint32_t a = vertex_of[base + k], b = vertex_of[base + (k + 1) % n];
         if (a > b) std::swap(a, b);

@@ -851,24 +851,31 @@ class Resolver {
               [&](uint32_t i, uint32_t j) { return less(steiner_[i], steiner_[j]); });
     std::vector<Point3> sorted(ns);
     for (uint32_t k = 0; k < ns; ++k) sorted[k] = steiner_[order[k]];
-    const std::vector<size_t> at = places(v_.data(), n0_, sorted, less);
+    // No Steiner vertex (only splits at vertices): the prepared vertices are the output, numbers and all,
+    // and are not copied (a copy beside them was 24 bytes a vertex of the resolve's peak).
     RawVector<uint32_t> renum;
-    resize_unwritten(renum, size_t(n0_) + ns);
-    resize_unwritten(out.vertices, renum.size());
-    Point3* V = out.vertices.data();
-    spread(n0_, at, threads_, [&](size_t i, size_t to) {
-      renum[i] = uint32_t(to);
-      V[to] = v_[i];
-    });
-    for (uint32_t k = 0; k < ns; ++k) {
-      renum[n0_ + order[k]] = uint32_t(at[k] + k);
-      V[at[k] + k] = sorted[k];
+    if (ns == 0) {
+      out.vertices = std::move(v_);
+    } else {
+      const std::vector<size_t> at = places(v_.data(), n0_, sorted, less);
+      resize_unwritten(renum, size_t(n0_) + ns);
+      resize_unwritten(out.vertices, renum.size());
+      Point3* V = out.vertices.data();
+      spread(n0_, at, threads_, [&](size_t i, size_t to) {
+        renum[i] = uint32_t(to);
+        V[to] = v_[i];
+      });
+      for (uint32_t k = 0; k < ns; ++k) {
+        renum[n0_ + order[k]] = uint32_t(at[k] + k);
+        V[at[k] + k] = sorted[k];
+      }
     }
 
     // Constraints: the prepared ones left whole keep their sorted order (renumbering keeps the (x, y)
     // order), renumbered on all cores; the pieces are sorted and merged in.
     auto renumbered = [&](uint32_t p) {
-      uint32_t a = renum[seg_[p][0]], b = renum[seg_[p][1]];
+      uint32_t a = seg_[p][0], b = seg_[p][1];
+      if (ns > 0) a = renum[a], b = renum[b];
       return a < b ? Edge{a, b} : Edge{b, a};
     };
     std::vector<Edge> kept = compact<Edge>(

@@ -123,7 +123,8 @@ Triangles tiled_cdt(const Points& vertices, const std::vector<Edge>& segments,
                                 TileStats* stats = nullptr);
 
 // The whole mesh of a resolved input, canonical: the bytes of triangulate_cgal(prepared) for the prepared
-// input `in` was resolved from.
+// input `in` was resolved from. `in` is moved from only once the triangles are made: when the triangulator
+// throws, it is left whole (the CLI's CPU fallback tiles it again).
 CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options,
                             const TileTriangulator& triangulate, TileStats* stats = nullptr);
 

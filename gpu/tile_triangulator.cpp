@@ -217,13 +217,15 @@ std::string TileDevices::names() const {
   return names;
 }
 
+uint64_t max_tile_points_of_any_device() { return uint64_t(DT_MAX_SLOTS / 2) / 4 * 3; }
+
 uint64_t max_tile_points(const Context& ctx) {
   uint64_t device_local = 0;
   for (size_t h = 0; h < ctx.info.heap_sizes.size(); ++h)
     if (ctx.info.heap_device_local[h]) device_local = std::max(device_local, ctx.info.heap_sizes[h]);
   constexpr uint64_t kBytesPerPoint = 260;
   const uint64_t by_memory = device_local / kBytesPerPoint;
-  const uint64_t by_slots = DT_MAX_SLOTS / 2;
+  const uint64_t by_slots = DT_MAX_SLOTS / 2;  // max_tile_points_of_any_device() once taken 3 / 4
   // The largest descriptor-bound buffer per point: the constraint inserter's 12-byte tables per triangle
   // slot, ~24 bytes a point (6.1 GB at 256M points, refused by a 4 GiB range).
   const uint64_t by_range = ctx.info.max_storage_buffer_range / 24;

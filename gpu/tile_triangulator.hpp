@@ -55,5 +55,7 @@ class TileDevices {
 // point in the constraint inserter's tables: 179M points on a 4 GiB range, 5.6M on lavapipe's 128 MiB), with
 // a quarter to spare for the endpoints of the segments that cross into the tile.
 uint64_t max_tile_points(const Context& ctx);
+// The most any device takes (the Delaunay build's slot limit): an input beyond it is tiled on every device.
+uint64_t max_tile_points_of_any_device();
 
 }  // namespace cdtgpu::gpu

@@ -652,6 +652,25 @@ TEST_F(Cli, ATileTheDeviceRefusesFailsOrFallsBack) {
   EXPECT_EQ(slurp(path("auto.ply")), slurp(path("cgal.ply")));
 }
 
+// Auto with tiles, and a device that may not come (CI's lavapipe does not count for auto): the resolve beside
+// the device's start took the prepared input itself, so without a device the CPU tiles what it resolved, and
+// with one the device does. The same bytes either way, and the prepared input gone from the peak.
+TEST_F(Cli, AutoTiledRunsTileWhatTheResolveMadeWithOrWithoutADevice) {
+  write_terrain();
+  const std::string in = path("dem.csv") + " " + path("lines.wkt") + " -q --max-tile-points 50";
+  ASSERT_EQ(run("triangulate " + in + " --backend cgal -o " + path("cgal.ply")).code, 0);
+  ::setenv("CDTGPU_AUTO_MIN_POINTS", "1", 1);
+  const Result r = run("triangulate " + in + " -o " + path("auto.ply") + " --stats " + path("auto.json"));
+  ::unsetenv("CDTGPU_AUTO_MIN_POINTS");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto stats = nlohmann::json::parse(slurp(path("auto.json")));
+  if (stats["backend"] == "cgal")
+    EXPECT_EQ(stats["backend_reason"].get<std::string>().rfind("no GPU to use", 0), 0u) << stats["backend_reason"];
+  EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
+  EXPECT_GT(stats["counts"]["constraints"].get<int>(), 0);
+  EXPECT_EQ(slurp(path("auto.ply")), slurp(path("cgal.ply")));
+}
+
 // Messages say what is allowed in words and write numbers as read; a coordinate far outside any CRS is refused
 // naming the file and line.
 TEST_F(Cli, RangeErrorsAndFarCoordinatesAreClearMessages) {
