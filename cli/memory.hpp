@@ -2,7 +2,7 @@
 // it reads (from the files' sizes) and again once the points are read. A run that does not fit would otherwise
 // be killed by the kernel's out-of-memory killer after minutes of work, or page for hours.
 //
-//   check_host_memory(estimate_input_points(paths), kHostBytesPerPoint, "estimated from the input files");
+//   check_host_memory(estimate_input_points(paths), kHostBytesPerPointGpu, "estimated from the input files");
 #pragma once
 #include <cstdint>
 #include <stdexcept>
@@ -10,12 +10,16 @@
 
 namespace cdtgpu {
 
-// Resident bytes a `cdtgpu triangulate` run holds at its peak per input vertex, the largest measured (H100
-// machine, 16M points + 4M segments, 20M input vertices, 2026-11-27, since the input is dropped after prepare):
-// GPU 158, GPU tiles 179, CGAL tiles 190, GPU --max-edge 20 158; boundaries and holes keep their rings, and were
-// 237 before (docs/performance.md, "Host memory").
-constexpr uint64_t kHostBytesPerPoint = 205;
-constexpr uint64_t kHostBytesPerPointRegions = 240;
+// Resident bytes a `cdtgpu triangulate` run holds at its peak per input vertex, at least as many as measured
+// (H100 machine, text points + contour lines, 2026-11-27, session 40; docs/performance.md, "Host memory"). The
+// GPU backend, tiled or not: 126-146 at 20M input vertices, 91 at 80M, 72 at 200M (fixed costs such as the
+// device's staging spread thinner; the slope is ~60), so 95 holds from ~80M up, where a machine's memory
+// matters. The CPU backend (CGAL, tiles on every core, a quarter of the input in flight): 135 at 20M. Boundaries,
+// holes and --max-edge keep the prepared input to the end (24 bytes a vertex and 12 a segment) and their own
+// tables: 40 more.
+constexpr uint64_t kHostBytesPerPointGpu = 95;
+constexpr uint64_t kHostBytesPerPointCpu = 140;
+constexpr uint64_t kHostBytesPerPointRegions = 40;  // added to either
 
 struct HostMemory {
   uint64_t total = 0;      // MemTotal of /proc/meminfo (0: unknown)

@@ -29,6 +29,7 @@
 #include "io/output_guard.hpp"
 #include "io/tiles_dir.hpp"
 #include "io/write_png.hpp"
+#include "core/uninit.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -101,6 +102,20 @@ CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_point
   return r;
 }
 
+// Host bytes a point of this job may take at the run's peak (cli/memory.hpp): the GPU's figure where a device
+// was asked for (auto falling back to the CPU is checked again there), else the CPU's.
+uint64_t bytes_per_point(const Job& job, const std::vector<InputSpec>& specs, bool on_cpu = false) {
+  const bool regions = job.options.max_edge > 0 ||
+                       std::any_of(specs.begin(), specs.end(), [](const InputSpec& s) { return is_region_role(s.role); });
+  const bool gpu = !on_cpu && job.options.backend != "cgal" && (job.options.backend == "gpu" || job.start);
+  return (gpu ? kHostBytesPerPointGpu : kHostBytesPerPointCpu) + (regions ? kHostBytesPerPointRegions : 0);
+}
+std::vector<InputSpec> input_specs(const Job& job) {
+  std::vector<InputSpec> specs;
+  for (const std::string& arg : job.options.input.inputs) specs.push_back(parse_input_spec(arg));
+  return specs;
+}
+
 // Whether a stage after the triangulation reads the prepared input: the regions (boundary and hole rings,
 // --max-edge) and the preview's constraint lines.
 bool prepared_read_later(const Job& job) {
@@ -132,6 +147,8 @@ bool hand_over_prepared(const Job& job) {
 // auto_cpu_tile_points). Both give the same bytes. `resolved`: the input resolved already (the GPU's tiles
 // failed; the prepared input may be gone), tiled here too.
 CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
+  // A run checked at the GPU's bytes a point (auto, a device asked for) takes the CPU's here.
+  if (job.start) check_host_memory(job.prepared.input_points, bytes_per_point(job, input_specs(job), true), "read, on the CPU");
   const uint64_t n = resolved ? resolved->vertices.size() : job.prepared.vertices.size();
   const int64_t max_tile_points = job.options.max_tile_points;
   const uint64_t tile = max_tile_points >= 0 ? uint64_t(max_tile_points)
@@ -312,19 +329,6 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
     job.start = &gpus.start(options.device, hardware_only(options), estimate);
 }
 
-namespace {
-// Host bytes a point of this job may take at the run's peak (cli/memory.hpp).
-uint64_t bytes_per_point(const Job& job, const std::vector<InputSpec>& specs) {
-  const bool regions = job.options.max_edge > 0 ||
-                       std::any_of(specs.begin(), specs.end(), [](const InputSpec& s) { return is_region_role(s.role); });
-  return regions ? kHostBytesPerPointRegions : kHostBytesPerPoint;
-}
-std::vector<InputSpec> input_specs(const Job& job) {
-  std::vector<InputSpec> specs;
-  for (const std::string& arg : job.options.input.inputs) specs.push_back(parse_input_spec(arg));
-  return specs;
-}
-}  // namespace
 
 uint64_t estimated_peak_bytes(Job& job) { return estimated_points(job) * bytes_per_point(job, input_specs(job)); }
 
@@ -625,12 +629,12 @@ void release_job(Job& job, GpuStarts* exiting) {
   timed(job, "release", [&] {
     if (exiting) exiting->leave_for_exit();
     job.in = InputSet{};
-    job.parts = {};
+    free_storage(job.parts);
     job.prepared = PreparedInput{};
     job.result = CdtResult{};
     job.grid.reset();
     job.preview.reset();
-    job.contours = {};
+    free_storage(job.contours);
   });
 }
 

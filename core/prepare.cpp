@@ -8,6 +8,7 @@
 #include "core/compact.hpp"
 #include "core/parallel.hpp"
 #include "core/touched.hpp"
+#include "core/uninit.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -118,8 +119,8 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
       [](double a, double b) { return std::max(a, b); });
   out.z_conflicts = count_if(conflict.size(), [&](size_t v) { return conflict[v] != 0; });
   out.merged_duplicates = total - out.vertices.size();
-  xy = {};
-  z = {};
+  free_storage(xy);
+  free_storage(z);
   phase("vertices");
 
   // Segments of every polyline, the closing edge of every ring included (counted per line above), written on

@@ -31,6 +31,12 @@ struct UninitAllocator : std::allocator<T> {
 template <class T>
 using RawVector = std::vector<T, UninitAllocator<T>>;
 
+// Frees a container's storage now: `v = {}` assigns an empty list and keeps the capacity, `v.clear()` too.
+template <class V>
+void free_storage(V& v) {
+  V().swap(v);
+}
+
 template <class A>
 inline constexpr bool is_uninit_allocator = false;
 template <class T>

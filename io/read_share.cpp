@@ -5,6 +5,7 @@
 
 #include "core/touched.hpp"
 #include "io/text_source.hpp"
+#include "core/uninit.hpp"
 
 namespace cdtgpu {
 
@@ -127,7 +128,7 @@ PointClassCounts join_shares(InputSet& piece, const ReadShare& share, InputSet& 
   resize_unwritten(in.points, at + total / sizeof(Point3));
   share.all_bytes(reinterpret_cast<const char*>(piece.points.data()), reinterpret_cast<char*>(in.points.data() + at),
                   point_bytes);
-  piece.points = {};
+  free_storage(piece.points);
 
   // Lines and counts, packed.
   const std::vector<char> mine = pack(piece);

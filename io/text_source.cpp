@@ -18,6 +18,7 @@
 
 #include "core/error.hpp"
 #include "core/touched.hpp"
+#include "core/uninit.hpp"
 
 namespace cdtgpu {
 
@@ -156,12 +157,12 @@ void append_parts(InputSet& in, std::vector<InputSet>& parts) {
   resize_unwritten(in.points, at.back());  // written on all cores, the earlier inputs kept
   tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
     std::copy(parts[k].points.begin(), parts[k].points.end(), in.points.begin() + std::ptrdiff_t(at[k]));
-    parts[k].points = {};
+    free_storage(parts[k].points);
   });
   in.lines.reserve(lines);
   for (InputSet& part : parts) {
     std::move(part.lines.begin(), part.lines.end(), std::back_inserter(in.lines));
-    part.lines = {};
+    free_storage(part.lines);
     Repairs& r = in.repairs;
     r.repeated_vertices += part.repairs.repeated_vertices;
     r.rings_closed += part.repairs.rings_closed;

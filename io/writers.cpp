@@ -22,6 +22,7 @@
 #include "io/atomic_file.hpp"
 #include "io/mesh_formats.hpp"
 #include "io/parallel_text.hpp"
+#include "core/uninit.hpp"
 
 namespace cdtgpu {
 
@@ -156,7 +157,7 @@ void write_wkt(const Mesh& mesh, bool multipolygon, Sink& out, std::ostream& str
   std::string pool;
   pool.reserve(start[V]);
   for (const std::string& b : block_text) pool += b;
-  block_text = {};
+  free_storage(block_text);
   auto point = [&](char* p, uint32_t v) { return put(p, std::string_view(pool).substr(start[v], length[v])); };
   out.ch('(');
   out.flush();

@@ -287,7 +287,7 @@ TEST_F(Batch, JobsInFlightStayWithinTheMachinesMemory) {
   std::vector<std::string> lines;
   for (int k = 0; k < 4; ++k) lines.push_back(in + " -o " + q("m" + std::to_string(k) + ".ply"));
   write_jobs("jobs.txt", lines);
-  // About 7.5K points estimated from the files, at 205 bytes each: 1.5 MB a job.
+  // About 7.5K points estimated from the files, at the CPU's 140 bytes each: 1.05 MB a job.
   setenv("CDTGPU_HOST_MEMORY", "2000000", 1);
   const Result tight = run("batch " + q("jobs.txt") + " -v");
   unsetenv("CDTGPU_HOST_MEMORY");
