@@ -160,6 +160,18 @@ CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
   return triangulate_in_tiles(job, std::move(in), tile, cgal_tile_triangulator());
 }
 
+// After a tile too large for its device (gpu::too_large), the tile size to try next: the old one scaled by how
+// far over the device's limit the tile went (with a quarter to spare), at most halved; 0 when it is not that kind
+// of failure or the tiles are small already (a refusal then is not about their size).
+uint64_t smaller_tile(const gpu::DeviceError& e, uint64_t tile) {
+  constexpr uint64_t kSmallest = 1024;
+  if (!gpu::too_large(e) || tile / 2 < kSmallest) return 0;
+  double scale = 0.5;
+  if (const auto* t = dynamic_cast<const gpu::TooLarge*>(&e); t && t->need > 0 && t->limit > 0)
+    scale = std::min(scale, 0.75 * t->limit / t->need);
+  return std::max<uint64_t>(kSmallest, uint64_t(double(tile) * scale));
+}
+
 // The GPU's tile size: `--max-tile-points`, or auto: tiles only for an input beyond what the device holds.
 uint64_t gpu_tile_points(const gpu::Context& ctx, uint64_t vertices, int64_t max_tile_points) {
   if (max_tile_points >= 0) return uint64_t(max_tile_points);
@@ -231,11 +243,26 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     drop_prepared(job);
     try {
       const gpu::TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
-      const uint64_t tile_here = options.max_tile_points >= 0 ? tile : std::min(tile, devices.max_tile_points());
-      gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
-      return triangulate_in_tiles(job, std::move(in), tile_here, tiles.triangulate,
-                                  unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
-                                  std::move(tiles.reserve));
+      uint64_t tile_here = options.max_tile_points >= 0 ? tile : std::min(tile, devices.max_tile_points());
+      for (uint64_t retries = 0;; ++retries) {
+        try {
+          gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
+          CdtResult r = triangulate_in_tiles(job, std::move(in), tile_here, tiles.triangulate,
+                                             unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
+                                             std::move(tiles.reserve));
+          stats.counts["gpu_tile_retries"] = retries;
+          return r;
+        } catch (const gpu::DeviceError& e) {
+          // Tiles are sized by points, but a tile's constraint work grows with how many triangles its segments
+          // cross (long breaklines over dense LiDAR: 34 a segment), and its tables may not fit then. Smaller
+          // tiles (still at most --max-tile-points) do; the same bytes. `in` is whole after a failed tiling.
+          const uint64_t smaller = smaller_tile(e, tile_here);
+          if (!smaller) throw;
+          spdlog::warn("{}: again in tiles of at most {} points", e.what(), smaller);
+          for (const gpu::GpuCdt* c : devices.cdts()) c->drop_kept();
+          tile_here = smaller;
+        }
+      }
     } catch (const gpu::DeviceError& e) {
       return on_cpu_instead(e, &in);
     }

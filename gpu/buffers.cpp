@@ -75,9 +75,10 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
       m.used.fetch_sub(req.size);
       vkDestroyBuffer(ctx.device, b.buffer, nullptr);
       b.buffer = VK_NULL_HANDLE;
-      throw DeviceError("out of device memory: buffer '" + name + "' of " + std::to_string(req.size) +
-                        " bytes would bring the GPU backend to " + std::to_string(after) +
-                        " bytes, over CDTGPU_DEVICE_MEMORY_LIMIT = " + std::to_string(m.limit) + " bytes");
+      throw TooLarge("out of device memory: buffer '" + name + "' of " + std::to_string(req.size) +
+                         " bytes would bring the GPU backend to " + std::to_string(after) +
+                         " bytes, over CDTGPU_DEVICE_MEMORY_LIMIT = " + std::to_string(m.limit) + " bytes",
+                     double(after), double(m.limit));
     }
     b.budget = ctx.memory_budget;
     b.charged = req.size;
@@ -196,10 +197,11 @@ Buffer::~Buffer() {
 Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
   // Every buffer is bound whole as one storage-buffer descriptor, so it must fit the device's range.
   if (bytes > ctx.info.max_storage_buffer_range)
-    throw DeviceError("buffer '" + name + "' needs " + std::to_string(bytes) + " bytes, more than the device limit maxStorageBufferRange = " +
-                      std::to_string(ctx.info.max_storage_buffer_range) + " bytes (" +
-                      std::to_string(ctx.info.max_storage_buffer_range >> 20) + " MiB) of " + ctx.info.name +
-                      "; use a smaller input or a device with a larger limit");
+    throw TooLarge("buffer '" + name + "' needs " + std::to_string(bytes) + " bytes, more than the device limit maxStorageBufferRange = " +
+                       std::to_string(ctx.info.max_storage_buffer_range) + " bytes (" +
+                       std::to_string(ctx.info.max_storage_buffer_range >> 20) + " MiB) of " + ctx.info.name +
+                       "; use a smaller input or a device with a larger limit",
+                   double(bytes), double(ctx.info.max_storage_buffer_range));
   return make(ctx, bytes, name, false);
 }
 

@@ -101,6 +101,12 @@ class GpuCdt {
   // The scan and sort passes, for other GPU work of the same run (gpu/raster, gpu/contours).
   const Primitives& primitives() const { return prims_; }
 
+  // Frees what the caches keep between tiles and runs (a tiling given up for smaller tiles).
+  void drop_kept() const {
+    cache_.clear();
+    kept_.clear();
+  }
+
  private:
   // Upload and Delaunay build of all[ids[i]] (of all, when ids is empty), their stages added to `s`.
   // `keep`: the tiles' cache (DelaunayBuilder::build).

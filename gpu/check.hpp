@@ -12,11 +12,25 @@ struct DeviceError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The work is more than the device holds (a buffer beyond its range or its memory): smaller pieces may fit.
+// need / limit: how far over, where known (0 when not).
+struct TooLarge : DeviceError {
+  TooLarge(const std::string& what, double need = 0, double limit = 0) : DeviceError(what), need(need), limit(limit) {}
+  double need, limit;
+};
+
 // A Vulkan call failed. `result` is the VkResult; out-of-memory and device-lost are named as such.
 struct VulkanError : DeviceError {
   VulkanError(VkResult result, const std::string& what) : DeviceError(what), result(result) {}
   VkResult result;
 };
+
+// Whether smaller work might fit: TooLarge, or the driver out of device memory.
+inline bool too_large(const DeviceError& e) {
+  if (dynamic_cast<const TooLarge*>(&e)) return true;
+  const auto* v = dynamic_cast<const VulkanError*>(&e);
+  return v && v->result == VK_ERROR_OUT_OF_DEVICE_MEMORY;
+}
 
 inline const char* result_name(VkResult r) {
   switch (r) {

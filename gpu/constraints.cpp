@@ -384,7 +384,8 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   bool fresh_table = false;
   auto make_table = [&] {
     capacity = fixed_slots ? uint64_t(m) * stride : uint64_t(crossed) + crossed / 2 + 1024;
-    if (capacity >= CDT_NEVER) throw DeviceError("insert_constraints: intersected-edge table too large");
+    if (capacity >= CDT_NEVER)
+      throw TooLarge("insert_constraints: intersected-edge table too large", double(capacity), double(CDT_NEVER));
     table_bytes = std::max(table_bytes, capacity * sizeof(CdtCross));
     table = &buffers.get(ctx_, "cdt intersected-edge table", capacity * sizeof(CdtCross));
     fresh_table = true;

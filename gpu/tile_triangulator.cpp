@@ -124,7 +124,7 @@ class OnDevice {
         if (sum_) add_up(one);
         return f;
       } catch (const DeviceError& e) {
-        throw named(e, job.what, job.ids.size(), job.segments.size(), d);
+        rethrow_named(e, job.what, job.ids.size(), job.segments.size(), d);
       }
     });
   }
@@ -142,7 +142,7 @@ class OnDevice {
         if (sum_) add_up(one);
         return result;
       } catch (const DeviceError& e) {
-        throw named(e, what, vertices, segments, d);
+        rethrow_named(e, what, vertices, segments, d);
       }
     });
   }
@@ -150,14 +150,18 @@ class OnDevice {
  private:
   static constexpr size_t kSlotsPerDevice = 2;
 
-  DeviceError named(const DeviceError& e, std::string_view what, size_t vertices, size_t segments, size_t d) const {
+  // e again, named by its tile (and device); still TooLarge where smaller tiles may fit.
+  [[noreturn]] void rethrow_named(const DeviceError& e, std::string_view what, size_t vertices, size_t segments,
+                                  size_t d) const {
     std::string m(what);
     m += " (" + std::to_string(vertices) + " vertices, " + std::to_string(segments) + " segments)";
     if (cdts_.size() > 1)
       m += " on device " + std::to_string(cdts_[d]->context().info.index) + " (" + cdts_[d]->context().info.name + ")";
     m += ": ";
     m += e.what();
-    return DeviceError(m);
+    if (const auto* t = dynamic_cast<const TooLarge*>(&e)) throw TooLarge(m, t->need, t->limit);
+    if (too_large(e)) throw TooLarge(m);
+    throw DeviceError(m);
   }
 
   void add_up(const GpuCdtStats& one) {

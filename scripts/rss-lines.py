@@ -36,5 +36,5 @@ for t, line in lines:
     while i < len(samples) and samples[i][0] <= t:
         peak = max(peak, samples[i][1])
         i += 1
-    print(f"{t * 1e3:8.0f} ms  max {peak:6.2f} GB  {line[:110]}")
+    print(f"{t * 1e3:8.0f} ms  max {peak:6.2f} GB  {line[:400]}")
 print("peak resident", max((s[1] for s in samples), default=0), "GB")

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <iomanip>
 #include <sstream>
 #include <string>
 
@@ -650,6 +651,39 @@ TEST_F(Cli, ATileTheDeviceRefusesFailsOrFallsBack) {
   EXPECT_EQ(stats["backend"], "cgal");
   EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
   EXPECT_EQ(slurp(path("auto.ply")), slurp(path("cgal.ply")));
+}
+
+// A tile more than its device holds (here its memory, CDTGPU_DEVICE_MEMORY_LIMIT; on the H100 machine the
+// intersected-edge table of 20M breakline segments over 104M LiDAR points) is not the end of the GPU run: the
+// tiling starts again with smaller tiles, still within --max-tile-points, and gives the same bytes.
+TEST_F(Cli, TilesTooLargeForTheDeviceAreMadeSmaller) {
+  std::ostringstream xyz, wkt;
+  xyz << std::fixed << std::setprecision(2);
+  for (int i = 0; i < 120; ++i)
+    for (int j = 0; j < 100; ++j)
+      xyz << 500000 + 2 * i + (i * 7 + j * 13) % 50 * 0.01 << ' ' << 6000000 + 2 * j + (i * 11 + j * 3) % 50 * 0.01
+          << ' ' << (i + j) % 10 << '\n';
+  for (int k = 0; k < 6; ++k)
+    wkt << "LINESTRING Z (500001 " << 6000010 + 30 * k << " 5, 500120 " << 6000017 + 30 * k << " 5, 500239 "
+        << 6000010 + 30 * k << " 5)\n";
+  write("dense.xyz", xyz.str());
+  write("breaklines.wkt", wkt.str());
+  const std::string in = path("dense.xyz") + " " + path("breaklines.wkt") + " --max-tile-points 6000";
+  const std::string device = first_usable_device();
+  ASSERT_FALSE(device.empty());
+  ASSERT_EQ(run("triangulate " + in + " -q --backend cgal -o " + path("cgal.ply")).code, 0);
+  ::setenv("CDTGPU_DEVICE_MEMORY_LIMIT", "1M", 1);
+  const Result r = run("triangulate " + in + " --backend gpu --device '" + device + "' -o " + path("gpu.ply") +
+                       " --stats " + path("gpu.json"));
+  ::unsetenv("CDTGPU_DEVICE_MEMORY_LIMIT");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find(", level 1 ("), std::string::npos) << "names the tile: " << r.err;
+  EXPECT_NE(r.err.find("again in tiles of at most 3000 points"), std::string::npos) << r.err;
+  const auto stats = nlohmann::json::parse(slurp(path("gpu.json")));
+  EXPECT_EQ(stats["backend"], "gpu");
+  EXPECT_GE(stats["counts"]["gpu_tile_retries"].get<uint64_t>(), 1u);
+  EXPECT_LT(stats["counts"]["tile_points"].get<uint64_t>(), 6000u);
+  EXPECT_EQ(slurp(path("gpu.ply")), slurp(path("cgal.ply")));
 }
 
 // Auto with tiles, and a device that may not come (CI's lavapipe does not count for auto): the resolve beside
