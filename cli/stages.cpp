@@ -366,7 +366,7 @@ void read_job(Job& job) {
   check_host_memory(estimated_points(job), bytes, "estimated from the input files");
   timed(job, "read", [&] { job.parts = read_inputs(specs, job.options.input.read, job.in); });
   check_host_memory(point_count(job.in), bytes, "read");
-  job.crs = choose_crs(job.in, job.options.input.crs);
+  job.crs = timed(job, "crs", [&] { return choose_crs(job.in, job.options.input.crs); });
   timed(job, "project", [&] { project(job.in, job.crs); });
   const DrapeStats drape = timed(job, "drape", [&] { return apply_z_rules(job.in, job.parts); });
   if (drape.draped_vertices)

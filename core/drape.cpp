@@ -4,9 +4,12 @@
 #include "core/drape.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include "core/cdt_cgal.hpp"
@@ -123,14 +126,24 @@ DrapeStats apply_z_rules(InputSet& in, const std::vector<InputPart>& parts) {
     any_draped |= part.z.draped();
   }
 
-  // Vertices read without z, in parts that keep z: 0, as before; not part of the surface.
+  // Vertices read without z, in parts that keep z: 0, as before; not part of the surface. On all cores: every
+  // run reads every vertex here (1.25B took 4.8 s on one).
   auto zero_missing = [&](const InputPart& part, uint64_t& count) {
     if (part.z.kind != ZRule::Kind::keep) return;
-    for (size_t i = part.points_begin; i < part.points_end; ++i)
-      if (is_missing_z(in.points[i].z)) in.points[i].z = 0, ++count;
-    for (size_t i = part.lines_begin; i < part.lines_end; ++i)
-      for (Point3& p : in.lines[i].points)
-        if (is_missing_z(p.z)) p.z = 0, ++count;
+    using Range = tbb::blocked_range<size_t>;
+    count += tbb::parallel_reduce(Range(part.points_begin, part.points_end, 1 << 16), uint64_t(0),
+                                  [&](const Range& r, uint64_t n) {
+                                    for (size_t i = r.begin(); i < r.end(); ++i)
+                                      if (is_missing_z(in.points[i].z)) in.points[i].z = 0, ++n;
+                                    return n;
+                                  }, std::plus<>());
+    count += tbb::parallel_reduce(Range(part.lines_begin, part.lines_end), uint64_t(0),
+                                  [&](const Range& r, uint64_t n) {
+                                    for (size_t i = r.begin(); i < r.end(); ++i)
+                                      for (Point3& p : in.lines[i].points)
+                                        if (is_missing_z(p.z)) p.z = 0, ++n;
+                                    return n;
+                                  }, std::plus<>());
   };
   if (!any_draped) {
     for (const InputPart& part : parts) zero_missing(part, stats.zero_z.emplace_back(0));

@@ -567,7 +567,7 @@ TEST_F(Cli, TiledRunsWriteTheUntiledBytes) {
       for (const char* key : {"tile_points", "tiles", "tile_levels", "tile_final_triangles", "tile_devices", "merge_vertices",
                               "merge_segments", "merge_triangles", "constraint_splits_at_vertices",
                               "gpu_delaunay_rounds", "gpu_delaunay_built_twice", "gpu_constraint_flip_rounds",
-                              "gpu_legalise_rounds", "gpu_peak_device_bytes"})
+                              "gpu_legalise_rounds", "gpu_peak_device_bytes", "gpu_tile_retries"})
         stats["counts"].erase(key);
       EXPECT_EQ(stats["counts"], single["counts"]) << name;
     }
