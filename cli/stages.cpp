@@ -459,7 +459,6 @@ void triangulate_job(Job& job) {
   // Delaunay build (gpu::GpuCdt::triangulate waits for it where it needs the constraints).
   double resolve_ms = 0;
   ResolveProgress progress;
-  std::future<ResolvedInput> resolving;
   const uint64_t vertices = job.prepared.vertices.size();
   const bool handed_over = job.want_gpu && hand_over_prepared(job);
   PreparedInput handed;  // its vertices and segments; the counts stay in job.prepared
@@ -468,6 +467,8 @@ void triangulate_job(Job& job) {
     handed.constraints = std::move(job.prepared.constraints);
     job.prepared.constraint_line = std::vector<uint32_t>{};
   }
+  // Declared after what its task reads: a throw before get() waits for the task before those go.
+  std::future<ResolvedInput> resolving;
   if (job.want_gpu)
     resolving = std::async(std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
