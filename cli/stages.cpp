@@ -18,6 +18,7 @@
 #include "core/regions.hpp"
 #include "core/resolve.hpp"
 #include "core/tiles.hpp"
+#include "core/uninit.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "gpu/check.hpp"
 #include "gpu/devices.hpp"
@@ -29,7 +30,6 @@
 #include "io/output_guard.hpp"
 #include "io/tiles_dir.hpp"
 #include "io/write_png.hpp"
-#include "core/uninit.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -127,9 +127,9 @@ bool prepared_read_later(const Job& job) {
 // 36 bytes a vertex of a tiled run's peak, beside the resolved copy the tiles read. Their counts are in the stats.
 void drop_prepared(Job& job) {
   if (prepared_read_later(job)) return;
-  job.prepared.vertices = Points{};
-  job.prepared.constraints = std::vector<Edge>{};
-  job.prepared.constraint_line = std::vector<uint32_t>{};
+  free_storage(job.prepared.vertices);
+  free_storage(job.prepared.constraints);
+  free_storage(job.prepared.constraint_line);
 }
 
 // Whether the GPU run's resolve may take the prepared input instead of a copy: no later stage reads it
@@ -148,7 +148,8 @@ bool hand_over_prepared(const Job& job) {
 // failed; the prepared input may be gone), tiled here too.
 CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
   // A run checked at the GPU's bytes a point (auto, a device asked for) takes the CPU's here.
-  if (job.start) check_host_memory(job.prepared.input_points, bytes_per_point(job, input_specs(job), true), "read, on the CPU");
+  if (job.start)
+    check_host_memory(job.prepared.input_points, bytes_per_point(job, input_specs(job), true), "read, on the CPU");
   const uint64_t n = resolved ? resolved->vertices.size() : job.prepared.vertices.size();
   const int64_t max_tile_points = job.options.max_tile_points;
   const uint64_t tile = max_tile_points >= 0 ? uint64_t(max_tile_points)
@@ -446,7 +447,6 @@ void prepare_job(Job& job) {
   add_point_class_counts(job.in.point_classes, job.stats);
   job.stats.crs = job.crs.name;
   job.stats.crs_epsg = job.crs.epsg;
-
 }
 
 // The GPU is waited for as late as possible, so that its start (~160 ms on the H100 machine) overlaps the CPU's
@@ -465,14 +465,15 @@ void triangulate_job(Job& job) {
   if (handed_over) {
     handed.vertices = std::move(job.prepared.vertices);
     handed.constraints = std::move(job.prepared.constraints);
-    job.prepared.constraint_line = std::vector<uint32_t>{};
+    free_storage(job.prepared.constraint_line);
   }
   // Declared after what its task reads: a throw before get() waits for the task before those go.
   std::future<ResolvedInput> resolving;
   if (job.want_gpu)
     resolving = std::async(std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
-      ResolvedInput r = handed_over ? resolve_constraints(std::move(handed)) : resolve_constraints(job.prepared, progress);
+      ResolvedInput r =
+          handed_over ? resolve_constraints(std::move(handed)) : resolve_constraints(job.prepared, progress);
       resolve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
     });

@@ -4,8 +4,8 @@
 #include <type_traits>
 
 #include "core/touched.hpp"
-#include "io/text_source.hpp"
 #include "core/uninit.hpp"
+#include "io/text_source.hpp"
 
 namespace cdtgpu {
 

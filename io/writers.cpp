@@ -19,10 +19,10 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/uninit.hpp"
 #include "io/atomic_file.hpp"
 #include "io/mesh_formats.hpp"
 #include "io/parallel_text.hpp"
-#include "core/uninit.hpp"
 
 namespace cdtgpu {
 

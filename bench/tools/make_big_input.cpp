@@ -45,7 +45,8 @@ void write_las(const std::string& path, uint64_t n, uint64_t seed) {
   put<double>(h, 195, kY0 + kSide), put<double>(h, 203, kY0);                   // max y, min y
   put<double>(h, 211, 200.0), put<double>(h, 219, 0.0);                         // max z, min z
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0 || ::pwrite(fd, h.data(), h.size(), 0) != ssize_t(h.size())) throw std::runtime_error("cannot write " + path);
+  if (fd < 0 || ::pwrite(fd, h.data(), h.size(), 0) != ssize_t(h.size()))
+    throw std::runtime_error("cannot write " + path);
   const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
   std::vector<std::thread> pool;
   for (unsigned t = 0; t < threads; ++t)
@@ -91,7 +92,8 @@ void write_lines(const std::string& dir, uint64_t vertices, uint64_t per_line, u
       const std::string base = dir + "/contours_" + std::to_string(i / per_file + 1);
       shp = SHPCreate((base + ".shp").c_str(), SHPT_ARCZ);
       dbf = DBFCreate((base + ".dbf").c_str());
-      if (!shp || !dbf || DBFAddField(dbf, "ELEV", FTDouble, 12, 3) < 0) throw std::runtime_error("cannot create " + base);
+      if (!shp || !dbf || DBFAddField(dbf, "ELEV", FTDouble, 12, 3) < 0)
+        throw std::runtime_error("cannot create " + base);
     }
     const double centre = kY0 + (double(i) + 0.5) * band, elev = 100 + 0.001 * double(i % 100000);
     for (uint64_t j = 0; j < per_line; ++j) {
