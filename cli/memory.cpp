@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -50,9 +51,19 @@ void check_host_memory(uint64_t points, uint64_t bytes_per_point, const std::str
   if (need > m.total)
     throw HostMemoryError(about + "; this machine has " + gigabytes(m.total) +
                           ": split the input (by area, into several runs) or use a machine with more memory");
-  if (need > m.available)
+  // What this process holds already (the points read, at the second check) is part of the need and no longer
+  // free: counted once.
+  const uint64_t held = resident_bytes();
+  if (need > m.available + held)
     spdlog::warn("{}; {} of this machine's {} are free now: the run may page or be killed", about,
-                 gigabytes(m.available), gigabytes(m.total));
+                 gigabytes(m.available + held), gigabytes(m.total));
+}
+
+uint64_t resident_bytes() {
+  std::ifstream statm("/proc/self/statm");
+  uint64_t pages = 0, resident = 0;
+  if (!(statm >> pages >> resident)) return 0;
+  return resident * uint64_t(sysconf(_SC_PAGESIZE));
 }
 
 uint64_t peak_host_bytes() {

@@ -37,6 +37,9 @@ struct HostMemoryError : std::runtime_error {
 // than is available now (other processes hold the rest). `what`: where the count comes from, for the message.
 void check_host_memory(uint64_t points, uint64_t bytes_per_point, const std::string& what);
 
+// The process's resident bytes now (/proc/self/statm; 0 where unknown).
+uint64_t resident_bytes();
+
 // The process's peak resident bytes so far (getrusage).
 uint64_t peak_host_bytes();
 
