@@ -2,7 +2,7 @@
 // it reads (from the files' sizes) and again once the points are read. A run that does not fit would otherwise
 // be killed by the kernel's out-of-memory killer after minutes of work, or page for hours.
 //
-//   check_host_memory(estimate_input_points(paths), kHostBytesPerPointGpu, "estimated from the input files");
+//   check_host_memory(estimate_input_points(paths), kHostBytesPerPointCpu, "estimated from the input files");
 #pragma once
 #include <cstdint>
 #include <stdexcept>
@@ -12,12 +12,14 @@ namespace cdtgpu {
 
 // Resident bytes a `cdtgpu triangulate` run holds at its peak per input vertex, at least as many as measured
 // (H100 machine, text points + contour lines, 2026-11-27, session 40; docs/performance.md, "Host memory"). The
-// GPU backend, tiled or not: 126-146 at 20M input vertices, 91 at 80M, 72 at 200M (fixed costs such as the
-// device's staging spread thinner; the slope is ~60), so 95 holds from ~80M up, where a machine's memory
-// matters. The CPU backend (CGAL, tiles on every core, a quarter of the input in flight): 135 at 20M. Boundaries,
-// holes and --max-edge keep the prepared input to the end (24 bytes a vertex and 12 a segment) and their own
-// tables: 40 more.
-constexpr uint64_t kHostBytesPerPointGpu = 95;
+// GPU backend in tiles: 146 at 20M input vertices, 91 at 80M, 72 at 200M, 70 at 1.25B (fixed costs such as the
+// device's staging spread thinner; the slope is ~60), so 95 holds where the input is beyond any device's tile
+// and the machine's memory matters. The GPU in one piece (up to ~200M points): 126 at 20M, 103 at 80M, so 130.
+// The CPU backend (CGAL, tiles on every core, a quarter of the input in flight): 135 at 20M. Boundaries, holes
+// and --max-edge keep the prepared input to the end (24 bytes a vertex and 12 a segment) and their own tables:
+// 40 more.
+constexpr uint64_t kHostBytesPerPointGpuTiles = 95;
+constexpr uint64_t kHostBytesPerPointGpu = 130;
 constexpr uint64_t kHostBytesPerPointCpu = 140;
 constexpr uint64_t kHostBytesPerPointRegions = 40;  // added to either
 

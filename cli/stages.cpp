@@ -102,13 +102,17 @@ CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_point
   return r;
 }
 
-// Host bytes a point of this job may take at the run's peak (cli/memory.hpp): the GPU's figure where a device
-// was asked for (auto falling back to the CPU is checked again there), else the CPU's.
-uint64_t bytes_per_point(const Job& job, const std::vector<InputSpec>& specs, bool on_cpu = false) {
+// Host bytes a point of this job's `points` may take at the run's peak (cli/memory.hpp): the GPU's figure where
+// a device was asked for (auto falling back to the CPU is checked again there), tiled beyond any device's
+// tile; else the CPU's.
+uint64_t bytes_per_point(const Job& job, const std::vector<InputSpec>& specs, uint64_t points, bool on_cpu = false) {
   const bool regions = job.options.max_edge > 0 ||
                        std::any_of(specs.begin(), specs.end(), [](const InputSpec& s) { return is_region_role(s.role); });
   const bool gpu = !on_cpu && job.options.backend != "cgal" && (job.options.backend == "gpu" || job.start);
-  return (gpu ? kHostBytesPerPointGpu : kHostBytesPerPointCpu) + (regions ? kHostBytesPerPointRegions : 0);
+  const uint64_t base = !gpu ? kHostBytesPerPointCpu
+                        : points > gpu::max_tile_points_of_any_device() ? kHostBytesPerPointGpuTiles
+                                                                        : kHostBytesPerPointGpu;
+  return base + (regions ? kHostBytesPerPointRegions : 0);
 }
 std::vector<InputSpec> input_specs(const Job& job) {
   std::vector<InputSpec> specs;
@@ -149,7 +153,8 @@ bool hand_over_prepared(const Job& job) {
 CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
   // A run checked at the GPU's bytes a point (auto, a device asked for) takes the CPU's here.
   if (job.start)
-    check_host_memory(job.prepared.input_points, bytes_per_point(job, input_specs(job), true), "read, on the CPU");
+    check_host_memory(job.prepared.input_points, bytes_per_point(job, input_specs(job), job.prepared.input_points, true),
+                      "read, on the CPU");
   const uint64_t n = resolved ? resolved->vertices.size() : job.prepared.vertices.size();
   const int64_t max_tile_points = job.options.max_tile_points;
   const uint64_t tile = max_tile_points >= 0 ? uint64_t(max_tile_points)
@@ -358,15 +363,19 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
 }
 
 
-uint64_t estimated_peak_bytes(Job& job) { return estimated_points(job) * bytes_per_point(job, input_specs(job)); }
+uint64_t estimated_peak_bytes(Job& job) {
+  const uint64_t points = estimated_points(job);
+  return points * bytes_per_point(job, input_specs(job), points);
+}
 
 // Read and projected; what prepare_job needs next.
 void read_job(Job& job) {
   const std::vector<InputSpec> specs = input_specs(job);
-  const uint64_t bytes = bytes_per_point(job, specs);
-  check_host_memory(estimated_points(job), bytes, "estimated from the input files");
+  const uint64_t estimate = estimated_points(job);
+  check_host_memory(estimate, bytes_per_point(job, specs, estimate), "estimated from the input files");
   timed(job, "read", [&] { job.parts = read_inputs(specs, job.options.input.read, job.in); });
-  check_host_memory(point_count(job.in), bytes, "read");
+  const uint64_t read = point_count(job.in);
+  check_host_memory(read, bytes_per_point(job, specs, read), "read");
   job.crs = timed(job, "crs", [&] { return choose_crs(job.in, job.options.input.crs); });
   timed(job, "project", [&] { project(job.in, job.crs); });
   const DrapeStats drape = timed(job, "drape", [&] { return apply_z_rules(job.in, job.parts); });
