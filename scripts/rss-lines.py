@@ -27,14 +27,17 @@ def sample():
 
 thread = threading.Thread(target=sample)
 thread.start()
-lines = [(time.monotonic() - t0, line.rstrip()) for line in p.stderr]
-p.wait()
-thread.join()
+# Each line printed as it arrives (a run cut short keeps what it said), with the most memory since the line before.
 i = 0
-for t, line in lines:
+top = 0.0
+for line in p.stderr:
+    t = time.monotonic() - t0
     peak = 0.0
     while i < len(samples) and samples[i][0] <= t:
         peak = max(peak, samples[i][1])
         i += 1
-    print(f"{t * 1e3:8.0f} ms  max {peak:6.2f} GB  {line[:400]}")
+    top = max(top, peak)
+    print(f"{t * 1e3:8.0f} ms  max {peak:6.2f} GB  {line.rstrip()[:400]}", flush=True)
+p.wait()
+thread.join()
 print("peak resident", max((s[1] for s in samples), default=0), "GB")
