@@ -29,14 +29,12 @@ thread = threading.Thread(target=sample)
 thread.start()
 # Each line printed as it arrives (a run cut short keeps what it said), with the most memory since the line before.
 i = 0
-top = 0.0
 for line in p.stderr:
     t = time.monotonic() - t0
     peak = 0.0
     while i < len(samples) and samples[i][0] <= t:
         peak = max(peak, samples[i][1])
         i += 1
-    top = max(top, peak)
     print(f"{t * 1e3:8.0f} ms  max {peak:6.2f} GB  {line.rstrip()[:400]}", flush=True)
 p.wait()
 thread.join()
