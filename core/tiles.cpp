@@ -421,6 +421,7 @@ class Buckets {
         const size_t to = size_t(std::partition_point(run.begin() + done[r], run.end(),
                                                       [&](const Triangle& t) { return t[0] < end; }) -
                                  run.begin());
+        if (to == done[r]) continue;  // a run's vertices lie in its tile's column: most waves miss it
         const std::span<const Triangle> part(run.data() + done[r], to - done[r]);
         each_group(part, [&](uint32_t v, size_t i, size_t j) {
           std::copy(part.begin() + i, part.begin() + j, out.begin() + base[v / kBlock] + count_[v]);
