@@ -242,15 +242,14 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     job.gpu_contours.reset();
     return triangulate_cpu(job, resolved);
   };
-  const uint64_t tile = gpu_tile_points(start.context(), vertices, options.max_tile_points);
-  if (tile >= 3 && vertices > tile) {
-    ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
-    stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+  // GPU tiles of at most `tile_here` points, tiled again smaller while a tile is more than its device holds;
+  // `retries`: such restarts before this call.
+  auto in_tiles = [&](ResolvedInput& in, uint64_t tile_here, uint64_t retries) -> CdtResult {
     drop_prepared(job);
     try {
       const gpu::TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
-      uint64_t tile_here = options.max_tile_points >= 0 ? tile : std::min(tile, devices.max_tile_points());
-      for (uint64_t retries = 0;; ++retries) {
+      if (options.max_tile_points < 0) tile_here = std::min(tile_here, devices.max_tile_points());
+      for (;; ++retries) {
         try {
           gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
           CdtResult r = triangulate_in_tiles(job, std::move(in), tile_here, tiles.triangulate,
@@ -272,12 +271,26 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     } catch (const gpu::DeviceError& e) {
       return on_cpu_instead(e, &in);
     }
+  };
+  const uint64_t tile = gpu_tile_points(start.context(), vertices, options.max_tile_points);
+  if (tile >= 3 && vertices > tile) {
+    ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
+    stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+    return in_tiles(in, tile, 0);
   }
   gpu::GpuCdtStats gs;
   CdtResult r;
   try {
     r = cdt.triangulate(job.prepared, std::move(resolving), &gs, &progress);
   } catch (const gpu::DeviceError& e) {
+    // The whole input more than the device holds (the tables of long constraints, say): its tiles may fit,
+    // unless --max-tile-points 0 forbids them. The resolved input went with the failed call: resolved again.
+    if (const uint64_t smaller = options.max_tile_points != 0 ? smaller_tile(e, vertices) : 0) {
+      spdlog::warn("{}: again in tiles of at most {} points", e.what(), smaller);
+      cdt.drop_kept();
+      ResolvedInput in = timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); });
+      return in_tiles(in, smaller, 1);
+    }
     return on_cpu_instead(e);
   }
   stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);

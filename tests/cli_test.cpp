@@ -655,7 +655,8 @@ TEST_F(Cli, ATileTheDeviceRefusesFailsOrFallsBack) {
 
 // A tile more than its device holds (here its memory, CDTGPU_DEVICE_MEMORY_LIMIT; on the H100 machine the
 // intersected-edge table of 20M breakline segments over 104M LiDAR points) is not the end of the GPU run: the
-// tiling starts again with smaller tiles, still within --max-tile-points, and gives the same bytes.
+// tiling starts again with smaller tiles, still within --max-tile-points, and gives the same bytes. So does a
+// whole input the device cannot take in one piece, unless --max-tile-points 0 forbids tiles.
 TEST_F(Cli, TilesTooLargeForTheDeviceAreMadeSmaller) {
   std::ostringstream xyz, wkt;
   xyz << std::fixed << std::setprecision(2);
@@ -668,14 +669,27 @@ TEST_F(Cli, TilesTooLargeForTheDeviceAreMadeSmaller) {
         << 6000010 + 30 * k << " 5)\n";
   write("dense.xyz", xyz.str());
   write("breaklines.wkt", wkt.str());
-  const std::string in = path("dense.xyz") + " " + path("breaklines.wkt") + " --max-tile-points 6000";
+  const std::string whole = path("dense.xyz") + " " + path("breaklines.wkt");
+  const std::string in = whole + " --max-tile-points 6000";
   const std::string device = first_usable_device();
   ASSERT_FALSE(device.empty());
   ASSERT_EQ(run("triangulate " + in + " -q --backend cgal -o " + path("cgal.ply")).code, 0);
+  const std::string gpu = " --backend gpu --device '" + device + "'";
   ::setenv("CDTGPU_DEVICE_MEMORY_LIMIT", "1M", 1);
-  const Result r = run("triangulate " + in + " --backend gpu --device '" + device + "' -o " + path("gpu.ply") +
-                       " --stats " + path("gpu.json"));
+  const Result r = run("triangulate " + in + gpu + " -o " + path("gpu.ply") + " --stats " + path("gpu.json"));
+  // Untiled first (the input is far below the device's tile): the whole is too large, its tiles are not.
+  const Result untiled = run("triangulate " + whole + gpu + " -q -o " + path("whole.ply") + " --stats " +
+                             path("whole.json"));
+  const Result never = run("triangulate " + whole + gpu + " -q --max-tile-points 0 -o " + path("never.ply"));
   ::unsetenv("CDTGPU_DEVICE_MEMORY_LIMIT");
+  ASSERT_EQ(untiled.code, 0) << untiled.err;
+  EXPECT_NE(untiled.err.find("again in tiles of at most"), std::string::npos) << untiled.err;
+  const auto whole_stats = nlohmann::json::parse(slurp(path("whole.json")));
+  EXPECT_GE(whole_stats["counts"]["tiles"].get<uint64_t>(), 2u);
+  EXPECT_GE(whole_stats["counts"]["gpu_tile_retries"].get<uint64_t>(), 1u);
+  EXPECT_EQ(slurp(path("whole.ply")), slurp(path("cgal.ply")));
+  EXPECT_EQ(never.code, 3) << "--max-tile-points 0 never tiles: " << never.err;
+  EXPECT_FALSE(fs::exists(path("never.ply")));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find(", level 1 ("), std::string::npos) << "names the tile: " << r.err;
   EXPECT_NE(r.err.find("again in tiles of at most 3000 points"), std::string::npos) << r.err;
