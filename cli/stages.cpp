@@ -120,11 +120,15 @@ std::vector<InputSpec> input_specs(const Job& job) {
   return specs;
 }
 
+// Whether a boundary or hole input was read: its rings are read again by the regions, after prepare.
+bool has_region_inputs(const Job& job) {
+  return std::any_of(job.parts.begin(), job.parts.end(), [](const InputPart& p) { return is_region_role(p.role); });
+}
+
 // Whether a stage after the triangulation reads the prepared input: the regions (boundary and hole rings,
 // --max-edge) and the preview's constraint lines.
 bool prepared_read_later(const Job& job) {
-  return job.options.max_edge > 0 || !job.options.preview.empty() ||
-         std::any_of(job.parts.begin(), job.parts.end(), [](const InputPart& p) { return is_region_role(p.role); });
+  return job.options.max_edge > 0 || !job.options.preview.empty() || has_region_inputs(job);
 }
 
 // The prepared vertices and segments, once the triangulation needs them no more and no later stage reads them:
@@ -431,11 +435,10 @@ void prepare_job(Job& job) {
   // Later stages read only the rings of boundary and hole inputs (region_rules): the rest of what was read
   // goes as soon as prepare has copied it. Kept to the end, it was a quarter of a large run's peak (80M
   // vertices in tiles: 3.0 of 13 GB).
-  const bool rings =
-      std::any_of(job.parts.begin(), job.parts.end(), [](const InputPart& p) { return is_region_role(p.role); });
+  const bool rings = has_region_inputs(job);
   auto drop_input = [&] {
-    job.in.points = Points{};
-    if (!rings) job.in.lines = std::vector<Polyline>{};
+    free_storage(job.in.points);
+    if (!rings) free_storage(job.in.lines);
   };
   job.prepared = timed(job, "prepare", [&] { return prepare(job.in, merge_points, drop_input); });
   spdlog::info("CRS: {}", job.crs.name);

@@ -221,7 +221,14 @@ std::string TileDevices::names() const {
   return names;
 }
 
-uint64_t max_tile_points_of_any_device() { return uint64_t(DT_MAX_SLOTS / 2) / 4 * 3; }
+namespace {
+// The Delaunay build's slot limit, in points: every device's.
+constexpr uint64_t kSlotPoints = DT_MAX_SLOTS / 2;
+// A quarter to spare for the endpoints of the segments that cross into a tile.
+uint64_t with_room(uint64_t points) { return points / 4 * 3; }
+}  // namespace
+
+uint64_t max_tile_points_of_any_device() { return with_room(kSlotPoints); }
 
 uint64_t max_tile_points(const Context& ctx) {
   uint64_t device_local = 0;
@@ -229,11 +236,10 @@ uint64_t max_tile_points(const Context& ctx) {
     if (ctx.info.heap_device_local[h]) device_local = std::max(device_local, ctx.info.heap_sizes[h]);
   constexpr uint64_t kBytesPerPoint = 260;
   const uint64_t by_memory = device_local / kBytesPerPoint;
-  const uint64_t by_slots = DT_MAX_SLOTS / 2;  // max_tile_points_of_any_device() once taken 3 / 4
   // The largest descriptor-bound buffer per point: the constraint inserter's 12-byte tables per triangle
   // slot, ~24 bytes a point (6.1 GB at 256M points, refused by a 4 GiB range).
   const uint64_t by_range = ctx.info.max_storage_buffer_range / 24;
-  return std::min({by_memory, by_slots, by_range}) / 4 * 3;
+  return with_room(std::min({by_memory, kSlotPoints, by_range}));
 }
 
 }  // namespace cdtgpu::gpu
