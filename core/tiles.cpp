@@ -29,6 +29,8 @@
 
 #include <sys/mman.h>
 
+#include <spdlog/spdlog.h>
+
 #include "core/canonical.hpp"
 #include "core/compact.hpp"
 #include "core/parallel.hpp"
@@ -513,10 +515,15 @@ TileFinal final_on_host(const Points& v, std::span<const uint32_t> ids,
   return f;
 }
 
-TileResult run_tile(const Points& v, const std::vector<Edge>& segments, const Plan& plan,
-                    const Node& node, std::span<const uint32_t> tile_segments,
-                    const TileTriangulator& triangulate, const TileFinalizer& finalize,
-                    const std::string& name, std::vector<uint8_t>& in_final) {
+// A tile's input: its vertex ids of the whole (sorted) and its segments in local ids.
+struct GatheredTile {
+  RawVector<uint32_t> ids;
+  std::vector<Edge> local_segments;
+  double gather_ms = 0;
+};
+
+GatheredTile gather_tile(const std::vector<Edge>& segments, const Plan& plan, const Node& node,
+                         std::span<const uint32_t> tile_segments) {
   const auto t0 = Clock::now();
   // The tile's vertex ids, sorted: its own lie in its column's id range (a column is a range of the (x, y)
   // order), marked in a byte map and read back in order; the segments' endpoints outside that range (few) are
@@ -576,11 +583,17 @@ TileResult run_tile(const Points& v, const std::vector<Edge>& segments, const Pl
     local_segments[i] = {local_of(segments[tile_segments[i]][0]), local_of(segments[tile_segments[i]][1])};
   });
   tbb::parallel_sort(local_segments.begin(), local_segments.end());
+  return GatheredTile{std::move(ids), std::move(local_segments), ms_since(t0)};
+}
 
+TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const TileTriangulator& triangulate,
+                       const TileFinalizer& finalize, const std::string& name, std::vector<uint8_t>& in_final) {
+  const auto t0 = Clock::now();
+  const RawVector<uint32_t>& ids = g.ids;
   TileResult r;
-  r.gather_ms = ms_since(t0);
-  TileFinal f = finalize ? finalize_tile(finalize, TileJob{v, ids, local_segments, node.rect, name}, r)
-                         : final_on_host(v, ids, local_segments, node.rect, triangulate, name, r);
+  r.gather_ms = g.gather_ms;
+  TileFinal f = finalize ? finalize_tile(finalize, TileJob{v, ids, g.local_segments, node.rect, name}, r)
+                         : final_on_host(v, ids, g.local_segments, node.rect, triangulate, name, r);
   // Back to the whole's ids, in place (a fresh 1.5 GB array for a 64M-point tile was zeroed on one core):
   // sorted ids keep a canonical list canonical.
   r.final_triangles = std::move(f.triangles);
@@ -596,7 +609,7 @@ TileResult run_tile(const Points& v, const std::vector<Edge>& segments, const Pl
     for (uint32_t id : r.final_triangles[i])
       std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
   });
-  r.other_ms = ms_since(t0) - r.cdt_ms;
+  r.other_ms = r.gather_ms + ms_since(t0) - r.cdt_ms;
   return r;
 }
 
@@ -688,12 +701,18 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     return all;
   }
   const auto t_tiles = Clock::now();
+  // The tiles' staging, allocated beside the plan: for tiles of about n / ceil(n / max) points (the plan's
+  // cells are no larger), again after it if one is, with room for the segments' far endpoints.
+  auto with_room = [](uint64_t points) { return points + points / 64 + 1024; };
+  const uint64_t estimate = (n + (n + options.max_tile_points - 1) / options.max_tile_points - 1) /
+                            ((n + options.max_tile_points - 1) / options.max_tile_points);
+  if (level == 1 && options.reserve) options.reserve(with_room(estimate));
   Plan plan = plan_tiles(v, options.max_tile_points);
   const size_t tiles = plan.tiles.size();
   if (level == 1 && options.reserve) {
     uint64_t largest = 0;
     for (uint32_t t : plan.tiles) largest = std::max<uint64_t>(largest, plan.nodes[t].hi - plan.nodes[t].lo);
-    options.reserve(largest + largest / 64 + 1024);
+    if (largest > estimate) options.reserve(with_room(largest));
   }
   std::vector<uint32_t> tile_of_node(plan.nodes.size(), 0);
   for (size_t t = 0; t < tiles; ++t) tile_of_node[plan.tiles[t]] = uint32_t(t);
@@ -760,40 +779,60 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   block_count.clear();
 
   s.plan_ms += ms_since(t_tiles);
+  spdlog::debug("tiles, level {}: {} tiles of at most {} points planned in {:.0f} ms", level, tiles,
+                options.max_tile_points, ms_since(t_tiles));
   std::vector<uint8_t> in_final;
   resize_touched(in_final, n);  // zeroed on all cores
   Buckets buckets(n);
   std::vector<TileResult> results(tiles);
-  // At most tiles_in_flight tiles at once (a sliding window), each with every core for its own loops.
-  auto one_tile = [&](size_t t) {
+  auto tile_name = [&](size_t t) {
+    return "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);
+  };
+  // Isolated: a thread waiting in a tile's own parallel loops takes no other tile (whose GPU call would make it
+  // wait for the device as well).
+  auto gather = [&](size_t t) {
     const std::span<const uint32_t> mine(tile_segments.data() + first[t], first[t + 1] - first[t]);
-    const std::string name =
-        "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);
-    // Isolated: a thread waiting in this tile's own parallel loops takes no other tile (whose GPU call would
-    // make it wait for the device as well).
+    return tbb::this_task_arena::isolate(
+        [&] { return gather_tile(segments, plan, plan.nodes[plan.tiles[t]], mine); });
+  };
+  auto finish = [&](size_t t, GatheredTile g) {
+    const std::string name = tile_name(t);
     tbb::this_task_arena::isolate([&] {
-      results[t] = run_tile(v, segments, plan, plan.nodes[plan.tiles[t]], mine, triangulate, options.finalize, name,
-                            in_final);
+      results[t] = finish_tile(v, std::move(g), plan.nodes[plan.tiles[t]], triangulate, options.finalize, name,
+                               in_final);
       buckets.count(results[t].final_triangles);
     });
+    const TileResult& r = results[t];
+    spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms", name,
+                  r.final_triangles.size(), r.gather_ms, r.cdt_ms, r.other_ms - r.gather_ms);
   };
   // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's).
   const TileSharing* sharing = level == 1 && options.sharing && options.sharing->ranks > 1 ? options.sharing : nullptr;
   std::vector<size_t> mine;
   for (size_t t = 0; t < tiles; ++t)
     if (!sharing || int(t % size_t(sharing->ranks)) == sharing->rank) mine.push_back(t);
-  auto my_tile = [&](size_t k) { one_tile(mine[k]); };
   if (options.tiles_in_flight == 0 || options.tiles_in_flight >= mine.size()) {
-    tbb::parallel_for(size_t(0), mine.size(), size_t(1), my_tile);
+    tbb::parallel_for(size_t(0), mine.size(), size_t(1), [&](size_t k) { finish(mine[k], gather(mine[k])); });
   } else {
+    // tiles_in_flight tiles on the devices, one more gathered: tiles are gathered one at a time, in order, on
+    // every core, so the next tile is ready when a device is free (gathered beside the tiles' own finishing,
+    // a tile's gather took as long as its GPU call and the device waited).
+    std::vector<GatheredTile> gathered(tiles);
     size_t next = 0;
-    tbb::parallel_pipeline(options.tiles_in_flight,
-                           tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                                          [&](tbb::flow_control& fc) -> size_t {
-                                                            if (next == mine.size()) fc.stop();
-                                                            return next < mine.size() ? next++ : 0;
-                                                          }) &
-                               tbb::make_filter<size_t, void>(tbb::filter_mode::parallel, my_tile));
+    tbb::parallel_pipeline(
+        options.tiles_in_flight + 1,
+        tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                       [&](tbb::flow_control& fc) -> size_t {
+                                         if (next == mine.size()) fc.stop();
+                                         return next < mine.size() ? mine[next++] : 0;
+                                       }) &
+            tbb::make_filter<size_t, size_t>(tbb::filter_mode::serial_in_order,
+                                             [&](size_t t) {
+                                               gathered[t] = gather(t);
+                                               return t;
+                                             }) &
+            tbb::make_filter<size_t, void>(tbb::filter_mode::parallel,
+                                           [&](size_t t) { finish(t, std::move(gathered[t])); }));
   }
   if (sharing) {
     // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final

@@ -2,7 +2,10 @@
 
 #include <tbb/task_arena.h>
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
+#include <chrono>
 #include <condition_variable>
 #include <future>
 #include <memory>
@@ -15,6 +18,8 @@
 namespace cdtgpu::gpu {
 
 namespace {
+
+double ms(std::chrono::steady_clock::duration d) { return std::chrono::duration<double, std::milli>(d).count(); }
 
 void add(std::vector<std::pair<std::string, double>>& sum,
          const std::vector<std::pair<std::string, double>>& one) {
@@ -103,9 +108,12 @@ class OnDevice {
   // so those host copies overlap another tile's GPU work.
   TileFinal staged(const TileJob& job) {
     return tbb::this_task_arena::isolate([&] {
+      const auto t0 = std::chrono::steady_clock::now();
       if (const auto reserved = reserved_; reserved.valid()) reserved.get();  // rethrows the allocation's error
+      const auto t1 = std::chrono::steady_clock::now();
       const size_t slot = slots_.take();
       const DevicePool::Held held_slot{slots_, slot};
+      const auto slot_taken = std::chrono::steady_clock::now();
       const size_t d = slot % cdts_.size();
       const GpuCdt& cdt = *cdts_[d];
       HostStaging& staging = *staging_[slot];
@@ -115,9 +123,14 @@ class OnDevice {
         TileFinal f;
         uint32_t count = 0;
         GpuCdtStats one;
+        const auto t2 = std::chrono::steady_clock::now();
         {
           pool_.take(d);
           const DevicePool::Held held_device{pool_, d};
+          const auto t3 = std::chrono::steady_clock::now();
+          spdlog::debug("{}: waited {:.0f} ms for the staging memory, {:.0f} ms for a slot, staged in {:.0f} ms, "
+                        "waited {:.0f} ms for the device",
+                        job.what, ms(t1 - t0), ms(slot_taken - t1), ms(t2 - slot_taken), ms(t3 - t2));
           count = cdt.finalize_staged(job, staging, f, &one);
         }
         GpuCdt::unstage_triangles(staging, count, f);
