@@ -247,16 +247,26 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     return triangulate_cpu(job, resolved);
   };
   // GPU tiles of at most `tile_here` points, tiled again smaller while a tile is more than its device holds;
-  // `retries`: such restarts before this call.
-  auto in_tiles = [&](ResolvedInput& in, uint64_t tile_here, uint64_t retries) -> CdtResult {
-    drop_prepared(job);
+  // `retries`: such restarts before this call. `resolve` gives the input once the tile devices are open and
+  // their staging is being pinned (seconds at 10^8 points, hidden behind the resolve).
+  auto in_tiles = [&](const std::function<ResolvedInput()>& resolve, uint64_t tile_here,
+                      uint64_t retries) -> CdtResult {
+    std::optional<ResolvedInput> got;
+    auto input = [&]() -> ResolvedInput& {
+      if (!got) {
+        got.emplace(resolve());
+        drop_prepared(job);
+      }
+      return *got;
+    };
     try {
       const gpu::TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
       if (options.max_tile_points < 0) tile_here = std::min(tile_here, devices.max_tile_points());
       for (;; ++retries) {
         try {
           gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
-          CdtResult r = triangulate_in_tiles(job, std::move(in), tile_here, tiles.triangulate,
+          if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
+          CdtResult r = triangulate_in_tiles(job, std::move(input()), tile_here, tiles.triangulate,
                                              unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
                                              std::move(tiles.reserve));
           stats.counts["gpu_tile_retries"] = retries;
@@ -264,7 +274,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
         } catch (const gpu::DeviceError& e) {
           // Tiles are sized by points, but a tile's constraint work grows with how many triangles its segments
           // cross (long breaklines over dense LiDAR: 34 a segment), and its tables may not fit then. Smaller
-          // tiles (still at most --max-tile-points) do; the same bytes. `in` is whole after a failed tiling.
+          // tiles (still at most --max-tile-points) do; the same bytes. The input is whole after a failed tiling.
           const uint64_t smaller = smaller_tile(e, tile_here);
           if (!smaller) throw;
           spdlog::warn("{}: again in tiles of at most {} points", e.what(), smaller);
@@ -273,14 +283,18 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
         }
       }
     } catch (const gpu::DeviceError& e) {
-      return on_cpu_instead(e, &in);
+      return on_cpu_instead(e, &input());
     }
   };
   const uint64_t tile = gpu_tile_points(start.context(), vertices, options.max_tile_points);
   if (tile >= 3 && vertices > tile) {
-    ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
-    stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
-    return in_tiles(in, tile, 0);
+    return in_tiles(
+        [&] {
+          ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
+          stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+          return in;
+        },
+        tile, 0);
   }
   gpu::GpuCdtStats gs;
   CdtResult r;
@@ -292,8 +306,8 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     if (const uint64_t smaller = options.max_tile_points != 0 ? smaller_tile(e, vertices) : 0) {
       spdlog::warn("{}: again in tiles of at most {} points", e.what(), smaller);
       cdt.drop_kept();
-      ResolvedInput in = timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); });
-      return in_tiles(in, smaller, 1);
+      return in_tiles([&] { return timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); }); },
+                      smaller, 1);
     }
     return on_cpu_instead(e);
   }

@@ -371,6 +371,9 @@ void release_pages(const void* p, size_t bytes) {
   if (b > a) madvise(reinterpret_cast<void*>(a), b - a, MADV_DONTNEED);
 }
 
+// A tile's own points and room for the far endpoints of the segments that cross into it.
+uint64_t staging_room(uint64_t points) { return points + points / 64 + 1024; }
+
 // The canonical order of sorted runs that together hold every triangle once (first vertices below n): each
 // triangle goes to its first vertex's bucket, laid out by counts and prefix sums. Runs are counted as they
 // come (a tile's while the others are on the device) and placed at the end. A run's triangles of one vertex
@@ -701,18 +704,15 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     return all;
   }
   const auto t_tiles = Clock::now();
-  // The tiles' staging, allocated beside the plan: for tiles of about n / ceil(n / max) points (the plan's
-  // cells are no larger), again after it if one is, with room for the segments' far endpoints.
-  auto with_room = [](uint64_t points) { return points + points / 64 + 1024; };
-  const uint64_t estimate = (n + (n + options.max_tile_points - 1) / options.max_tile_points - 1) /
-                            ((n + options.max_tile_points - 1) / options.max_tile_points);
-  if (level == 1 && options.reserve) options.reserve(with_room(estimate));
+  // The tiles' staging, allocated beside the plan (if the caller has not yet), again after it if a tile is larger.
+  const uint64_t reserved = level == 1 && options.reserve ? tile_staging_points(n, options.max_tile_points) : 0;
+  if (reserved) options.reserve(reserved);
   Plan plan = plan_tiles(v, options.max_tile_points);
   const size_t tiles = plan.tiles.size();
-  if (level == 1 && options.reserve) {
+  if (reserved) {
     uint64_t largest = 0;
     for (uint32_t t : plan.tiles) largest = std::max<uint64_t>(largest, plan.nodes[t].hi - plan.nodes[t].lo);
-    if (largest > estimate) options.reserve(with_room(largest));
+    if (staging_room(largest) > reserved) options.reserve(staging_room(largest));
   }
   std::vector<uint32_t> tile_of_node(plan.nodes.size(), 0);
   for (size_t t = 0; t < tiles; ++t) tile_of_node[plan.tiles[t]] = uint32_t(t);
@@ -1034,6 +1034,11 @@ std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points) {
 bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double x0, double x1, double y0,
                        double y1) {
   return disk_inside(a, b, c, Rect{x0, x1, y0, y1});
+}
+
+uint64_t tile_staging_points(uint64_t n, uint64_t max_tile_points) {
+  const uint64_t tiles = (n + max_tile_points - 1) / max_tile_points;
+  return staging_room((n + tiles - 1) / tiles);
 }
 
 uint64_t auto_cpu_tile_points(uint64_t vertices, unsigned cores) {

@@ -95,8 +95,8 @@ struct TileOptions {
   // Tiles (of every level) through this instead of the triangulator plus the host's final test; the merges
   // still take the triangulator. Empty: the host's test.
   TileFinalizer finalize;
-  // Told the largest first-level tile's vertex count (with room for segment ends from outside) once the tiles
-  // are planned, before their segments are: a GPU finalizer allocates its pinned staging meanwhile.
+  // Told a first-level tile's vertex count (tile_staging_points) before the plan, and again after it if a tile
+  // is larger: a GPU finalizer allocates its pinned staging meanwhile.
   std::function<void(uint64_t vertices)> reserve;
 };
 
@@ -148,5 +148,8 @@ bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double
 // The tile size `--max-tile-points` auto picks for the CPU: 0 (no tiles) below min_points or on one core,
 // else vertices / (4 x cores), so that every core has a few tiles (docs/tiles.md has the measurements).
 uint64_t auto_cpu_tile_points(uint64_t vertices, unsigned cores);
+// The points a tile's staging (TileOptions::reserve) is sized for before the plan: tiles of about n / ceil(n /
+// max) points (the plan's cells are no larger, but for rounding), with room for segments' far endpoints.
+uint64_t tile_staging_points(uint64_t n, uint64_t max_tile_points);
 
 }  // namespace cdtgpu
