@@ -280,8 +280,9 @@ Buffer& BufferCache::fit(const Context& ctx, const std::string& key, VkDeviceSiz
                          bool addressed) {
   Buffer& b = buffers_[key];
   if (!b.buffer || b.size < bytes) {
-    const VkDeviceSize want =
-        b.buffer && grow_by > 0 ? std::max(bytes, b.size + VkDeviceSize(double(b.size) * grow_by)) : bytes;
+    const VkDeviceSize want = b.buffer && grow_by > 0 ? std::max(bytes, b.size + VkDeviceSize(double(b.size) * grow_by))
+                              : b.buffer                ? bytes
+                                                        : bytes + VkDeviceSize(double(bytes) * first_room);
     b = Buffer();  // the old one goes first: a lower peak
     b = addressed ? create_addressed_buffer(ctx, want, label)
                   : create_buffer(ctx, std::min(want, std::max(bytes, ctx.info.max_storage_buffer_range)), label);

@@ -237,6 +237,7 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
     ~Restore() { ctx.staging = std::move(own); }
   } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
   cache_.grow_by = kept_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
+  cache_.first_room = kept_.first_room = 1.0 / 16;
   GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &kept_, &staging);
   constrain(tri, job.segments, s, /*recycle=*/true);
   auto t = Clock::now();
