@@ -257,6 +257,22 @@ TEST(Tiles, AutoTileSizeForTheCpu) {
   EXPECT_LT(auto_cpu_tile_points(2'000'000, 2), 2'000'000u);
 }
 
+// Four tiles a core, exactly, on data about as wide as tall: 2 cores 2 x 4 tiles (not 3 x 3), 16 cores 8 x 8
+// (not 80 of the size rounded down). A ninth tile on 2 cores runs alone.
+TEST(Tiles, AutoTileSizeGivesFourTilesACore) {
+  InputSet in = uniform_points(1'300'000, 33);  // 64 tiles above the 20K-point floor
+  const PreparedInput p = prepare(in);
+  const uint64_t n = p.vertices.size();
+  for (const unsigned cores : {2u, 16u}) {
+    TileOptions opt;
+    opt.max_tile_points = auto_cpu_tile_points(n, cores);
+    opt.retile_share = 0;  // the first level alone
+    TileStats ts;
+    triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
+    EXPECT_EQ(ts.tiles, 4u * cores) << cores << " cores, tiles of " << opt.max_tile_points;
+  }
+}
+
 // The peer inputs (artem-ogre/CDT's test suite) when ../shared/data is there: every one, tiles of 16 and 64.
 TEST(Tiles, PeerInputs) {
   CDTGPU_SKIP_WITHOUT_PEER_INPUTS();
