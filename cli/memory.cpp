@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -40,6 +41,11 @@ HostMemory host_memory() {
     if (key == "MemAvailable:") m.available = kib * 1024;
   }
   return m;
+}
+
+uint64_t host_bytes_per_point_cpu(uint64_t points, uint64_t in_flight_points) {
+  if (!points) return 85;
+  return 85 + (230 * std::min(points, in_flight_points) + points - 1) / points;
 }
 
 void check_host_memory(uint64_t points, uint64_t bytes_per_point, const std::string& what) {

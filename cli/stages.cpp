@@ -102,6 +102,15 @@ CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_point
   return r;
 }
 
+// The points in CGAL's structures at once on the CPU backend: a tile a core (triangulate_cpu's tile size), or
+// all of them in one piece.
+uint64_t cpu_points_in_flight(const Job& job, uint64_t points) {
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const int64_t m = job.options.max_tile_points;
+  const uint64_t tile = m >= 0 ? uint64_t(m) : auto_cpu_tile_points(points, cores);
+  return tile < 3 || points <= tile ? points : std::min(points, tile * cores);
+}
+
 // Host bytes a point of this job's `points` may take at the run's peak (cli/memory.hpp): the GPU's figure where
 // a device was asked for (auto falling back to the CPU is checked again there), tiled beyond any device's
 // tile; else the CPU's.
@@ -109,7 +118,7 @@ uint64_t bytes_per_point(const Job& job, const std::vector<InputSpec>& specs, ui
   const bool regions = job.options.max_edge > 0 ||
                        std::any_of(specs.begin(), specs.end(), [](const InputSpec& s) { return is_region_role(s.role); });
   const bool gpu = !on_cpu && job.options.backend != "cgal" && (job.options.backend == "gpu" || job.start);
-  const uint64_t base = !gpu ? kHostBytesPerPointCpu
+  const uint64_t base = !gpu ? host_bytes_per_point_cpu(points, cpu_points_in_flight(job, points))
                         : points > gpu::max_tile_points_of_any_device() ? kHostBytesPerPointGpuTiles
                                                                         : kHostBytesPerPointGpu;
   return base + (regions ? kHostBytesPerPointRegions : 0);

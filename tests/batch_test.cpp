@@ -287,8 +287,8 @@ TEST_F(Batch, JobsInFlightStayWithinTheMachinesMemory) {
   std::vector<std::string> lines;
   for (int k = 0; k < 4; ++k) lines.push_back(in + " -o " + q("m" + std::to_string(k) + ".ply"));
   write_jobs("jobs.txt", lines);
-  // About 7.5K points estimated from the files, at the CPU's 140 bytes each: 1.05 MB a job.
-  setenv("CDTGPU_HOST_MEMORY", "2000000", 1);
+  // About 7.5K points estimated from the files, at one CGAL run's 315 bytes each: 2.4 MB a job.
+  setenv("CDTGPU_HOST_MEMORY", "3500000", 1);
   const Result tight = run("batch " + q("jobs.txt") + " -v");
   unsetenv("CDTGPU_HOST_MEMORY");
   ASSERT_EQ(tight.code, 0) << tight.err;

@@ -206,7 +206,7 @@ TEST_F(Cli, RunTooLargeForHostMemoryIsRefusedBeforeReading) {
   std::ostringstream xyz;
   for (int i = 0; i < 250; ++i)
     for (int j = 0; j < 200; ++j) xyz << 500000 + i * 2 << ' ' << 6000000 + j * 2 + (i % 3) * 0.25 << ' ' << i % 7 << '\n';
-  write("dem.xyz", xyz.str());  // 50000 points, too few for auto's GPU: about 7 MB at kHostBytesPerPointCpu
+  write("dem.xyz", xyz.str());  // 50000 points, too few for auto's GPU or for tiles: one CGAL run, ~16 MB
   write("tin.ply", "old bytes");
   ::setenv("CDTGPU_HOST_MEMORY", "5000000", 1);
   Result small = run("triangulate " + path("dem.xyz") + " -o " + path("tin.ply"));
@@ -214,8 +214,9 @@ TEST_F(Cli, RunTooLargeForHostMemoryIsRefusedBeforeReading) {
   Result roomy = run("triangulate " + path("dem.xyz") + " -q -o " + path("roomy.ply") + " --stats " + path("s.json"));
   ::unsetenv("CDTGPU_HOST_MEMORY");
   EXPECT_EQ(small.code, 3) << small.err;
-  EXPECT_NE(small.err.find("input points (estimated from the input files) need about 7."), std::string::npos)
+  EXPECT_NE(small.err.find("input points (estimated from the input files) need about 16."), std::string::npos)
       << small.err;  // the estimate from the file's size is within a few per cent of the 50000 points
+  EXPECT_NE(small.err.find("(315 bytes a point)"), std::string::npos) << small.err;  // all in CGAL at once
   EXPECT_NE(small.err.find("this machine has 5.0 MB"), std::string::npos) << small.err;
   EXPECT_EQ(small.err.find("read:"), std::string::npos) << "refused before reading: " << small.err;
   EXPECT_EQ(slurp(path("tin.ply")), "old bytes");

@@ -255,6 +255,7 @@ TEST(Tiles, AutoTileSizeForTheCpu) {
   EXPECT_EQ(auto_cpu_tile_points(1000, 16), 0u);
   EXPECT_GT(auto_cpu_tile_points(2'000'000, 2), 0u);
   EXPECT_LT(auto_cpu_tile_points(2'000'000, 2), 2'000'000u);
+  EXPECT_EQ(auto_cpu_tile_points(1'000'000'000, 16), 1'000'000u);  // at most 1M: faster, and less in flight
 }
 
 // Four tiles a core, exactly, on data about as wide as tall: 2 cores 2 x 4 tiles (not 3 x 3), 16 cores 8 x 8
