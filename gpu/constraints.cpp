@@ -52,6 +52,14 @@ uint32_t predict_rounds(uint32_t before, uint32_t last) {
 
 // A host-visible, persistently mapped buffer: the counters of a batch are copied into it at the end of the
 // batch's command buffer, so reading them costs no extra submission.
+// "r7 legalise": a round's profiler label (appended, not "r" + std::to_string(r): GCC 12 warns falsely there).
+std::string round_label(uint32_t r, const char* what) {
+  std::string label = "r";
+  label += std::to_string(r);
+  label += what;
+  return label;
+}
+
 Buffer make_readback(const Context& ctx, VkDeviceSize bytes, void** mapped) {
   Buffer b;
   b.device = ctx.device;
@@ -419,7 +427,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
       for (uint32_t b = 0; b < batch; ++b) {
         const uint32_t r = round + b;
         const bool first = reuse_first_count && b == 0;
-        if (detail) prof.begin(rec, "r" + std::to_string(r) + " insert");
+        if (detail) prof.begin(rec, round_label(r, " insert"));
         prof.begin(rec, "crossing detection");
         if (!first) timed(prof, rec, "k:walk count", [&] { walk(rec, CDT_WALK_COUNT, r, cap, s); });
         prof.end(rec);
@@ -546,7 +554,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         const Buffer& next = *queue[(r + 1) & 1];
         CdtRoundPush push{r, 0, 0};
         prof.begin(rec, "legalise");
-        if (detail) prof.begin(rec, "r" + std::to_string(r) + " legalise");
+        if (detail) prof.begin(rec, round_label(r, " legalise"));
         timed(prof, rec, "k:args queue", [&] { args(rec, CDT_ARGS_QUEUE, r, b, 0, 0); });
         timed(prof, rec, "k:legal claim", [&] {
           rec.dispatch_indirect(legal_claim_,
