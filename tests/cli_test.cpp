@@ -713,8 +713,9 @@ TEST_F(Cli, AutoTiledRunsTileWhatTheResolveMadeWithOrWithoutADevice) {
   ::unsetenv("CDTGPU_AUTO_MIN_POINTS");
   ASSERT_EQ(r.code, 0) << r.err;
   const auto stats = nlohmann::json::parse(slurp(path("auto.json")));
-  if (stats["backend"] == "cgal")
+  if (stats["backend"] == "cgal") {
     EXPECT_EQ(stats["backend_reason"].get<std::string>().rfind("no GPU to use", 0), 0u) << stats["backend_reason"];
+  }
   EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
   EXPECT_GT(stats["counts"]["constraints"].get<int>(), 0);
   EXPECT_EQ(slurp(path("auto.ply")), slurp(path("cgal.ply")));
