@@ -436,10 +436,16 @@ class Buckets {
                                  run.begin());
         if (to == done[r]) continue;  // a run's vertices lie in its tile's column: most waves miss it
         const std::span<const Triangle> part(run.data() + done[r], to - done[r]);
-        each_group(part, [&](uint32_t v, size_t i, size_t j) {
-          std::copy(part.begin() + i, part.begin() + j, out.begin() + base[v / kBlock] + count_[v]);
-          count_[v] += uint32_t(j - i);
-        });
+        // Triangle by triangle within blocks that start at a group's start (a group is one thread's).
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, part.size(), 1 << 16),
+                          [&](const tbb::blocked_range<size_t>& range) {
+                            size_t i = range.begin();
+                            while (i > 0 && i < part.size() && part[i][0] == part[i - 1][0]) ++i;
+                            for (; i < part.size() && (i < range.end() || part[i][0] == part[i - 1][0]); ++i) {
+                              const uint32_t v = part[i][0];
+                              out[base[v / kBlock] + count_[v]++] = part[i];
+                            }
+                          });
         release_pages(part.data(), part.size_bytes());
         done[r] = to;
       }
