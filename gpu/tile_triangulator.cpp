@@ -93,7 +93,7 @@ class OnDevice {
   }
 
   // Every slot's staging buffer for tiles of `vertices`, allocated in turn on a thread of its own: pinned memory
-  // takes ~0.3 ms per MB (1.7 s for a 3 GB slot at 1B points), which the tiles' planning hides.
+  // takes ~0.3 ms per MB (1.7 s for a 3 GB slot at 1B points), which the resolve and the plan hide.
   void reserve(uint64_t vertices) {
     if (reserved_.valid()) reserved_.wait();
     const uint64_t bytes = GpuCdt::staging_bytes(vertices);
