@@ -805,9 +805,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // Isolated: a thread waiting in a tile's own parallel loops takes no other tile (whose GPU call would make it
   // wait for the device as well).
   auto gather = [&](size_t t) {
-    const std::span<const uint32_t> mine(tile_segments.data() + first[t], first[t + 1] - first[t]);
+    const std::span<const uint32_t> its_segments(tile_segments.data() + first[t], first[t + 1] - first[t]);
     return tbb::this_task_arena::isolate(
-        [&] { return gather_tile(segments, plan, plan.nodes[plan.tiles[t]], mine); });
+        [&] { return gather_tile(segments, plan, plan.nodes[plan.tiles[t]], its_segments); });
   };
   auto finish = [&](size_t t, GatheredTile g) {
     const std::string name = tile_name(t);
