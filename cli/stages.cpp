@@ -102,12 +102,16 @@ CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_point
   return r;
 }
 
-// The points in CGAL's structures at once on the CPU backend: a tile a core (triangulate_cpu's tile size), or
-// all of them in one piece.
-uint64_t cpu_points_in_flight(const Job& job, uint64_t points) {
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+// The CPU backend's tile size for n vertices: --max-tile-points, or auto's (core/tiles' auto_cpu_tile_points).
+uint64_t cpu_tile_points(const Job& job, uint64_t n) {
   const int64_t m = job.options.max_tile_points;
-  const uint64_t tile = m >= 0 ? uint64_t(m) : auto_cpu_tile_points(points, cores);
+  return m >= 0 ? uint64_t(m) : auto_cpu_tile_points(n, std::thread::hardware_concurrency());
+}
+
+// The points in CGAL's structures at once on the CPU backend: a tile a core, or all of them in one piece.
+uint64_t cpu_points_in_flight(const Job& job, uint64_t points) {
+  const uint64_t tile = cpu_tile_points(job, points);
+  const uint64_t cores = std::max(1u, std::thread::hardware_concurrency());
   return tile < 3 || points <= tile ? points : std::min(points, tile * cores);
 }
 
@@ -169,9 +173,7 @@ CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
     check_host_memory(job.prepared.input_points, bytes_per_point(job, input_specs(job), job.prepared.input_points, true),
                       "read, on the CPU");
   const uint64_t n = resolved ? resolved->vertices.size() : job.prepared.vertices.size();
-  const int64_t max_tile_points = job.options.max_tile_points;
-  const uint64_t tile = max_tile_points >= 0 ? uint64_t(max_tile_points)
-                                             : auto_cpu_tile_points(n, std::thread::hardware_concurrency());
+  const uint64_t tile = cpu_tile_points(job, n);
   if (resolved) return triangulate_in_tiles(job, std::move(*resolved), tile < 3 ? 0 : tile, cgal_tile_triangulator());
   if (tile < 3 || n <= tile) return triangulate_cgal(job.prepared);
   ResolvedInput in = timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); });
@@ -181,14 +183,16 @@ CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
 
 // After a tile too large for its device (gpu::too_large), the tile size to try next: the old one scaled by how
 // far over the device's limit the tile went (with a quarter to spare), at most halved; 0 when it is not that kind
-// of failure or the tiles are small already (a refusal then is not about their size).
+// of failure or the tiles are small already (a refusal then is not about their size). A size given is warned of.
 uint64_t smaller_tile(const gpu::DeviceError& e, uint64_t tile) {
   constexpr uint64_t kSmallest = 1024;
   if (!gpu::too_large(e) || tile / 2 < kSmallest) return 0;
   double scale = 0.5;
   if (const auto* t = dynamic_cast<const gpu::TooLarge*>(&e); t && t->need > 0 && t->limit > 0)
     scale = std::min(scale, 0.75 * t->limit / t->need);
-  return std::max<uint64_t>(kSmallest, uint64_t(double(tile) * scale));
+  const uint64_t smaller = std::max<uint64_t>(kSmallest, uint64_t(double(tile) * scale));
+  spdlog::warn("{}: again in tiles of at most {} points", e.what(), smaller);
+  return smaller;
 }
 
 // The GPU's tile size: `--max-tile-points`, or auto: tiles only for an input beyond what the device holds.
@@ -286,7 +290,6 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           // tiles (still at most --max-tile-points) do; the same bytes. The input is whole after a failed tiling.
           const uint64_t smaller = smaller_tile(e, tile_here);
           if (!smaller) throw;
-          spdlog::warn("{}: again in tiles of at most {} points", e.what(), smaller);
           for (const gpu::GpuCdt* c : devices.cdts()) c->drop_kept();
           tile_here = smaller;
         }
@@ -313,7 +316,6 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     // The whole input more than the device holds (the tables of long constraints, say): its tiles may fit,
     // unless --max-tile-points 0 forbids them. The resolved input went with the failed call: resolved again.
     if (const uint64_t smaller = options.max_tile_points != 0 ? smaller_tile(e, vertices) : 0) {
-      spdlog::warn("{}: again in tiles of at most {} points", e.what(), smaller);
       cdt.drop_kept();
       return in_tiles([&] { return timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); }); },
                       smaller, 1);

@@ -358,16 +358,30 @@ void mark_border(const Triangles& triangles, const Points& local,
   });
 }
 
+// Calls body(i, j) on all cores for blocks [i, j) of a run sorted by first vertex, each block starting and ending
+// at a group's boundary (the triangles of one first vertex), so writes indexed by that vertex do not race.
+template <class F>
+void group_blocks(std::span<const Triangle> run, F&& body) {
+  const size_t n = run.size();
+  auto inside_group = [&](size_t i) { return i > 0 && i < n && run[i][0] == run[i - 1][0]; };
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+    size_t i = r.begin(), j = r.end();
+    while (inside_group(i)) ++i;
+    while (inside_group(j)) ++j;
+    if (i < j) body(i, j);
+  });
+}
+
 // Calls f(v, i, j) for each group [i, j) of triangles with the same first vertex v in a sorted run, on all
-// cores; one call per group, so writes indexed by v do not race within a run.
+// cores; one call per group.
 template <class F>
 void each_group(std::span<const Triangle> run, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, run.size(), 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i) {
-      if (i > 0 && run[i - 1][0] == run[i][0]) continue;
+  group_blocks(run, [&](size_t i, size_t end) {
+    while (i < end) {
       size_t j = i + 1;
-      while (j < run.size() && run[j][0] == run[i][0]) ++j;
+      while (j < end && run[j][0] == run[i][0]) ++j;
       f(run[i][0], i, j);
+      i = j;
     }
   });
 }
@@ -436,16 +450,13 @@ class Buckets {
                                  run.begin());
         if (to == done[r]) continue;  // a run's vertices lie in its tile's column: most waves miss it
         const std::span<const Triangle> part(run.data() + done[r], to - done[r]);
-        // Triangle by triangle within blocks that start at a group's start (a group is one thread's).
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, part.size(), 1 << 16),
-                          [&](const tbb::blocked_range<size_t>& range) {
-                            size_t i = range.begin();
-                            while (i > 0 && i < part.size() && part[i][0] == part[i - 1][0]) ++i;
-                            for (; i < part.size() && (i < range.end() || part[i][0] == part[i - 1][0]); ++i) {
-                              const uint32_t v = part[i][0];
-                              out[base[v / kBlock] + count_[v]++] = part[i];
-                            }
-                          });
+        // Triangle by triangle, not a copy call a group: most groups hold one or two triangles.
+        group_blocks(part, [&](size_t i, size_t j) {
+          for (; i < j; ++i) {
+            const uint32_t v = part[i][0];
+            out[base[v / kBlock] + count_[v]++] = part[i];
+          }
+        });
         release_pages(part.data(), part.size_bytes());
         done[r] = to;
       }

@@ -50,8 +50,6 @@ uint32_t predict_rounds(uint32_t before, uint32_t last) {
   return std::clamp(uint32_t(std::ceil(rounds)), 4u, kMaxBatch);
 }
 
-// A host-visible, persistently mapped buffer: the counters of a batch are copied into it at the end of the
-// batch's command buffer, so reading them costs no extra submission.
 // "r7 legalise": a round's profiler label (appended, not "r" + std::to_string(r): GCC 12 warns falsely there).
 std::string round_label(uint32_t r, const char* what) {
   std::string label = "r";
@@ -60,6 +58,8 @@ std::string round_label(uint32_t r, const char* what) {
   return label;
 }
 
+// A host-visible, persistently mapped buffer: the counters of a batch are copied into it at the end of the
+// batch's command buffer, so reading them costs no extra submission.
 Buffer make_readback(const Context& ctx, VkDeviceSize bytes, void** mapped) {
   Buffer b;
   b.device = ctx.device;
