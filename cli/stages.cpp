@@ -545,8 +545,13 @@ void triangulate_job(Job& job) {
     stats.backend_reason = job.backend_reason;
     spdlog::debug("backend {}: {}", stats.backend, job.backend_reason);
     if (job.gpu) return triangulate_gpu(job, resolving, progress, resolve_ms, vertices);
-    if (!handed_over) return triangulate_cpu(job);
-    ResolvedInput in = resolving.get();  // no device after all: the CPU tiles what was resolved for it
+    if (!job.want_gpu) return triangulate_cpu(job);
+    // No device after all. The resolve begun for it reads the prepared input, which the CPU's tiles free: its
+    // result is what they tile (a second resolve beside it freed the input under it). One CGAL run waits for it.
+    ResolvedInput in = resolving.get();
+    stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
+    const uint64_t tile = cpu_tile_points(job, vertices);
+    if (!handed_over && (tile < 3 || vertices <= tile)) return triangulate_cpu(job);
     return triangulate_cpu(job, &in);
   });
   drop_prepared(job);
