@@ -194,14 +194,17 @@ Buffer::~Buffer() {
                   std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - clock.t0).count());
 }
 
-Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
-  // Every buffer is bound whole as one storage-buffer descriptor, so it must fit the device's range.
+void require_storage_range(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
   if (bytes > ctx.info.max_storage_buffer_range)
     throw TooLarge("buffer '" + name + "' needs " + std::to_string(bytes) + " bytes, more than the device limit maxStorageBufferRange = " +
                        std::to_string(ctx.info.max_storage_buffer_range) + " bytes (" +
                        std::to_string(ctx.info.max_storage_buffer_range >> 20) + " MiB) of " + ctx.info.name +
                        "; use a smaller input or a device with a larger limit",
                    double(bytes), double(ctx.info.max_storage_buffer_range));
+}
+
+Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name) {
+  require_storage_range(ctx, bytes, name);  // every buffer is bound whole as one storage-buffer descriptor
   return make(ctx, bytes, name, false);
 }
 

@@ -40,6 +40,8 @@ struct Buffer {
   ~Buffer();
 };
 
+// Throws TooLarge when bytes > maxStorageBufferRange (message names the buffer, its size and the limit).
+void require_storage_range(const Context& ctx, VkDeviceSize bytes, const std::string& name);
 // Throws DeviceError when bytes > maxStorageBufferRange (message names the buffer, its size and the limit).
 Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name = "buffer");
 // A buffer that every pass binds by its device address (Binding, Recorder::bind): no range limit.

@@ -65,6 +65,8 @@ PointMerger GpuCdt::merger() const {
 }
 
 CdtResult GpuCdt::triangulate(const PreparedInput& prepared, GpuCdtStats* stats) const {
+  // Refused before the resolve starts, not after it (8 s at 1B points): the resolve only adds vertices.
+  require_storage_range(ctx_, uint64_t(prepared.vertices.size()) * 16, "points");
   ResolveProgress progress;
   return triangulate(prepared, std::async(std::launch::async, [&] {
                        return resolve_constraints(prepared, progress, resolve_threads);
