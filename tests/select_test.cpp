@@ -1,5 +1,6 @@
 // parallel_select against std::nth_element: large enough for the parallel partition (and, at 40M, for a band
-// that is partitioned again), with the rank near the middle and at both ends, and with keys that tie.
+// that is partitioned again), with the rank near the middle, at both ends and outside the sampled band, and with
+// keys that tie.
 #include "core/select.hpp"
 
 #include <gtest/gtest.h>
@@ -39,6 +40,23 @@ TEST(ParallelSelect, EqualsNthElementOnDistinctKeys) {
     std::sort(ids.begin(), ids.end());
     EXPECT_EQ(ids, ids_of(n)) << "every id once";
   }
+}
+
+TEST(ParallelSelect, RankOutsideTheSampledBand) {
+  // The ids that parallel_select samples (every n/4096th) get keys in [0, 0.5), all others in [0, 1): the
+  // pivots land near the first quartile, the median lies above both, and the part above them (~3/4 of the
+  // range) is split again.
+  const size_t n = 3'000'000, samples = 4096;
+  std::vector<double> key(n);
+  std::mt19937_64 rng(5);
+  for (double& k : key) k = double(rng() >> 11) * 0x1.0p-53;
+  for (size_t i = 0; i < samples; ++i) key[i * n / samples] = 0.5 * double(i) / double(samples);
+  auto less = [&](uint32_t a, uint32_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; };
+  std::vector<uint32_t> ids = ids_of(n), expected = ids_of(n);
+  parallel_select(ids.data(), ids.data() + n / 2, ids.data() + n, less);
+  std::nth_element(expected.begin(), expected.begin() + n / 2, expected.end(), less);
+  EXPECT_EQ(ids[n / 2], expected[n / 2]);
+  expect_selected(ids, n / 2, less);
 }
 
 TEST(ParallelSelect, KeysThatTie) {
