@@ -34,7 +34,13 @@ class Batch : public cdtgpu::test::BinaryTest {
     return p;
   }
   // The path in single quotes, as a shell and a job line both read it.
-  std::string q(const std::string& name) const { return "'" + path(name) + "'"; }
+  // (Appended, not "'" + ...: GCC 12 warns falsely about that with -Wrestrict.)
+  std::string q(const std::string& name) const {
+    std::string quoted = "'";
+    quoted += path(name);
+    quoted += "'";
+    return quoted;
+  }
 
   // In `dir`. `args` go through /bin/sh, so a job line's quoting means the same here as in a job file.
   Result run(const std::string& args, const std::string& stdin_from = "/dev/null") const {
@@ -285,7 +291,7 @@ TEST_F(Batch, JobsInFlightStayWithinTheMachinesMemory) {
   const std::string in = s + "dem.xyz '" + s + "contours.shp:z=ELEV' --backend cgal";
   ASSERT_EQ(run("triangulate " + in + " -q -o " + q("single.ply")).code, 0);
   std::vector<std::string> lines;
-  for (int k = 0; k < 4; ++k) lines.push_back(in + " -o " + q("m" + std::to_string(k) + ".ply"));
+  for (int k = 0; k < 4; ++k) lines.push_back(in + " -o " + q(std::string("m").append(std::to_string(k)) + ".ply"));
   write_jobs("jobs.txt", lines);
   // About 7.5K points estimated from the files, at one CGAL run's 315 bytes each: 2.4 MB a job.
   setenv("CDTGPU_HOST_MEMORY", "3500000", 1);
@@ -318,16 +324,20 @@ TEST_F(Batch, ManyJobsWantTheGpuForSmallerInputs) {
             0);
   const std::string single_reason = stats("single.json")["backend_reason"];
   EXPECT_NE(single_reason.find("fewer than 100000"), std::string::npos) << single_reason;
+  auto job = [](size_t k) {  // "b" + std::to_string(k), which GCC 12 warns about falsely (-Wrestrict)
+    std::string name = "b";
+    name += std::to_string(k);
+    return name;
+  };
   for (const size_t n : {kBatchWarmJobs - 1, kBatchWarmJobs}) {
     std::vector<std::string> lines;
     for (size_t k = 0; k < n; ++k)
-      lines.push_back(q("dem12k.xyz") + " -o " + q("b" + std::to_string(k) + ".ply") + " --stats " +
-                      q("b" + std::to_string(k) + ".json"));
+      lines.push_back(q("dem12k.xyz") + " -o " + q(job(k) + ".ply") + " --stats " + q(job(k) + ".json"));
     write_jobs("jobs.txt", lines);
     Result r = run("batch " + q("jobs.txt"));
     ASSERT_EQ(r.code, 0) << r.err;
     for (size_t k = 0; k < n; ++k) {
-      const std::string name = "b" + std::to_string(k);
+      const std::string name = job(k);
       EXPECT_TRUE(slurp(path(name + ".ply")) == slurp(path("single.ply"))) << n << " " << name;
       const nlohmann::json s = stats(name + ".json");
       const std::string reason = s["backend_reason"];
