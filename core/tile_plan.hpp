@@ -1,0 +1,34 @@
+// plan_tiles: k-d tiles of at most max_points vertices each, for core/tiles. Columns of equal counts, each cut
+// into cells of equal counts, as a binary tree over the cuts.
+//
+//   Plan plan = plan_tiles(vertices, 1 << 20);  // vertices sorted by (x, y), as the resolve leaves them
+//   for (uint32_t t : plan.tiles) {
+//     const TileNode& node = plan.nodes[t];  // its rectangle, its ids plan.order[node.lo, node.hi)
+//   }
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "core/tiles.hpp"
+#include "core/uninit.hpp"
+
+namespace cdtgpu {
+
+// A tile's closed rectangle (TileRect) is ±inf on the outside of the data. Its vertices may lie on its border
+// (shared with a neighbour, each vertex in one of them); every vertex strictly inside it is one of its own.
+struct TileNode {
+  TileRect rect;
+  uint32_t lo = 0, hi = 0;                // its own vertices: plan.order[lo, hi)
+  int32_t left = -1, right = -1;          // children; -1: a tile
+  uint32_t column_lo = 0, column_hi = 0;  // a tile: the ids of its column, which hold its own
+};
+
+struct TilePlan {
+  RawVector<uint32_t> order;      // vertex ids, each node's a contiguous range
+  std::vector<TileNode> nodes;    // nodes[0]: the root
+  std::vector<uint32_t> tiles;    // the leaf nodes, left to right in the tree
+};
+
+TilePlan plan_tiles(const Points& v, uint64_t max_points);
+
+}  // namespace cdtgpu

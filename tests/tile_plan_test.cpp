@@ -1,0 +1,82 @@
+// plan_tiles: every tile at most max_points vertices, every vertex in exactly one tile and inside its closed
+// rectangle, every vertex strictly inside a tile's rectangle one of its own (what the tiles' exactness needs),
+// on random points (large enough for the parallel selection) and on a grid (ties on every row and column).
+#include "core/tile_plan.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <string>
+
+namespace cdtgpu {
+namespace {
+
+Points sorted(Points v) {
+  std::sort(v.begin(), v.end(), [](const Point3& a, const Point3& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
+  return v;
+}
+
+bool inside_closed(const TileRect& r, const Point3& p) {
+  return p.x >= r.x0 && p.x <= r.x1 && p.y >= r.y0 && p.y <= r.y1;
+}
+bool strictly_inside(const TileRect& r, const Point3& p) {
+  return p.x > r.x0 && p.x < r.x1 && p.y > r.y0 && p.y < r.y1;
+}
+
+void expect_plan(const Points& v, uint64_t max_points, const std::string& what) {
+  const TilePlan plan = plan_tiles(v, max_points);
+  const uint64_t tiles_asked = (v.size() + max_points - 1) / max_points;
+  EXPECT_GE(plan.tiles.size(), tiles_asked) << what;
+  EXPECT_LE(plan.tiles.size(), tiles_asked + tiles_asked / 2 + 1) << what;  // columns round the count up
+  std::vector<int> owner(v.size(), -1);
+  for (size_t t = 0; t < plan.tiles.size(); ++t) {
+    const TileNode& node = plan.nodes[plan.tiles[t]];
+    EXPECT_LE(node.hi - node.lo, max_points) << what << ", tile " << t;
+    for (uint32_t i = node.lo; i < node.hi; ++i) {
+      const uint32_t id = plan.order[i];
+      ASSERT_LT(id, v.size());
+      ASSERT_EQ(owner[id], -1) << what << ": vertex " << id << " in two tiles";
+      owner[id] = int(t);
+      ASSERT_TRUE(inside_closed(node.rect, v[id])) << what << ": vertex " << id << " outside tile " << t;
+      ASSERT_TRUE(id >= node.column_lo && id < node.column_hi) << what << ": vertex " << id << " off its column";
+    }
+  }
+  for (size_t id = 0; id < v.size(); ++id) {
+    ASSERT_NE(owner[id], -1) << what << ": vertex " << id << " in no tile";
+    for (size_t t = 0; t < plan.tiles.size(); ++t) {
+      if (strictly_inside(plan.nodes[plan.tiles[t]].rect, v[id])) {
+        ASSERT_EQ(owner[id], int(t)) << what << ": vertex " << id << " strictly inside tile " << t;
+      }
+    }
+  }
+}
+
+TEST(TilePlan, RandomPointsInTilesOfAtMostTheirSize) {
+  std::mt19937_64 rng(3);
+  Points v(3'000'000);
+  for (Point3& p : v) p = {double(rng() % 1000000) / 8, double(rng() % 1000000) / 8, 0};
+  v = sorted(std::move(v));
+  auto same = [](const Point3& a, const Point3& b) { return a.x == b.x && a.y == b.y; };
+  v.erase(std::unique(v.begin(), v.end(), same), v.end());
+  for (uint64_t max_points : {1'600'000ull, 400'000ull, 100'000ull})
+    expect_plan(v, max_points, "random, " + std::to_string(max_points));
+}
+
+TEST(TilePlan, GridPointsTieOnEveryRowAndColumn) {
+  Points v;
+  for (int x = 0; x < 300; ++x)
+    for (int y = 0; y < 200; ++y) v.push_back({double(x), double(y), 0});
+  for (uint64_t max_points : {60'000ull, 7'000ull, 999ull, 16ull})
+    expect_plan(v, max_points, "grid, " + std::to_string(max_points));
+}
+
+TEST(TilePlan, FewerPointsThanATile) {
+  const Points v = sorted({{0, 0, 0}, {1, 2, 0}, {2, 1, 0}});
+  const TilePlan plan = plan_tiles(v, 10);
+  ASSERT_EQ(plan.tiles.size(), 1u);
+  EXPECT_EQ(plan.nodes[plan.tiles[0]].hi - plan.nodes[plan.tiles[0]].lo, 3u);
+}
+
+}  // namespace
+}  // namespace cdtgpu
