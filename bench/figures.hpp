@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "core/timing.hpp"
+
 namespace cdtgpu::figures {
 
 using Clock = std::chrono::steady_clock;
 
-inline double ms_since(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
+using cdtgpu::ms_since;
 
 // NaN when there are no runs.
 inline double median(std::vector<double> v) {

@@ -108,11 +108,16 @@ uint64_t cpu_tile_points(const Job& job, uint64_t n) {
   return m >= 0 ? uint64_t(m) : auto_cpu_tile_points(n, std::thread::hardware_concurrency());
 }
 
+// Whether the CPU backend triangulates n vertices in one CGAL run: no tiles asked for, or n within one tile.
+bool cpu_in_one_piece(const Job& job, uint64_t n) {
+  const uint64_t tile = cpu_tile_points(job, n);
+  return tile < 3 || n <= tile;
+}
+
 // The points in CGAL's structures at once on the CPU backend: a tile a core, or all of them in one piece.
 uint64_t cpu_points_in_flight(const Job& job, uint64_t points) {
-  const uint64_t tile = cpu_tile_points(job, points);
   const uint64_t cores = std::max(1u, std::thread::hardware_concurrency());
-  return tile < 3 || points <= tile ? points : std::min(points, tile * cores);
+  return cpu_in_one_piece(job, points) ? points : std::min(points, cpu_tile_points(job, points) * cores);
 }
 
 // Host bytes a point of this job's `points` may take at the run's peak (cli/memory.hpp): the GPU's figure where
@@ -175,7 +180,7 @@ CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
   const uint64_t n = resolved ? resolved->vertices.size() : job.prepared.vertices.size();
   const uint64_t tile = cpu_tile_points(job, n);
   if (resolved) return triangulate_in_tiles(job, std::move(*resolved), tile < 3 ? 0 : tile, cgal_tile_triangulator());
-  if (tile < 3 || n <= tile) return triangulate_cgal(job.prepared);
+  if (cpu_in_one_piece(job, n)) return triangulate_cgal(job.prepared);
   ResolvedInput in = timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); });
   drop_prepared(job);
   return triangulate_in_tiles(job, std::move(in), tile, cgal_tile_triangulator());
@@ -550,8 +555,7 @@ void triangulate_job(Job& job) {
     // result is what they tile (a second resolve beside it freed the input under it). One CGAL run waits for it.
     ResolvedInput in = resolving.get();
     stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
-    const uint64_t tile = cpu_tile_points(job, vertices);
-    if (!handed_over && (tile < 3 || vertices <= tile)) return triangulate_cpu(job);
+    if (!handed_over && cpu_in_one_piece(job, vertices)) return triangulate_cpu(job);
     return triangulate_cpu(job, &in);
   });
   drop_prepared(job);

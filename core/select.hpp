@@ -16,16 +16,17 @@
 
 namespace cdtgpu {
 
-// std::nth_element, on all cores for large ranges: two pivots sampled around the wanted rank split the range
-// into below, between and above them (a parallel partition); the rank almost always falls between, and only
-// that band (a few per cent) is selected in the same way, down to std::nth_element. Exact either way.
-// Its working memory, kept by a caller that selects again (a k-d split's later levels, the band): fresh arrays
-// are page faults on every call.
+// parallel_select's working memory, kept by a caller that selects again (a k-d split's later levels): fresh
+// arrays are page faults on every call.
 struct SelectScratch {
   RawVector<uint8_t> part;
   RawVector<uint32_t> out;
 };
 
+// std::nth_element, on all cores for large ranges: two pivots sampled around the wanted rank split the range
+// into below, between and above them (a parallel partition); the rank almost always falls between, and only
+// the part that holds it (the band, a few per cent) is selected again in the same way, down to
+// std::nth_element. Exact either way.
 template <class Less>
 void parallel_select(uint32_t* first, uint32_t* nth, uint32_t* last, Less less, SelectScratch* scratch = nullptr) {
   const size_t n = size_t(last - first);

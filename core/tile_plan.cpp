@@ -14,15 +14,13 @@
 #include <utility>
 
 #include "core/select.hpp"
+#include "core/timing.hpp"
 #include "core/touched.hpp"
 
 namespace cdtgpu {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 constexpr double kInf = std::numeric_limits<double>::infinity();
 using Rect = TileRect;
 }  // namespace

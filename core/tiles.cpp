@@ -8,7 +8,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
@@ -19,7 +18,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -36,6 +34,7 @@
 #include "core/parallel.hpp"
 #include "core/predicates.hpp"
 #include "core/tile_plan.hpp"
+#include "core/timing.hpp"
 #include "core/touched.hpp"
 #include "core/uninit.hpp"
 
@@ -43,9 +42,6 @@ namespace cdtgpu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 

@@ -12,6 +12,7 @@
 
 #include "core/parallel.hpp"
 #include "core/resolve.hpp"
+#include "core/timing.hpp"
 #include "core/touched.hpp"
 #include "gpu/triangulation.hpp"
 
@@ -19,8 +20,6 @@ namespace cdtgpu::gpu {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
 
 void add_gpu(GpuCdtStats& s, const std::string& prefix, const std::vector<std::pair<std::string, double>>& stages) {
   for (const auto& [name, ms] : stages) {

@@ -102,18 +102,15 @@ class OnDevice {
     allocating_.clear();  // joins an earlier reserve's threads
     const uint64_t bytes = GpuCdt::staging_bytes(vertices);
     const size_t devices = cdts_.size();
-    std::vector<std::shared_ptr<std::promise<void>>> done(staging_.size());
-    for (size_t slot = 0; slot < staging_.size(); ++slot) {
-      done[slot] = std::make_shared<std::promise<void>>();
-      reserved_[slot] = done[slot]->get_future().share();
-    }
+    filled_ = std::vector<std::promise<void>>(staging_.size());
+    for (size_t slot = 0; slot < staging_.size(); ++slot) reserved_[slot] = filled_[slot].get_future().share();
     for (size_t d = 0; d < devices; ++d)
-      allocating_.emplace_back([this, d, devices, bytes, done] {
+      allocating_.emplace_back([this, d, devices, bytes] {
         for (size_t slot = d; slot < staging_.size(); slot += devices) try {
             staging_[slot]->fit(cdts_[d]->context(), bytes);
-            done[slot]->set_value();
+            filled_[slot].set_value();
           } catch (...) {
-            done[slot]->set_exception(std::current_exception());
+            filled_[slot].set_exception(std::current_exception());
           }
       });
   }
@@ -206,7 +203,8 @@ class OnDevice {
   DevicePool pool_;   // the devices not running a call
   DevicePool slots_;  // the staging buffers not holding a tile; slot i is device i % devices'
   std::vector<std::unique_ptr<HostStaging>> staging_;
-  std::vector<std::shared_future<void>> reserved_;  // reserve()'s allocations, a slot each
+  std::vector<std::promise<void>> filled_;          // reserve()'s allocations, a slot each
+  std::vector<std::shared_future<void>> reserved_;  // their futures, which a tile waits on
   std::mutex sum_lock_;
   std::vector<std::jthread> allocating_;  // last: joined before the slots it fills are freed
 };

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <functional>
 
+#include "core/timing.hpp"
 #include "gpu/profiler.hpp"
 #include "shaders/layout_dt.h"
 #include "shaders/layout_vd.h"
@@ -31,10 +32,6 @@ constexpr uint32_t kNone = UINT32_MAX;
 constexpr uint32_t kGrain = 1 << 14;
 
 uint64_t groups(uint64_t n) { return (n + VD_WG - 1) / VD_WG; }
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 void add_ms(std::vector<std::pair<std::string, double>>& stages, const std::string& name, double ms) {
   auto it = std::find_if(stages.begin(), stages.end(), [&](const auto& e) { return e.first == name; });

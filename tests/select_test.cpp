@@ -25,21 +25,30 @@ void expect_selected(const std::vector<uint32_t>& ids, size_t nth, Less less) {
   for (size_t i = nth + 1; i < ids.size(); ++i) ASSERT_FALSE(less(ids[i], ids[nth])) << "after " << nth << " at " << i;
 }
 
+// Ids ordered by key, ties by id: distinct keys, so std::nth_element's id at nth is the only right one.
+template <class Key>
+auto by_key(const std::vector<Key>& key) {
+  return [&key](uint32_t a, uint32_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; };
+}
+
+// parallel_select of rank nth among ids 0..n-1: std::nth_element's id there, and every id once.
+template <class Less>
+void expect_as_nth_element(size_t n, size_t nth, Less less) {
+  std::vector<uint32_t> ids = ids_of(n), expected = ids_of(n);
+  parallel_select(ids.data(), ids.data() + nth, ids.data() + n, less);
+  std::nth_element(expected.begin(), expected.begin() + nth, expected.end(), less);
+  EXPECT_EQ(ids[nth], expected[nth]) << "rank " << nth;
+  expect_selected(ids, nth, less);
+  std::sort(ids.begin(), ids.end());
+  EXPECT_EQ(ids, ids_of(n)) << "every id once";
+}
+
 TEST(ParallelSelect, EqualsNthElementOnDistinctKeys) {
   const size_t n = 3'000'000;
   std::vector<double> key(n);
   std::mt19937_64 rng(7);
   for (double& k : key) k = double(rng() >> 11);
-  auto less = [&](uint32_t a, uint32_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; };
-  for (size_t nth : {n / 2, n / 8, size_t(0), n - 1, size_t(12345)}) {
-    std::vector<uint32_t> ids = ids_of(n), expected = ids_of(n);
-    parallel_select(ids.data(), ids.data() + nth, ids.data() + n, less);
-    std::nth_element(expected.begin(), expected.begin() + nth, expected.end(), less);
-    EXPECT_EQ(ids[nth], expected[nth]) << "rank " << nth;
-    expect_selected(ids, nth, less);
-    std::sort(ids.begin(), ids.end());
-    EXPECT_EQ(ids, ids_of(n)) << "every id once";
-  }
+  for (size_t nth : {n / 2, n / 8, size_t(0), n - 1, size_t(12345)}) expect_as_nth_element(n, nth, by_key(key));
 }
 
 TEST(ParallelSelect, RankOutsideTheSampledBand) {
@@ -51,12 +60,7 @@ TEST(ParallelSelect, RankOutsideTheSampledBand) {
   std::mt19937_64 rng(5);
   for (double& k : key) k = double(rng() >> 11) * 0x1.0p-53;
   for (size_t i = 0; i < samples; ++i) key[i * n / samples] = 0.5 * double(i) / double(samples);
-  auto less = [&](uint32_t a, uint32_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; };
-  std::vector<uint32_t> ids = ids_of(n), expected = ids_of(n);
-  parallel_select(ids.data(), ids.data() + n / 2, ids.data() + n, less);
-  std::nth_element(expected.begin(), expected.begin() + n / 2, expected.end(), less);
-  EXPECT_EQ(ids[n / 2], expected[n / 2]);
-  expect_selected(ids, n / 2, less);
+  expect_as_nth_element(n, n / 2, by_key(key));
 }
 
 TEST(ParallelSelect, KeysThatTie) {
@@ -78,12 +82,7 @@ TEST(ParallelSelect, BandPartitionedAgain) {
   std::vector<uint32_t> key(n);
   std::mt19937 rng(11);
   for (uint32_t& k : key) k = rng();
-  auto less = [&](uint32_t a, uint32_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; };
-  std::vector<uint32_t> ids = ids_of(n), expected = ids_of(n);
-  parallel_select(ids.data(), ids.data() + n / 2, ids.data() + n, less);
-  std::nth_element(expected.begin(), expected.begin() + n / 2, expected.end(), less);
-  EXPECT_EQ(ids[n / 2], expected[n / 2]);
-  expect_selected(ids, n / 2, less);
+  expect_as_nth_element(n, n / 2, by_key(key));
 }
 
 }  // namespace
