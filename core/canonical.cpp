@@ -38,6 +38,26 @@ void canonicalize_triangles(Triangles& triangles) {
   if (!sorted) tbb::parallel_sort(triangles.begin(), triangles.end());
 }
 
+void canonicalize_triangles_one_core(Triangles& triangles, size_t vertices) {
+  std::vector<uint32_t> at(vertices + 1, 0);
+  for (Triangle& t : triangles) {
+    const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
+    t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
+    ++at[t[0] + 1];
+  }
+  std::partial_sum(at.begin(), at.end(), at.begin());
+  Triangles sorted(triangles.size());
+  for (const Triangle& t : triangles) sorted[at[t[0]]++] = t;
+  // A vertex is the first of a few triangles: each group sorted by its other two.
+  for (size_t i = 0; i < sorted.size();) {
+    size_t j = i + 1;
+    while (j < sorted.size() && sorted[j][0] == sorted[i][0]) ++j;
+    if (j - i > 1) std::sort(sorted.begin() + i, sorted.begin() + j);
+    i = j;
+  }
+  triangles = std::move(sorted);
+}
+
 void canonicalize(Mesh& mesh) {
   const Points& v = mesh.vertices;
   if (!sorted_and_unique(v)) {  // the backends' vertices usually are: then only the triangles move

@@ -96,7 +96,12 @@ std::vector<typename Tri::Vertex_handle> insert_points(Tri& cdt, const Points& v
   std::iota(order.begin(), order.end(), std::size_t(0));
   using SortTraits =
       CGAL::Spatial_sort_traits_adapter_2<Epick, CGAL::Pointer_property_map<Epick::Point_2>::type>;
-  CGAL::spatial_sort(order.begin(), order.end(), SortTraits(CGAL::make_property_map(points)));
+  // Splits at the middle of each box, not at the median (no selection a level): a 16-thread host's 2M + 500K
+  // CPU tiles took 630 ms against 666 (medians of 9); the single run is unchanged. Any order gives the same CDT.
+  // (It reads the first point for the box, so not on an empty list.)
+  if (!order.empty())
+    CGAL::spatial_sort(order.begin(), order.end(), SortTraits(CGAL::make_property_map(points)),
+                       CGAL::Hilbert_sort_middle_policy());
   std::vector<typename Tri::Vertex_handle> handle(points.size());
   typename Tri::Face_handle hint;
   for (std::size_t i : order) {

@@ -381,7 +381,7 @@ TileFinal final_on_host(const Points& v, std::span<const uint32_t> ids,
           if (final_mask[i] & (1 << k)) *at++ = {triangles[i][k], triangles[i][(k + 1) % 3]};
         return at;
       });
-  canonicalize_triangles(f.triangles);  // a GPU tile's come sorted already
+  canonicalize_triangles_one_core(f.triangles, local.size());  // a GPU tile's come sorted already
   return f;
 }
 

@@ -180,6 +180,24 @@ TEST(Canonicalize, IsIdempotentAndOrderIndependent) {
   EXPECT_EQ(again.triangles, r.mesh.triangles);
 }
 
+// A tile's counting sort gives the parallel sort's order: rotated, shuffled triangles of a real mesh.
+TEST(Canonicalize, OneCoreCountingSortEqualsTheSort) {
+  InputSet in = uniform_points(5000, 6);
+  const CdtResult r = triangulate_cgal(prepare(in));
+  Triangles mixed = r.mesh.triangles;
+  std::mt19937_64 rng(3);
+  for (Triangle& t : mixed) std::rotate(t.begin(), t.begin() + rng() % 3, t.end());
+  std::shuffle(mixed.begin(), mixed.end(), rng);
+  Triangles counted = mixed;
+  canonicalize_triangles_one_core(counted, r.mesh.vertices.size());
+  canonicalize_triangles(mixed);
+  EXPECT_EQ(counted, r.mesh.triangles);
+  EXPECT_EQ(mixed, r.mesh.triangles);
+  Triangles none;
+  canonicalize_triangles_one_core(none, 0);
+  EXPECT_TRUE(none.empty());
+}
+
 // ---------------------------------------------------------------------------------------------------------------
 // CGAL CDT + verify on valid inputs
 
