@@ -169,6 +169,16 @@ bool hand_over_prepared(const Job& job) {
   return tiled && !prepared_read_later(job);
 }
 
+// The prepared vertices and segments moved out for a resolve that takes them (their counts stay in
+// job.prepared), the constraints' line numbers freed: for a run where no later stage reads them.
+PreparedInput take_prepared(Job& job) {
+  PreparedInput taken;
+  taken.vertices = std::move(job.prepared.vertices);
+  taken.constraints = std::move(job.prepared.constraints);
+  free_storage(job.prepared.constraint_line);
+  return taken;
+}
+
 // The CPU backend: the reference CDT in one piece, or tiles on every core (`--max-tile-points`, or auto: core/tiles'
 // auto_cpu_tile_points). Both give the same bytes. `resolved`: the input resolved already (the GPU's tiles
 // failed; the prepared input may be gone), tiled here too.
@@ -181,8 +191,10 @@ CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
   const uint64_t tile = cpu_tile_points(job, n);
   if (resolved) return triangulate_in_tiles(job, std::move(*resolved), tile < 3 ? 0 : tile, cgal_tile_triangulator());
   if (cpu_in_one_piece(job, n)) return triangulate_cgal(job.prepared);
-  ResolvedInput in = timed(job, "triangulate: resolve", [&] { return resolve_constraints(job.prepared); });
-  drop_prepared(job);
+  // The prepared input handed to the resolve where nothing reads it later: no copy of it beside round 1.
+  ResolvedInput in = timed(job, "triangulate: resolve", [&] {
+    return prepared_read_later(job) ? resolve_constraints(job.prepared) : resolve_constraints(take_prepared(job));
+  });
   return triangulate_in_tiles(job, std::move(in), tile, cgal_tile_triangulator());
 }
 
@@ -516,12 +528,7 @@ void triangulate_job(Job& job) {
   ResolveProgress progress;
   const uint64_t vertices = job.prepared.vertices.size();
   const bool handed_over = job.want_gpu && hand_over_prepared(job);
-  PreparedInput handed;  // its vertices and segments; the counts stay in job.prepared
-  if (handed_over) {
-    handed.vertices = std::move(job.prepared.vertices);
-    handed.constraints = std::move(job.prepared.constraints);
-    free_storage(job.prepared.constraint_line);
-  }
+  PreparedInput handed = handed_over ? take_prepared(job) : PreparedInput{};
   // Declared after what its task reads: a throw before get() waits for the task before those go.
   std::future<ResolvedInput> resolving;
   if (job.want_gpu)
