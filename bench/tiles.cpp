@@ -76,6 +76,8 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
                 unsigned in_flight = 0, const TileFinalizer& finalize = {},
                 const std::function<void(uint64_t)>& reserve = {}) {
   const auto t = Clock::now();
+  // As cdtgpu triangulate does: the tiles' staging (and the devices' warm-up) begun before the resolve.
+  if (reserve) reserve(tile_staging_points(p.vertices.size(), tile_points));
   ResolvedInput in = resolve_constraints(p);
   out.resolve_ms.push_back(ms_since(t));
   TileOptions opt;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <future>
 #include <memory>
 #include <utility>
@@ -90,16 +91,25 @@ void write_points(std::span<const Point3> all, std::span<const uint32_t> ids, vo
 }  // namespace
 
 GpuTriangulation GpuCdt::delaunay_of(std::span<const Point3> all, std::span<const uint32_t> ids,
-                                     GpuCdtStats& s, BufferCache* keep, const HostStaging* staged) const {
+                                     GpuCdtStats& s, BufferCache* keep) const {
   auto t = Clock::now();
   const uint32_t n = static_cast<uint32_t>(ids.empty() ? all.size() : ids.size());
   Buffer points = keep ? keep->take(ctx_, "points", uint64_t(n) * 16) : create_buffer(ctx_, uint64_t(n) * 16, "points");
-  if (staged)
-    copy_from_staging(ctx_, *staged, points, uint64_t(n) * 16);
-  else
-    upload_with(ctx_, points, uint64_t(n) * 16, [&](void* mapped) { write_points(all, ids, mapped); });
+  upload_with(ctx_, points, uint64_t(n) * 16, [&](void* mapped) { write_points(all, ids, mapped); });
   record_stage(s, "upload", t);
-  t = Clock::now();
+  return build(std::move(points), n, s, keep);
+}
+
+GpuTriangulation GpuCdt::delaunay_staged(uint32_t n, const HostStaging& staged, GpuCdtStats& s) const {
+  auto t = Clock::now();
+  Buffer points = kept_.take(ctx_, "points", uint64_t(n) * 16);
+  copy_from_staging(ctx_, staged, points, uint64_t(n) * 16);
+  record_stage(s, "upload", t);
+  return build(std::move(points), n, s, &kept_);
+}
+
+GpuTriangulation GpuCdt::build(Buffer points, uint32_t n, GpuCdtStats& s, BufferCache* keep) const {
+  const auto t = Clock::now();
   GpuTriangulation tri = delaunay_.build(std::move(points), n, &s.delaunay, keep);
   record_stage(s, "delaunay", t);
   add_gpu(s, "dt ", s.delaunay.stage_ms);
@@ -229,6 +239,11 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
   GpuCdtStats local;
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
+  return run_staged(uint32_t(job.ids.size()), job.segments, job.rect, staging, f, s, /*copy_out=*/true);
+}
+
+uint32_t GpuCdt::run_staged(uint32_t n, const std::vector<Edge>& segments, const TileRect& rect,
+                            HostStaging& staging, TileFinal& f, GpuCdtStats& s, bool copy_out) const {
   const auto t_all = Clock::now();
   // The device's other copies of this call (the build's uploads, the border) go through `staging` as well, once
   // the points have left it: a pinned buffer per tile in flight and none more for the context.
@@ -239,21 +254,40 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
   } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
   cache_.grow_by = kept_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   cache_.first_room = kept_.first_room = 1.0 / 16;
-  GpuTriangulation tri = delaunay_of(job.all, job.ids, s, &kept_, &staging);
-  constrain(tri, job.segments, s, /*recycle=*/true);
+  GpuTriangulation tri = delaunay_staged(n, staging, s);
+  constrain(tri, segments, s, /*recycle=*/true);
   auto t = Clock::now();
   double ms = 0;
-  f.border = finals_.mark(tri, job.rect, cache_, &ms);
+  f.border = finals_.mark(tri, rect, cache_, &ms);
   add_gpu(s, "", {{"tile final", ms}});
   record_stage(s, "tile final", t);
   t = Clock::now();
   const uint32_t count = sorter_.sort(tri, &ms);
   add_gpu(s, "", {{"canonical order", ms}});
-  copy_to_staging(ctx_, tri.nbrs, staging, uint64_t(count) * sizeof(Triangle));
+  if (copy_out) copy_to_staging(ctx_, tri.nbrs, staging, uint64_t(count) * sizeof(Triangle));
   record_stage(s, "download", t);
   keep(tri);
   s.wall_total_ms = ms_since(t_all);
   return count;
+}
+
+void GpuCdt::warm_up_tiles(uint64_t vertices, HostStaging& staging) const {
+  if (vertices < 3 || vertices > UINT32_MAX) return;
+  const uint32_t n = uint32_t(vertices);
+  staging.fit(ctx_, staging_bytes(n));
+  // A jittered grid, sheared so that x grows along the list: already sorted and unique, no degeneracy.
+  double* xy = static_cast<double*>(staging.mapped);
+  const uint32_t side = uint32_t(std::ceil(std::sqrt(double(n))));
+  for (uint32_t i = 0; i < n; ++i) {
+    uint64_t h = (uint64_t(i) + 1) * 0x9E3779B97F4A7C15ull;
+    h = (h ^ (h >> 31)) * 0xBF58476D1CE4E5B9ull;
+    const uint32_t c = i / side, r = i % side;
+    xy[2 * i] = c + 0.5 * r / side;
+    xy[2 * i + 1] = r + 0.5 * double(h >> 11) * 0x1p-53;
+  }
+  GpuCdtStats s;
+  TileFinal f;
+  run_staged(n, {}, TileRect{}, staging, f, s, /*copy_out=*/false);
 }
 
 void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f) {

@@ -82,6 +82,11 @@ class GpuCdt {
   static void stage_points(const TileJob& job, HostStaging& staging);
   uint32_t finalize_staged(const TileJob& job, HostStaging& staging, TileFinal& f, GpuCdtStats* stats = nullptr) const;
   static void unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f);
+  // Tiles of about `vertices` points to come (core/tiles' tile_staging_points, known before the plan): a tile of
+  // made-up points that size run through `staging` and dropped, so that the device's buffers for tiles are
+  // made while the host resolves and plans. At 1B points the first tile's device call took 1.1 s longer than
+  // the next ones on one device, and 4 s longer on each of two devices allocating at once.
+  void warm_up_tiles(uint64_t vertices, HostStaging& staging) const;
   // Duplicate merging on the GPU for prepare(in, cdt.merger()); the same answer as the CPU's merge_points.
   PointMerger merger() const;
 
@@ -110,9 +115,15 @@ class GpuCdt {
  private:
   // Upload and Delaunay build of all[ids[i]] (of all, when ids is empty), their stages added to `s`.
   // `keep`: the tiles' cache (DelaunayBuilder::build).
-  // `staged`: the points are in it already (stage_points).
   GpuTriangulation delaunay_of(std::span<const Point3> all, std::span<const uint32_t> ids, GpuCdtStats& s,
-                               BufferCache* keep = nullptr, const HostStaging* staged = nullptr) const;
+                               BufferCache* keep = nullptr) const;
+  // The same of n points staged already (stage_points), into the tiles' cache.
+  GpuTriangulation delaunay_staged(uint32_t n, const HostStaging& staged, GpuCdtStats& s) const;
+  // The build of uploaded points, its stages added to `s`.
+  GpuTriangulation build(Buffer points, uint32_t n, GpuCdtStats& s, BufferCache* keep) const;
+  // finalize_staged's work for n staged points; copy_out: the sorted final triangles left in `staging`.
+  uint32_t run_staged(uint32_t n, const std::vector<Edge>& segments, const TileRect& rect, HostStaging& staging,
+                      TileFinal& f, GpuCdtStats& s, bool copy_out) const;
   // Stage 3: the constraints inserted.
   // recycle: the inserter's flags stay in the cache for the next tile or run.
   void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <future>
@@ -88,8 +89,9 @@ namespace {
 // Runs work(cdt, stats) on a free device: its stats added to `sum`, a DeviceError given the call's name.
 class OnDevice {
  public:
-  OnDevice(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum)
-      : cdts_(std::move(cdts)), sum_(sum), pool_(cdts_.size()), slots_(kSlotsPerDevice * cdts_.size()) {
+  OnDevice(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from)
+      : cdts_(std::move(cdts)), sum_(sum), warm_up_from_(warm_up_from), pool_(cdts_.size()),
+        slots_(kSlotsPerDevice * cdts_.size()) {
     for (size_t i = 0; i < kSlotsPerDevice * cdts_.size(); ++i) staging_.push_back(std::make_unique<HostStaging>());
     reserved_.resize(staging_.size());
   }
@@ -98,16 +100,24 @@ class OnDevice {
   // device's own: pinned memory takes ~0.3 ms per MB (1.0-1.7 s for a 3 GB slot at 1B points), which the
   // resolve and the plan hide. A tile waits only for its own slot: on two devices the first tiles waited
   // 2.3-2.9 s for all four.
+  //
+  // The first reserve also warms each device up (GpuCdt::warm_up_tiles) in its first slot, unless a tile has
+  // begun by then: the device's buffers for tiles are made while the host resolves and plans. Asked again for
+  // no more than before (the plan's own call after the CLI's), it does nothing.
   void reserve(uint64_t vertices) {
+    if (vertices <= reserved_vertices_) return;
+    reserved_vertices_ = vertices;
     allocating_.clear();  // joins an earlier reserve's threads
     const uint64_t bytes = GpuCdt::staging_bytes(vertices);
     const size_t devices = cdts_.size();
+    const bool warm = std::exchange(warm_pending_, false) && vertices >= warm_up_from_;
     filled_ = std::vector<std::promise<void>>(staging_.size());
     for (size_t slot = 0; slot < staging_.size(); ++slot) reserved_[slot] = filled_[slot].get_future().share();
     for (size_t d = 0; d < devices; ++d)
-      allocating_.emplace_back([this, d, devices, bytes] {
+      allocating_.emplace_back([this, d, devices, bytes, vertices, warm] {
         for (size_t slot = d; slot < staging_.size(); slot += devices) try {
             staging_[slot]->fit(cdts_[d]->context(), bytes);
+            if (warm && slot == d) warm_up(d, *staging_[slot], vertices);
             filled_[slot].set_value();
           } catch (...) {
             filled_[slot].set_exception(std::current_exception());
@@ -115,10 +125,30 @@ class OnDevice {
       });
   }
 
+  // Device d's warm-up, holding the device; a failure only logged (the tiles meet it again, with their names).
+  void warm_up(size_t d, HostStaging& staging, uint64_t vertices) {
+    if (tiles_begun_.load()) return;
+    pool_.take(d);
+    const DevicePool::Held held{pool_, d};
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      cdts_[d]->warm_up_tiles(vertices, staging);
+      warm_ups_.fetch_add(1);
+      spdlog::debug("device {}: warmed up for tiles of {} points in {:.0f} ms", d, vertices,
+                    ms(std::chrono::steady_clock::now() - t0));
+    } catch (const std::exception& e) {
+      cdts_[d]->drop_kept();
+      spdlog::debug("device {}: no warm-up for tiles of {} points: {}", d, vertices, e.what());
+    }
+  }
+
+  size_t warm_ups() const { return warm_ups_.load(); }
+
   // A tile in a slot of its own (a staging buffer; two a device, as many as the tiles in flight): its points are
   // written there and its final triangles copied out without the device, which is held only for the GPU part,
   // so those host copies overlap another tile's GPU work.
   TileFinal staged(const TileJob& job) {
+    tiles_begun_.store(true);
     return tbb::this_task_arena::isolate([&] {
       const auto t0 = std::chrono::steady_clock::now();
       const size_t slot = slots_.take();
@@ -200,9 +230,14 @@ class OnDevice {
 
   std::vector<const GpuCdt*> cdts_;
   GpuCdtStats* sum_;
+  const uint64_t warm_up_from_;
+  std::atomic<size_t> warm_ups_{0};
   DevicePool pool_;   // the devices not running a call
   DevicePool slots_;  // the staging buffers not holding a tile; slot i is device i % devices'
   std::vector<std::unique_ptr<HostStaging>> staging_;
+  uint64_t reserved_vertices_ = 0;                  // the largest reserve() so far
+  bool warm_pending_ = true;                         // the first reserve() warms the devices up
+  std::atomic<bool> tiles_begun_{false};             // a tile has asked for a slot: no warm-up from now on
   std::vector<std::promise<void>> filled_;          // reserve()'s allocations, a slot each
   std::vector<std::shared_future<void>> reserved_;  // their futures, which a tile waits on
   std::mutex sum_lock_;
@@ -211,8 +246,19 @@ class OnDevice {
 
 }  // namespace
 
+uint64_t warm_up_from(const std::vector<const GpuCdt*>& cdts) {
+  for (const GpuCdt* c : cdts)
+    if (c->context().info.type == "cpu") return UINT64_MAX;
+  return 100'000'000;
+}
+
 GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
-  auto on = std::make_shared<OnDevice>(std::move(cdts), sum);
+  const uint64_t from = warm_up_from(cdts);
+  return gpu_tiles(std::move(cdts), sum, from);
+}
+
+GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from) {
+  auto on = std::make_shared<OnDevice>(std::move(cdts), sum, warm_up_from);
   GpuTiles g;
   // A tile is a resolved graph already: no resolve stage, no copies.
   g.triangulate = [on](const Points& vertices, const std::vector<Edge>& segments, std::string_view what) {
@@ -222,6 +268,7 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
   };
   g.finalize = [on](const TileJob& job) { return on->staged(job); };
   g.reserve = [on](uint64_t vertices) { on->reserve(vertices); };
+  g.warm_ups = [on] { return on->warm_ups(); };
   return g;
 }
 
