@@ -25,14 +25,13 @@
 #include <span>
 #include <thread>
 
-#include <sys/mman.h>
-
 #include <spdlog/spdlog.h>
 
 #include "core/canonical.hpp"
 #include "core/compact.hpp"
 #include "core/parallel.hpp"
 #include "core/predicates.hpp"
+#include "core/tile_merge.hpp"
 #include "core/tile_plan.hpp"
 #include "core/timing.hpp"
 #include "core/touched.hpp"
@@ -115,8 +114,6 @@ bool disk_inside(const Point3& a, const Point3& b, const Point3& c, const Rect& 
   return worst > 0;
 }
 
-uint64_t key_of(uint32_t a, uint32_t b) { return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a; }
-
 // The hull chains of p[ids] (ids in (x, y) order): the lower one left to right, then the upper one right to
 // left, collinear boundary points kept (a triangulation's hull edges join consecutive ones). Returns the
 // closed cycle, its first point repeated at the end.
@@ -196,127 +193,8 @@ void mark_border(const Triangles& triangles, const Points& local,
   });
 }
 
-// Calls body(i, j) on all cores for blocks [i, j) of a run sorted by first vertex, each block starting and ending
-// at a group's boundary (the triangles of one first vertex), so writes indexed by that vertex do not race.
-template <class F>
-void group_blocks(std::span<const Triangle> run, F&& body) {
-  const size_t n = run.size();
-  auto inside_group = [&](size_t i) { return i > 0 && i < n && run[i][0] == run[i - 1][0]; };
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-    size_t i = r.begin(), j = r.end();
-    while (inside_group(i)) ++i;
-    while (inside_group(j)) ++j;
-    if (i < j) body(i, j);
-  });
-}
-
-// Calls f(v, i, j) for each group [i, j) of triangles with the same first vertex v in a sorted run, on all
-// cores; one call per group.
-template <class F>
-void each_group(std::span<const Triangle> run, F&& f) {
-  group_blocks(run, [&](size_t i, size_t end) {
-    while (i < end) {
-      size_t j = i + 1;
-      while (j < end && run[j][0] == run[i][0]) ++j;
-      f(run[i][0], i, j);
-      i = j;
-    }
-  });
-}
-
-// Gives the whole pages inside [p, p + bytes) back to the system: their contents are dead. The allocation
-// stays (freed later as usual); a page touched again comes back zeroed.
-void release_pages(const void* p, size_t bytes) {
-  const uintptr_t page = 4096, a = (uintptr_t(p) + page - 1) & ~(page - 1), b = (uintptr_t(p) + bytes) & ~(page - 1);
-  if (b > a) madvise(reinterpret_cast<void*>(a), b - a, MADV_DONTNEED);
-}
-
 // A tile's own points and room for the far endpoints of the segments that cross into it.
 uint64_t staging_room(uint64_t points) { return points + points / 64 + 1024; }
-
-// The canonical order of sorted runs that together hold every triangle once (first vertices below n): each
-// triangle goes to its first vertex's bucket, laid out by counts and prefix sums. Runs are counted as they
-// come (a tile's while the others are on the device) and placed at the end. A run's triangles of one vertex
-// arrive together and in order, so only the buckets filled from two runs (vertices on the final region's
-// border: a tile's final triangles and the merge's) are sorted afterwards. A heap merge of the runs took 1.5 s
-// for 512M triangles on 16 threads.
-class Buckets {
- public:
-  explicit Buckets(size_t n) {
-    resize_touched(count_, n);
-    resize_touched(mixed_, n);
-  }
-
-  // Runs counted at the same time have no first vertex in common: a tile's final triangles are made of its own
-  // vertices.
-  void count(const Triangles& run) {
-    each_group(run, [&](uint32_t v, size_t i, size_t j) {
-      if (count_[v]) mixed_[v] = 1;
-      count_[v] += uint32_t(j - i);
-    });
-  }
-
-  // The counted runs, freed one by one, as one sorted list. Offsets are 32-bit within blocks of vertices.
-  Triangles place(std::vector<Triangles>& runs) {
-    const size_t n = count_.size(), blocks = (n + kBlock - 1) / kBlock;
-    std::vector<uint64_t> base(blocks + 1, 0);
-    tbb::parallel_for(size_t(0), blocks, [&](size_t b) {  // count_[v]: where bucket v starts in its block
-      uint32_t at = 0;
-      for (size_t v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) at += std::exchange(count_[v], at);
-      base[b + 1] = at;
-    });
-    for (size_t b = 0; b < blocks; ++b) base[b + 1] += base[b];
-    size_t total = 0;
-    for (const Triangles& run : runs) total += run.size();
-    if (total != base[blocks])
-      throw std::logic_error("tiles: " + std::to_string(total) + " triangles to order, " +
-                             std::to_string(base[blocks]) + " counted");
-    // In waves of vertex ids (about 512 MB of triangles each, at most 64), each run's part of a wave (a run is
-    // sorted by first vertex) copied, then its pages given back: the output's pages are touched as the runs' go,
-    // so the order holds the triangles about once, not twice. Run by run, the first run touched most of the
-    // output: a tile's vertices spread over its column's whole id range. Within a wave the tiles' runs (all but
-    // the last) at once, as they share no first vertex; the merge's last, as a border vertex has triangles in
-    // it and in a tile's. 64 waves of 65 runs for 2.5M vertices took 41-54 ms on 16 threads.
-    Triangles out;
-    resize_unwritten(out, total);
-    const size_t waves = std::clamp<size_t>(total * sizeof(Triangle) >> 29, 1, 64);
-    std::vector<size_t> done(runs.size(), 0);
-    for (size_t w = 1; w <= waves; ++w) {
-      const uint64_t end = uint64_t(n) * w / waves;
-      auto place_part = [&](size_t r) {
-        const Triangles& run = runs[r];
-        const size_t to = size_t(std::partition_point(run.begin() + done[r], run.end(),
-                                                      [&](const Triangle& t) { return t[0] < end; }) -
-                                 run.begin());
-        if (to == done[r]) return;  // a run's vertices lie in its tile's column: most waves miss it
-        const std::span<const Triangle> part(run.data() + done[r], to - done[r]);
-        // Triangle by triangle, not a copy call a group: most groups hold one or two triangles.
-        group_blocks(part, [&](size_t i, size_t j) {
-          for (; i < j; ++i) {
-            const uint32_t v = part[i][0];
-            out[base[v / kBlock] + count_[v]++] = part[i];
-          }
-        });
-        release_pages(part.data(), part.size_bytes());
-        done[r] = to;
-      };
-      tbb::parallel_for(size_t(0), runs.size() - 1, size_t(1), place_part);
-      place_part(runs.size() - 1);
-    }
-    for (Triangles& run : runs) free_storage(run);
-    each(n, [&](size_t v) {  // count_[v] is now bucket v's end in its block, count_[v - 1] its start
-      if (!mixed_[v]) return;
-      const auto at = out.begin() + base[v / kBlock];
-      std::sort(at + (v % kBlock ? count_[v - 1] : 0), at + count_[v]);
-    });
-    return out;
-  }
-
- private:
-  static constexpr size_t kBlock = 1 << 16;
-  RawVector<uint32_t> count_;
-  RawVector<uint8_t> mixed_;
-};
 
 // One tile: its CDT, its final triangles (vertex ids of the whole) and their border.
 struct TileResult {
@@ -482,99 +360,6 @@ TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const 
   return r;
 }
 
-// The merge's triangles outside the final region: the merge triangulates the final region's holes too, from
-// their border vertices; those triangles lie in parts of the merge, bounded by border edges, that are on the
-// final side of a border edge (tiling.md, claim 2). `border` is directed with the final region on its left.
-Triangles outside_final(const Triangles& m, const std::vector<Edge>& border) {
-  // Every edge of every triangle, and each border edge as one more entry after its triangles' (triangle
-  // kBorder), sorted: a group of equal keys is one edge. On all cores: the level-1 keep of a 2.5M-vertex run
-  // was 100-140 ms of a 16-thread host's ~800 ms with the border looked up and the parts joined on one core.
-  constexpr uint32_t kBorder = UINT32_MAX;
-  struct HalfEdge {
-    uint64_t key;
-    uint32_t triangle;
-    bool forward;  // runs from min to max: the triangle (or the border's final side) is left of (min, max)
-  };
-  const size_t halves = 3 * m.size();
-  std::vector<HalfEdge> half(halves + border.size());
-  tbb::parallel_for(size_t(0), m.size(), [&](size_t t) {
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = m[t][k], b = m[t][(k + 1) % 3];
-      half[3 * t + k] = {key_of(a, b), uint32_t(t), a < b};
-    }
-  });
-  tbb::parallel_for(size_t(0), border.size(), [&](size_t i) {
-    half[halves + i] = {key_of(border[i][0], border[i][1]), kBorder, border[i][0] < border[i][1]};
-  });
-  tbb::parallel_sort(half.begin(), half.end(), [](const HalfEdge& p, const HalfEdge& q) {
-    return p.key != q.key ? p.key < q.key : p.triangle < q.triangle;
-  });
-  // The parts: triangles joined across edges that are not border edges (union-find linking the larger root
-  // under the smaller, so concurrent unions make no cycle; the parts do not depend on the order).
-  std::vector<uint32_t> parent(m.size());
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto root = [&](uint32_t t) {
-    for (;;) {
-      uint32_t p = std::atomic_ref<uint32_t>(parent[t]).load(std::memory_order_relaxed);
-      if (p == t) return t;
-      const uint32_t g = std::atomic_ref<uint32_t>(parent[p]).load(std::memory_order_relaxed);
-      if (g != p) std::atomic_ref<uint32_t>(parent[t]).compare_exchange_weak(p, g, std::memory_order_relaxed);
-      t = g;
-    }
-  };
-  auto unite = [&](uint32_t a, uint32_t b) {
-    for (;;) {
-      a = root(a), b = root(b);
-      if (a == b) return;
-      if (a < b) std::swap(a, b);
-      uint32_t expected = a;
-      if (std::atomic_ref<uint32_t>(parent[a]).compare_exchange_strong(expected, b, std::memory_order_relaxed))
-        return;
-    }
-  };
-  // Calls f(i, j) for each group [i, j) of one edge, on all cores.
-  auto each_edge = [&](auto&& f) {
-    const size_t n = half.size();
-    auto inside_group = [&](size_t i) { return i > 0 && i < n && half[i].key == half[i - 1].key; };
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
-      size_t i = r.begin(), end = r.end();
-      while (inside_group(i)) ++i;
-      while (inside_group(end)) ++end;
-      while (i < end) {
-        size_t j = i + 1;
-        while (j < end && half[j].key == half[i].key) ++j;
-        f(i, j);
-        i = j;
-      }
-    });
-  };
-  each_edge([&](size_t i, size_t j) {
-    if (half[j - 1].triangle != kBorder && j == i + 2) unite(half[i].triangle, half[i + 1].triangle);
-  });
-  // Each part beside a border edge takes that edge's side: 1 final, 2 outside; a part with both is an error.
-  std::vector<uint8_t> mark(m.size(), 0);
-  each_edge([&](size_t i, size_t j) {
-    const HalfEdge& b = half[j - 1];
-    if (b.triangle != kBorder) return;
-    for (size_t k = i; half[k].triangle != kBorder; ++k)
-      std::atomic_ref<uint8_t>(mark[root(half[k].triangle)])
-          .fetch_or(half[k].forward == b.forward ? 1 : 2, std::memory_order_relaxed);
-  });
-  half = {};
-  return compact_as<Triangles>(
-      m.size(),
-      [&](size_t t) {
-        const uint8_t mk = mark[root(uint32_t(t))];
-        if (mk == 3)
-          throw std::logic_error("tile merge: a part of the merge lies on both sides of the final region's border");
-        return mk != 1;
-      },
-      [&](size_t t, Triangle* at) {
-        if (mark[root(uint32_t(t))] != 1) *at++ = m[t];
-        return at;
-      });
-}
-
 }  // namespace
 
 TileTriangulator cgal_tile_triangulator() {
@@ -587,7 +372,7 @@ TileTriangulator cgal_tile_triangulator() {
 
 namespace {
 
-// tiled_cdt's triangles in canonical order: each tile's final ones and the merge's, placed by Buckets.
+// tiled_cdt's triangles in canonical order: each tile's final ones and the merge's, placed by TriangleBuckets (core/tile_merge).
 Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
                                               const TileOptions& options, const TileTriangulator& triangulate,
                                               TileStats& s) {
@@ -683,7 +468,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
                 options.max_tile_points, ms_since(t_tiles));
   std::vector<uint8_t> in_final;
   resize_touched(in_final, n);  // zeroed on all cores
-  Buckets buckets(n);
+  TriangleBuckets buckets(n);
   std::vector<TileResult> results(tiles);
   auto tile_name = [&](size_t t) {
     return "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);

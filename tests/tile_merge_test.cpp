@@ -1,0 +1,124 @@
+// core/tile_merge: TriangleBuckets puts a mesh split into tile runs and a merge run back into canonical order;
+// outside_final drops exactly the merge's triangles on the final side of the border, and refuses a border whose
+// sides disagree.
+#include "core/tile_merge.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <random>
+#include <stdexcept>
+
+#include "core/cdt_cgal.hpp"
+#include "core/prepare.hpp"
+#include "core/workloads.hpp"
+
+namespace cdtgpu {
+namespace {
+
+// A real canonical mesh split as core/tiles splits it: vertices in `tiles` id ranges; a triangle of one range's
+// vertices goes to that range's run unless `to_merge` takes it; every other triangle to the merge's run, last.
+std::vector<Triangles> split_runs(const Triangles& all, size_t vertices, size_t tiles, std::mt19937_64& rng) {
+  std::vector<Triangles> runs(tiles + 1);
+  auto tile_of = [&](uint32_t v) { return size_t(v) * tiles / vertices; };
+  for (const Triangle& t : all) {
+    const size_t a = tile_of(t[0]);
+    const bool own = a == tile_of(t[1]) && a == tile_of(t[2]) && rng() % 5 != 0;
+    runs[own ? a : tiles].push_back(t);
+  }
+  return runs;
+}
+
+TEST(TriangleBuckets, PutsTileRunsAndTheMergeBackInCanonicalOrder) {
+  InputSet in = uniform_points(30000, 3);
+  add_dt_edge_constraints(in, 5000, 0.5, 3);
+  const CdtResult r = triangulate_cgal(prepare(in));
+  const size_t n = r.mesh.vertices.size();
+  std::mt19937_64 rng(8);
+  for (size_t tiles : {1, 3, 16}) {
+    std::vector<Triangles> runs = split_runs(r.mesh.triangles, n, tiles, rng);
+    size_t shared = 0;  // first vertices with triangles in a tile's run and in the merge's: sorted after placing
+    {
+      std::map<uint32_t, int> in_runs;
+      for (const Triangles& run : runs) {
+        uint32_t last = UINT32_MAX;
+        for (const Triangle& t : run)
+          if (t[0] != last) ++in_runs[last = t[0]];
+      }
+      for (const auto& [v, k] : in_runs) shared += k > 1;
+    }
+    EXPECT_GT(shared, 0u) << tiles << " tiles";
+    TriangleBuckets buckets(n);
+    for (const Triangles& run : runs) buckets.count(run);
+    EXPECT_EQ(buckets.place(runs), r.mesh.triangles) << tiles << " tiles";
+  }
+}
+
+// Points around (and on) rectangles whose sides are the border: no point strictly inside one, as in a merge.
+struct Holes {
+  Points vertices;
+  std::vector<Edge> border;  // counter-clockwise around each rectangle: the final region on the left
+};
+
+Holes holes_in_points() {
+  const std::vector<std::array<double, 4>> rects = {{20, 45, 30, 70}, {60, 85, 10, 40}};
+  auto inside = [&](double x, double y) {
+    for (const auto& q : rects)
+      if (x >= q[0] && x <= q[1] && y >= q[2] && y <= q[3]) return true;
+    return false;
+  };
+  Points pts;
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(0, 100);
+  while (pts.size() < 3000) {
+    const double x = u(rng), y = u(rng);
+    if (!inside(x, y)) pts.push_back({x, y, 0});
+  }
+  std::vector<std::vector<Point3>> rings;
+  for (const auto& q : rects) {
+    std::vector<Point3> ring;
+    for (int k = 0; k < 10; ++k) ring.push_back({q[0] + (q[1] - q[0]) * k / 10, q[2], 0});
+    for (int k = 0; k < 10; ++k) ring.push_back({q[1], q[2] + (q[3] - q[2]) * k / 10, 0});
+    for (int k = 0; k < 10; ++k) ring.push_back({q[1] - (q[1] - q[0]) * k / 10, q[3], 0});
+    for (int k = 0; k < 10; ++k) ring.push_back({q[0], q[3] - (q[3] - q[2]) * k / 10, 0});
+    pts.insert(pts.end(), ring.begin(), ring.end());
+    rings.push_back(ring);
+  }
+  auto less = [](const Point3& a, const Point3& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; };
+  std::sort(pts.begin(), pts.end(), less);
+  Holes h;
+  h.vertices = pts;
+  auto id = [&](const Point3& p) { return uint32_t(std::lower_bound(pts.begin(), pts.end(), p, less) - pts.begin()); };
+  for (const auto& ring : rings)
+    for (size_t k = 0; k < ring.size(); ++k) h.border.push_back({id(ring[k]), id(ring[(k + 1) % ring.size()])});
+  return h;
+}
+
+TEST(OutsideFinal, DropsTheTrianglesOnTheBordersFinalSide) {
+  const Holes h = holes_in_points();
+  std::vector<Edge> segments;
+  for (const Edge& e : h.border) segments.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
+  std::sort(segments.begin(), segments.end());
+  const Triangles merge = cdt_of_graph(h.vertices, segments);
+  auto in_a_hole = [&](const Triangle& t) {
+    const double x = (h.vertices[t[0]].x + h.vertices[t[1]].x + h.vertices[t[2]].x) / 3;
+    const double y = (h.vertices[t[0]].y + h.vertices[t[1]].y + h.vertices[t[2]].y) / 3;
+    return (x > 20 && x < 45 && y > 30 && y < 70) || (x > 60 && x < 85 && y > 10 && y < 40);
+  };
+  Triangles outside, inside;
+  for (const Triangle& t : merge) (in_a_hole(t) ? inside : outside).push_back(t);
+  ASSERT_GT(inside.size(), 20u);
+  EXPECT_EQ(outside_final(merge, h.border), outside);
+  // The border turned round: the final region is now outside the rectangles.
+  std::vector<Edge> reversed;
+  for (const Edge& e : h.border) reversed.push_back({e[1], e[0]});
+  EXPECT_EQ(outside_final(merge, reversed), inside);
+  // One edge turned round: a part on both sides of the border.
+  std::vector<Edge> broken = h.border;
+  std::swap(broken[5][0], broken[5][1]);
+  EXPECT_THROW(outside_final(merge, broken), std::logic_error);
+}
+
+}  // namespace
+}  // namespace cdtgpu
