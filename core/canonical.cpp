@@ -19,15 +19,16 @@ bool sorted_and_unique(const Points& v) {
   return true;
 }
 
+// Its smallest index first; rotation keeps the orientation.
+void rotate_to_smallest(Triangle& t) {
+  const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
+  t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
+}
+
 }  // namespace
 
 void canonicalize_triangles(Triangles& triangles) {
-  // Rotation keeps the orientation.
-  tbb::parallel_for(size_t(0), triangles.size(), [&](size_t i) {
-    Triangle& t = triangles[i];
-    const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
-    t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
-  });
+  tbb::parallel_for(size_t(0), triangles.size(), [&](size_t i) { rotate_to_smallest(triangles[i]); });
   const bool sorted = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(1, std::max<size_t>(1, triangles.size()), 1 << 16), true,
       [&](const tbb::blocked_range<size_t>& r, bool ok) {
@@ -41,8 +42,7 @@ void canonicalize_triangles(Triangles& triangles) {
 void canonicalize_triangles_one_core(Triangles& triangles, size_t vertices) {
   std::vector<uint32_t> at(vertices + 1, 0);
   for (Triangle& t : triangles) {
-    const int k = int(std::min_element(t.begin(), t.end()) - t.begin());
-    t = {t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
+    rotate_to_smallest(t);
     ++at[t[0] + 1];
   }
   std::partial_sum(at.begin(), at.end(), at.begin());

@@ -24,13 +24,12 @@ namespace {
 
 uint64_t key_of(uint32_t a, uint32_t b) { return a < b ? uint64_t(a) << 32 | b : uint64_t(b) << 32 | a; }
 
-// Calls body(i, j) on all cores for blocks [i, j) of a run sorted by first vertex, each block starting and ending
-// at a group's boundary (the triangles of one first vertex), so writes indexed by that vertex do not race.
-template <class F>
-void group_blocks(std::span<const Triangle> run, F&& body) {
-  const size_t n = run.size();
-  auto inside_group = [&](size_t i) { return i > 0 && i < n && run[i][0] == run[i - 1][0]; };
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+// Calls body(i, j) on all cores for blocks [i, j) of [0, n), each starting and ending at a group's boundary
+// (same(i): item i is in item i - 1's group), so writes indexed by a group do not race.
+template <class Same, class Body>
+void group_blocks(size_t n, size_t grain, Same&& same, Body&& body) {
+  auto inside_group = [&](size_t i) { return i > 0 && i < n && same(i); };
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, grain), [&](const tbb::blocked_range<size_t>& r) {
     size_t i = r.begin(), j = r.end();
     while (inside_group(i)) ++i;
     while (inside_group(j)) ++j;
@@ -38,18 +37,22 @@ void group_blocks(std::span<const Triangle> run, F&& body) {
   });
 }
 
-// Calls f(v, i, j) for each group [i, j) of triangles with the same first vertex v in a sorted run, on all
-// cores; one call per group.
-template <class F>
-void each_group(std::span<const Triangle> run, F&& f) {
-  group_blocks(run, [&](size_t i, size_t end) {
+// Calls f(i, j) for each group [i, j) of [0, n), on all cores; one call per group.
+template <class Same, class F>
+void each_group(size_t n, size_t grain, Same&& same, F&& f) {
+  group_blocks(n, grain, same, [&](size_t i, size_t end) {
     while (i < end) {
       size_t j = i + 1;
-      while (j < end && run[j][0] == run[i][0]) ++j;
-      f(run[i][0], i, j);
+      while (j < end && same(j)) ++j;
+      f(i, j);
       i = j;
     }
   });
+}
+
+// A run sorted by first vertex, grouped by it.
+auto same_first(std::span<const Triangle> run) {
+  return [run](size_t i) { return run[i][0] == run[i - 1][0]; };
 }
 
 // Gives the whole pages inside [p, p + bytes) back to the system: their contents are dead. The allocation
@@ -67,7 +70,8 @@ TriangleBuckets::TriangleBuckets(size_t n) {
 }
 
 void TriangleBuckets::count(const Triangles& run) {
-  each_group(run, [&](uint32_t v, size_t i, size_t j) {
+  each_group(run.size(), 1 << 16, same_first(run), [&](size_t i, size_t j) {
+    const uint32_t v = run[i][0];
     if (count_[v]) mixed_[v] = 1;
     count_[v] += uint32_t(j - i);
   });
@@ -107,7 +111,7 @@ Triangles TriangleBuckets::place(std::vector<Triangles>& runs) {
       if (to == done[r]) return;  // a run's vertices lie in its tile's column: most waves miss it
       const std::span<const Triangle> part(run.data() + done[r], to - done[r]);
       // Triangle by triangle, not a copy call a group: most groups hold one or two triangles.
-      group_blocks(part, [&](size_t i, size_t j) {
+      group_blocks(part.size(), 1 << 16, same_first(part), [&](size_t i, size_t j) {
         for (; i < j; ++i) {
           const uint32_t v = part[i][0];
           out[base[v / kBlock] + count_[v]++] = part[i];
@@ -175,21 +179,9 @@ Triangles outside_final(const Triangles& m, const std::vector<Edge>& border) {
         return;
     }
   };
-  // Calls f(i, j) for each group [i, j) of one edge, on all cores.
+  // Each group of equal keys is one edge.
   auto each_edge = [&](auto&& f) {
-    const size_t n = half.size();
-    auto inside_group = [&](size_t i) { return i > 0 && i < n && half[i].key == half[i - 1].key; };
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1 << 14), [&](const tbb::blocked_range<size_t>& r) {
-      size_t i = r.begin(), end = r.end();
-      while (inside_group(i)) ++i;
-      while (inside_group(end)) ++end;
-      while (i < end) {
-        size_t j = i + 1;
-        while (j < end && half[j].key == half[i].key) ++j;
-        f(i, j);
-        i = j;
-      }
-    });
+    each_group(half.size(), 1 << 14, [&](size_t i) { return half[i].key == half[i - 1].key; }, f);
   };
   each_edge([&](size_t i, size_t j) {
     if (half[j - 1].triangle != kBorder && j == i + 2) unite(half[i].triangle, half[i + 1].triangle);

@@ -13,6 +13,7 @@
 #include <mutex>
 #include <thread>
 
+#include "core/timing.hpp"
 #include "gpu/check.hpp"
 #include "gpu/devices.hpp"
 #include "shaders/layout_dt.h"
@@ -106,11 +107,11 @@ class OnDevice {
   // no more than before (the plan's own call after the CLI's), it does nothing.
   void reserve(uint64_t vertices) {
     if (vertices <= reserved_vertices_) return;
+    const bool warm = reserved_vertices_ == 0 && vertices >= warm_up_from_;  // the first reserve
     reserved_vertices_ = vertices;
     allocating_.clear();  // joins an earlier reserve's threads
     const uint64_t bytes = GpuCdt::staging_bytes(vertices);
     const size_t devices = cdts_.size();
-    const bool warm = std::exchange(warm_pending_, false) && vertices >= warm_up_from_;
     filled_ = std::vector<std::promise<void>>(staging_.size());
     for (size_t slot = 0; slot < staging_.size(); ++slot) reserved_[slot] = filled_[slot].get_future().share();
     for (size_t d = 0; d < devices; ++d)
@@ -134,8 +135,7 @@ class OnDevice {
     try {
       cdts_[d]->warm_up_tiles(vertices, staging);
       warm_ups_.fetch_add(1);
-      spdlog::debug("device {}: warmed up for tiles of {} points in {:.0f} ms", d, vertices,
-                    ms(std::chrono::steady_clock::now() - t0));
+      spdlog::debug("device {}: warmed up for tiles of {} points in {:.0f} ms", d, vertices, ms_since(t0));
     } catch (const std::exception& e) {
       cdts_[d]->drop_kept();
       spdlog::debug("device {}: no warm-up for tiles of {} points: {}", d, vertices, e.what());
@@ -236,7 +236,6 @@ class OnDevice {
   DevicePool slots_;  // the staging buffers not holding a tile; slot i is device i % devices'
   std::vector<std::unique_ptr<HostStaging>> staging_;
   uint64_t reserved_vertices_ = 0;                  // the largest reserve() so far
-  bool warm_pending_ = true;                         // the first reserve() warms the devices up
   std::atomic<bool> tiles_begun_{false};             // a tile has asked for a slot: no warm-up from now on
   std::vector<std::promise<void>> filled_;          // reserve()'s allocations, a slot each
   std::vector<std::shared_future<void>> reserved_;  // their futures, which a tile waits on
