@@ -18,6 +18,7 @@
 #include "core/cdt_cgal.hpp"
 #include "core/resolve.hpp"
 #include "core/tiles.hpp"
+#include "core/tiles_ahead.hpp"
 #include "core/workloads.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "gpu/check.hpp"
@@ -78,14 +79,32 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
   const auto t = Clock::now();
   // As cdtgpu triangulate does: the tiles' staging (and the devices' warm-up) begun before the resolve.
   if (reserve) reserve(tile_staging_points(p.vertices.size(), tile_points));
-  ResolvedInput in = resolve_constraints(p);
-  out.resolve_ms.push_back(ms_since(t));
   TileOptions opt;
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
   opt.finalize = finalize;
   opt.reserve = reserve;
   out.tile_points = tile_points;
+  if (finalize) {  // a device's tiles: begun beside the resolve (core/tiles_ahead.hpp), as cdtgpu triangulate does
+    ResolveProgress progress;
+    auto resolving = std::async(std::launch::async, [&] {
+      ResolvedInput r = resolve_if_needed(p, progress);
+      out.resolve_ms.push_back(ms_since(t));
+      return r;
+    });
+    std::optional<Triangles> ahead = tiled_cdt_ahead(p, progress, opt, tri, &out.tiles);
+    ResolvedInput in = resolving.get();
+    if (ahead) {
+      out.mesh.vertices = p.vertices;
+      out.mesh.triangles = std::move(*ahead);
+      return;
+    }
+    out.tiles = TileStats{};
+    out.mesh = triangulate_tiled(std::move(in), opt, tri, &out.tiles).mesh;
+    return;
+  }
+  ResolvedInput in = resolve_constraints(p);
+  out.resolve_ms.push_back(ms_since(t));
   out.mesh = triangulate_tiled(std::move(in), opt, tri, &out.tiles).mesh;
 }
 
@@ -226,10 +245,12 @@ int run_tiles(const BenchOptions& o) {
       }));
       std::string parts;
       for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
+      std::string gpu_parts;
+      for (const auto& [name, ms] : sum.gpu_ms) gpu_parts += " " + name + " " + fmt(ms);
       std::printf(
-          "%9s last tiled %s run, the tiles' calls summed: GPU %s ms, wall %s ms:%s; peak device %s MB; device "
+          "%9s last tiled %s run, the tiles' calls summed: GPU %s ms:%s; wall %s ms:%s; peak device %s MB; device "
           "buffers allocated and freed in %s ms (all runs, all threads)\n", "",
-          backend.c_str(), fmt(sum.gpu_total_ms).c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
+          backend.c_str(), fmt(sum.gpu_total_ms).c_str(), gpu_parts.c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
           fmt(double(sum.peak_device_bytes) / 1e6).c_str(), fmt(gpu::memory_ms() - memory_before).c_str());
     }
     if (results.empty()) continue;

@@ -18,6 +18,7 @@
 #include "core/regions.hpp"
 #include "core/resolve.hpp"
 #include "core/tiles.hpp"
+#include "core/tiles_ahead.hpp"
 #include "core/uninit.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "gpu/check.hpp"
@@ -73,19 +74,32 @@ std::string gpu_refused(const gpu::DeviceError& e) {
 // The tiled CDT (core/tiles) of a resolved input, its figures in the stats.
 // in_flight: tiles worked on at once (0: as many as the cores take; a device's: 2, core/tiles.hpp).
 // finalize: the tiles' own (the GPU's, core/tiles.hpp); empty: the host's test.
-CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
-                               const TileTriangulator& triangulate, unsigned in_flight = 0,
-                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {}) {
+TileOptions tile_options(const Job& job, uint64_t tile_points, unsigned in_flight, TileFinalizer finalize,
+                         std::function<void(uint64_t)> reserve) {
   TileOptions opt;
   opt.finalize = std::move(finalize);
   opt.reserve = std::move(reserve);
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
   opt.sharing = job.options.sharing;
+  return opt;
+}
+
+void record_tiles(Job& job, const TileStats& ts, uint64_t tile_points);
+
+CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
+                               const TileTriangulator& triangulate, unsigned in_flight = 0,
+                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {}) {
+  const TileOptions opt = tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve));
   TileStats ts;
   CdtResult r = timed(job, "triangulate: tiles and merge", [&] {
     return triangulate_tiled(std::move(in), opt, triangulate, &ts);
   });
+  record_tiles(job, ts, tile_points);
+  return r;
+}
+
+void record_tiles(Job& job, const TileStats& ts, uint64_t tile_points) {
   job.stats.stage_ms.emplace_back("triangulate: tiles", ts.tiles_ms);
   job.stats.stage_ms.emplace_back("triangulate: merge", ts.merge_ms);
   auto& c = job.stats.counts;
@@ -99,7 +113,6 @@ CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_point
   spdlog::info("{} tiles of at most {} points in {} level(s): {} triangles final in their tiles, a merge of {} "
                "vertices and {} segments gave {}", ts.tiles, tile_points, ts.levels, ts.final_triangles,
                ts.merge_vertices, ts.merge_segments, ts.merge_triangles);
-  return r;
 }
 
 // The CPU backend's tile size for n vertices: --max-tile-points, or auto's (core/tiles' auto_cpu_tile_points).
@@ -158,15 +171,28 @@ void drop_prepared(Job& job) {
   free_storage(job.prepared.constraint_line);
 }
 
-// Whether the GPU run's resolve may take the prepared input instead of a copy: no later stage reads it
-// (drop_prepared) and the run is tiled on any device (--max-tile-points below its vertices, or more of them
-// than a device takes), so that no untiled GPU call or its CPU fallback needs it. At 1B points the copy was
-// 24 bytes a vertex of the resolve's peak.
-bool hand_over_prepared(const Job& job) {
+// Whether a GPU run is tiled on any device (--max-tile-points below its vertices, or more of them than a device
+// takes): its tiles begin before the resolve ends (core/tiles_ahead.hpp), and the resolve copies the prepared
+// input only if it splits something (at 1B points the copy was 24 bytes a vertex of the resolve's peak).
+bool tiled_on_any_device(const Job& job) {
   const uint64_t n = job.prepared.vertices.size();
   const int64_t m = job.options.max_tile_points;
-  const bool tiled = m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device();
-  return tiled && !prepared_read_later(job);
+  return m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device();
+}
+
+// resolve_if_needed's result made whole: an unchanged input is the prepared one, moved where no later stage reads
+// it.
+ResolvedInput filled(Job& job, ResolvedInput&& r) {
+  if (!r.unchanged) return std::move(r);
+  r.unchanged = false;
+  if (prepared_read_later(job)) {
+    r.vertices = job.prepared.vertices;
+    r.constraints = job.prepared.constraints;
+  } else {
+    r.vertices = std::move(job.prepared.vertices);
+    r.constraints = std::move(job.prepared.constraints);
+  }
+  return std::move(r);
 }
 
 // The prepared vertices and segments moved out for a resolve that takes them (their counts stay in
@@ -243,9 +269,10 @@ gpu::TileDevices tile_devices(Job& job, GpuStart& start) {
 }
 
 // The GPU backend on a started device, the CPU's resolve stage running on other threads meanwhile.
-// `vertices`: the prepared input's, which may have gone to the resolve (hand_over_prepared).
+// `ahead`: the resolve is resolve_if_needed's, and tiles begin before it ends (tiled_on_any_device).
 CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const ResolveProgress& progress,
-                          const double& resolve_ms, uint64_t vertices) {
+                          const double& resolve_ms, bool ahead) {
+  const uint64_t vertices = job.prepared.vertices.size();
   RunStats& stats = job.stats;
   GpuStart& start = *job.start;
   gpu::GpuCdt& cdt = start.cdt();
@@ -296,6 +323,22 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
         try {
           gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
+          if (ahead && !got) {  // the prepared input's tiles beside the resolve; what it splits, tiled again below
+            const TileOptions opt =
+                tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
+            TileStats ts;
+            std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
+              return tiled_cdt_ahead(job.prepared, progress, opt, tiles.triangulate, &ts);
+            });
+            if (t) {
+              CdtResult r;
+              r.mesh.vertices = std::move(input().vertices);  // unchanged: the prepared vertices
+              r.mesh.triangles = std::move(*t);
+              record_tiles(job, ts, tile_here);
+              stats.counts["gpu_tile_retries"] = retries;
+              return r;
+            }
+          }
           CdtResult r = triangulate_in_tiles(job, std::move(input()), tile_here, tiles.triangulate,
                                              unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
                                              std::move(tiles.reserve));
@@ -316,10 +359,10 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
     }
   };
   const uint64_t tile = gpu_tile_points(start.context(), vertices, options.max_tile_points);
-  if (tile >= 3 && vertices > tile) {
+  if (ahead || (tile >= 3 && vertices > tile)) {  // ahead: the resolve's result is for tiles only
     return in_tiles(
         [&] {
-          ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return resolving.get(); });
+          ResolvedInput in = timed(job, "triangulate: resolve wait", [&] { return filled(job, resolving.get()); });
           stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
           return in;
         },
@@ -527,15 +570,14 @@ void triangulate_job(Job& job) {
   double resolve_ms = 0;
   ResolveProgress progress;
   const uint64_t vertices = job.prepared.vertices.size();
-  const bool handed_over = job.want_gpu && hand_over_prepared(job);
-  PreparedInput handed = handed_over ? take_prepared(job) : PreparedInput{};
+  const bool ahead = job.want_gpu && tiled_on_any_device(job);
   // Declared after what its task reads: a throw before get() waits for the task before those go.
   std::future<ResolvedInput> resolving;
   if (job.want_gpu)
     resolving = std::async(std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
       ResolvedInput r =
-          handed_over ? resolve_constraints(std::move(handed)) : resolve_constraints(job.prepared, progress);
+          ahead ? resolve_if_needed(job.prepared, progress) : resolve_constraints(job.prepared, progress);
       resolve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
     });
@@ -556,13 +598,13 @@ void triangulate_job(Job& job) {
     stats.backend = job.gpu ? "gpu" : "cgal";
     stats.backend_reason = job.backend_reason;
     spdlog::debug("backend {}: {}", stats.backend, job.backend_reason);
-    if (job.gpu) return triangulate_gpu(job, resolving, progress, resolve_ms, vertices);
+    if (job.gpu) return triangulate_gpu(job, resolving, progress, resolve_ms, ahead);
     if (!job.want_gpu) return triangulate_cpu(job);
     // No device after all. The resolve begun for it reads the prepared input, which the CPU's tiles free: its
     // result is what they tile (a second resolve beside it freed the input under it). One CGAL run waits for it.
-    ResolvedInput in = resolving.get();
+    ResolvedInput in = filled(job, resolving.get());
     stats.stage_ms.emplace_back("triangulate: resolve (other threads)", resolve_ms);
-    if (!handed_over && cpu_in_one_piece(job, vertices)) return triangulate_cpu(job);
+    if (!ahead && cpu_in_one_piece(job, vertices)) return triangulate_cpu(job);
     return triangulate_cpu(job, &in);
   });
   drop_prepared(job);

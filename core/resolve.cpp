@@ -41,6 +41,7 @@
 #include <exception>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -282,19 +283,19 @@ class Resolver {
   // meanwhile: 48 MB of vertices take ~30 ms to copy on the 2-core machines, mostly page faults, and that
   // overlaps with the sweep's computing. The copy itself on all cores (TBB): on one, 120 MB (5M vertices)
   // outlasted the sweep on the 16-core H100 machine.
+  // `lazily`: the copy only once round 1 has found something to split; a clean input is not copied at all
+  // (unchanged() tells).
   Resolver(const Points& vertices, const std::vector<Edge>& constraints, unsigned threads,
-           ResolveProgress* progress = nullptr)
-      : threads_(threads), progress_(progress), vr_(&vertices), sr_(&constraints) {
+           ResolveProgress* progress = nullptr, bool lazily = false)
+      : threads_(threads), progress_(progress), lazily_(lazily), vr_(&vertices), sr_(&constraints) {
+    if (lazily_) return;
     if (threads_ > 1)
-      copier_ = std::jthread([this, &vertices, &constraints] {
-        resize_unwritten(v_, vertices.size());
-        copy_on_all_cores(vertices.data(), vertices.size(), v_.data());
-        seg_.reserve(with_room(constraints.size()));
-        seg_.assign(constraints.begin(), constraints.end());
-      });
+      copier_ = std::jthread([this, &vertices, &constraints] { copy_input(vertices, constraints); });
     else
       v_ = vertices, seg_ = constraints;
   }
+
+  bool unchanged() const { return unchanged_; }
 
   ResolvedInput run() {
     ResolvedInput out;
@@ -309,12 +310,24 @@ class Resolver {
       ev = sweep(/*everything=*/true);
       spdlog::debug("resolve: setup {:.1f} ms, round 1 {:.1f} ms", ms(t0, t1), ms(t1, std::chrono::steady_clock::now()));
     }
-    if (progress_) progress_->crossings.store(ev.cross.empty() ? 0 : 1);
+    const bool clean = ev.on.empty() && ev.cross.empty();
+    if (progress_) {
+      progress_->crossings.store(ev.cross.empty() ? 0 : 1);
+      progress_->publish(clean ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity(),
+                         !clean);
+    }
     const auto t2 = std::chrono::steady_clock::now();
     if (copier_.joinable()) copier_.join();
+    if (lazily_) {
+      if (clean) {
+        unchanged_ = true;
+        return out;
+      }
+      copy_input(*vr_, *sr_);
+    }
     spdlog::debug("resolve: waited {:.1f} ms for the input's copy", ms(t2, std::chrono::steady_clock::now()));
     vr_ = &v_, sr_ = &seg_;
-    if (ev.on.empty() && ev.cross.empty()) {  // the input is already clean: it is the output
+    if (clean) {  // the input is already clean: it is the output
       out.vertices = std::move(v_);
       out.constraints = std::move(seg_);
       return out;
@@ -359,6 +372,13 @@ class Resolver {
 
  private:
   static size_t with_room(size_t n) { return n + n / 16 + 4096; }
+
+  void copy_input(const Points& vertices, const std::vector<Edge>& constraints) {
+    resize_unwritten(v_, vertices.size());
+    copy_on_all_cores(vertices.data(), vertices.size(), v_.data());
+    seg_.reserve(with_room(constraints.size()));
+    seg_.assign(constraints.begin(), constraints.end());
+  }
   const Point3& vert(uint32_t i) const { return i < n0_ ? (*vr_)[i] : steiner_[i - n0_]; }
   XY xy(uint32_t i) const { return {vert(i).x, vert(i).y}; }
 
@@ -512,12 +532,26 @@ class Resolver {
     });
     for (size_t b = 1; b < reach_.size(); ++b) reach_[b] = std::max(reach_[b], reach_[b - 1]);
     std::vector<SweepState> states(ranges);
+    // Round 1 tells the progress, range by range, the x below which it has found nothing: the left side of the
+    // first range not yet swept. Every event lies in the column of its x (vertex on a segment: the vertex's;
+    // crossing: the rounded point's), and no x below a column's left() is in it or a later one.
+    std::vector<uint8_t> swept(ranges, 0);
+    size_t cleared = 0;
+    std::mutex sweeping;
     parallel_chunks(ranges, threads_, 1, [&](size_t t0, size_t t1, unsigned) {
       for (size_t t = t0; t < t1; ++t) {
         if (everything)
           sweep_range<true>(bound[t], bound[t + 1], states[t]);
         else
           sweep_range<false>(bound[t], bound[t + 1], states[t]);
+        if (everything && progress_) {
+          std::lock_guard<std::mutex> lock(sweeping);
+          swept[t] = 1;
+          while (cleared < ranges && swept[cleared]) ++cleared;
+          const bool found = !states[t].events.on.empty() || !states[t].events.cross.empty();
+          progress_->publish(cleared == ranges ? std::numeric_limits<double>::infinity() : cols_.left(bound[cleared]),
+                             found);
+        }
       }
     });
     Events all;
@@ -903,6 +937,8 @@ class Resolver {
 
   const unsigned threads_;
   ResolveProgress* const progress_ = nullptr;
+  const bool lazily_ = false;
+  bool unchanged_ = false;
   Points v_;        // prepared vertices
   Points steiner_;  // Steiner vertices in creation order: vertex n0_ + i is steiner_[i]
   std::vector<Edge> seg_;        // prepared constraints, then the pieces of splits (in order along them)
@@ -942,6 +978,36 @@ ResolvedInput resolve_constraints(const PreparedInput& prepared, unsigned thread
 
 ResolvedInput resolve_constraints(const PreparedInput& prepared, ResolveProgress& progress, unsigned threads) {
   return Resolver(prepared.vertices, prepared.constraints, thread_count(threads), &progress).run();
+}
+
+ResolvedInput resolve_if_needed(const PreparedInput& prepared, ResolveProgress& progress, unsigned threads) {
+  try {
+    Resolver r(prepared.vertices, prepared.constraints, thread_count(threads), &progress, /*lazily=*/true);
+    ResolvedInput out = r.run();
+    out.unchanged = r.unchanged();
+    return out;
+  } catch (...) {
+    progress.publish(-std::numeric_limits<double>::infinity(), true);  // nobody waits on it for ever
+    throw;
+  }
+}
+
+void ResolveProgress::publish(double below, bool found) {
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (found) changes.store(true);
+    if (below > clean_below.load()) clean_below.store(below);
+  }
+  moved.notify_all();
+}
+
+bool ResolveProgress::wait_clean(double x) const {
+  std::unique_lock<std::mutex> lock(mutex);
+  moved.wait(lock, [&] {
+    const double b = clean_below.load();
+    return changes.load() || b == std::numeric_limits<double>::infinity() || x < b;
+  });
+  return !changes.load();
 }
 
 ResolvedInput resolve_constraints(PreparedInput&& prepared, unsigned threads) {

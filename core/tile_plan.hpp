@@ -1,5 +1,5 @@
 // plan_tiles: k-d tiles of at most max_points vertices each, for core/tiles. Columns of equal counts, each cut
-// into cells of equal counts, as a binary tree over the cuts.
+// into cells of equal counts, as a binary tree over the cuts; or slabs, one tile a column.
 //
 //   Plan plan = plan_tiles(vertices, 1 << 20);  // vertices sorted by (x, y), as the resolve leaves them
 //   for (uint32_t t : plan.tiles) {
@@ -27,8 +27,12 @@ struct TilePlan {
   RawVector<uint32_t> order;      // vertex ids, each node's a contiguous range
   std::vector<TileNode> nodes;    // nodes[0]: the root
   std::vector<uint32_t> tiles;    // the leaf nodes, left to right in the tree
+  bool slabs = false;             // one tile a column
 };
 
-TilePlan plan_tiles(const Points& v, uint64_t max_points);
+// TileShape: about square tiles (the shortest border, so the smallest merge), or slabs: columns of the (x, y)
+// order, which need no selection, each tile a range of ids. `automatic`: slabs for tiles of 2^24 points or more
+// (a GPU's) unless they would be over 16 times as tall as wide, else squares.
+TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape = TileShape::squares);
 
 }  // namespace cdtgpu

@@ -274,20 +274,13 @@ GatheredTile gather_tile(const std::vector<Edge>& segments, const Plan& plan, co
                          std::span<const uint32_t> tile_segments) {
   const auto t0 = Clock::now();
   // The tile's vertex ids, sorted: its own lie in its column's id range (a column is a range of the (x, y)
-  // order), marked in a byte map and read back in order; the segments' endpoints outside that range (few) are
-  // sorted apart. The map's ranks then give the segments' local ids.
+  // order); the segments' endpoints outside that range (few) are sorted apart. A slab owns its whole column;
+  // a cell's own ids and the segments' endpoints in the column are marked in a byte map and read back in
+  // order, and the map's ranks give the segments' local ids.
   const uint32_t c0 = node.column_lo, c1 = node.column_hi;
-  // Raw, on huge pages: a column at 1B points in 8 tiles is 500M ids, and this map and the ranks below were
-  // 2.5 GB of 4 KiB page faults a tile (a vector would also value-initialise them on one core).
   const size_t span = c1 - c0;
-  RawVector<uint8_t> mark;
-  resize_touched(mark, span);  // zeroed on all cores
-  tbb::parallel_for(node.lo, node.hi, [&](uint32_t i) { mark[plan.order[i] - c0] = 1; });
+  const bool slab = node.hi - node.lo == span;
   auto inside = [&](uint32_t id) { return id >= c0 && id < c1; };
-  tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
-    for (uint32_t id : segments[tile_segments[i]])
-      if (inside(id)) std::atomic_ref<uint8_t>(mark[id - c0]).store(1, std::memory_order_relaxed);
-  });
   std::vector<uint32_t> outside = compact<uint32_t>(
       tile_segments.size(),
       [&](size_t i) {
@@ -300,30 +293,50 @@ GatheredTile gather_tile(const std::vector<Edge>& segments, const Plan& plan, co
       });
   std::sort(outside.begin(), outside.end());
   outside.erase(std::unique(outside.begin(), outside.end()), outside.end());
-  const std::vector<uint32_t> own = compact<uint32_t>(
-      span, [&](size_t i) { return mark[i]; },
-      [&](size_t i, uint32_t* at) {
-        if (mark[i]) *at++ = c0 + uint32_t(i);
-        return at;
-      });
   const size_t below = size_t(std::lower_bound(outside.begin(), outside.end(), c0) - outside.begin());
-  // Outside ids below the column, the column's, those above: copied on all cores into unwritten memory.
+  // Raw, on huge pages: a column at 1B points in 8 tiles is 500M ids, and this map and the ranks below were
+  // 2.5 GB of 4 KiB page faults a tile (a vector would also value-initialise them on one core).
+  RawVector<uint8_t> mark;
+  std::vector<uint32_t> own;
+  if (!slab) {
+    resize_touched(mark, span);  // zeroed on all cores
+    tbb::parallel_for(node.lo, node.hi, [&](uint32_t i) { mark[plan.order[i] - c0] = 1; });
+    tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
+      for (uint32_t id : segments[tile_segments[i]])
+        if (inside(id)) std::atomic_ref<uint8_t>(mark[id - c0]).store(1, std::memory_order_relaxed);
+    });
+    own = compact<uint32_t>(
+        span, [&](size_t i) { return mark[i]; },
+        [&](size_t i, uint32_t* at) {
+          if (mark[i]) *at++ = c0 + uint32_t(i);
+          return at;
+        });
+  }
+  const size_t owned = slab ? span : own.size();
+  // Outside ids below the column, the column's, those above: written on all cores into unwritten memory.
   RawVector<uint32_t> ids;
-  ids.resize(outside.size() + own.size());
+  ids.resize(outside.size() + owned);
   advise_huge_pages(ids.data(), ids.size() * sizeof(uint32_t));
   std::copy(outside.begin(), outside.begin() + below, ids.begin());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, own.size(), 1 << 20), [&](const tbb::blocked_range<size_t>& r) {
-    std::copy(own.begin() + r.begin(), own.begin() + r.end(), ids.begin() + below + r.begin());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, owned, 1 << 20), [&](const tbb::blocked_range<size_t>& r) {
+    uint32_t* at = ids.data() + below;
+    if (slab)
+      std::iota(at + r.begin(), at + r.end(), c0 + uint32_t(r.begin()));
+    else
+      std::copy(own.begin() + r.begin(), own.begin() + r.end(), at + r.begin());
   });
-  std::copy(outside.begin() + below, outside.end(), ids.begin() + below + own.size());
+  std::copy(outside.begin() + below, outside.end(), ids.begin() + below + owned);
   const size_t nl = ids.size();
   RawVector<uint32_t> rank;
-  resize_unwritten(rank, span);  // set, and read, only at the tile's ids in the column
-  tbb::parallel_for(size_t(0), nl, [&](size_t i) {
-    if (inside(ids[i])) rank[ids[i] - c0] = uint32_t(i);
-  });
+  if (!slab) {
+    resize_unwritten(rank, span);  // set, and read, only at the tile's ids in the column
+    tbb::parallel_for(size_t(0), nl, [&](size_t i) {
+      if (inside(ids[i])) rank[ids[i] - c0] = uint32_t(i);
+    });
+  }
   auto local_of = [&](uint32_t id) {
-    return inside(id) ? rank[id - c0] : uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
+    if (!inside(id)) return uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
+    return slab ? uint32_t(below + (id - c0)) : rank[id - c0];
   };
   std::vector<Edge> local_segments(tile_segments.size());
   tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
@@ -393,7 +406,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // The tiles' staging, allocated beside the plan (if the caller has not yet), again after it if a tile is larger.
   const uint64_t reserved = level == 1 && options.reserve ? tile_staging_points(n, options.max_tile_points) : 0;
   if (reserved) options.reserve(reserved);
-  Plan plan = plan_tiles(v, options.max_tile_points);
+  Plan plan = plan_tiles(v, options.max_tile_points, options.shape);
   const size_t tiles = plan.tiles.size();
   if (reserved) {
     uint64_t largest = 0;
@@ -465,8 +478,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   block_count.clear();
 
   s.plan_ms += ms_since(t_tiles);
-  spdlog::debug("tiles, level {}: {} tiles of at most {} points planned in {:.0f} ms", level, tiles,
-                options.max_tile_points, ms_since(t_tiles));
+  spdlog::debug("tiles, level {}: {} {} of at most {} points planned in {:.0f} ms", level, tiles,
+                plan.slabs ? "slabs" : "tiles", options.max_tile_points, ms_since(t_tiles));
   std::vector<uint8_t> in_final;
   resize_touched(in_final, n);  // zeroed on all cores
   TriangleBuckets buckets(n);
@@ -482,6 +495,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
         [&] { return gather_tile(segments, plan, plan.nodes[plan.tiles[t]], its_segments); });
   };
   auto finish = [&](size_t t, GatheredTile g) {
+    // Its ids are sorted: the last has the largest x of its vertices and segments.
+    if (options.wait_clean && !g.ids.empty() && !options.wait_clean(v[g.ids.back()].x)) throw InputChangedByResolve();
     const std::string name = tile_name(t);
     tbb::this_task_arena::isolate([&] {
       results[t] = finish_tile(v, std::move(g), plan.nodes[plan.tiles[t]], triangulate, options.finalize, name,
@@ -564,6 +579,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   }
 
   const double tiles_wall_ms = ms_since(t_tiles);
+  if (options.wait_clean && !options.wait_clean(std::numeric_limits<double>::infinity()))
+    throw InputChangedByResolve();
   // The merge: the vertices not inside the final region, the segments between them (a segment with an end
   // inside the final region lies inside it) and the final region's border. What only the tiles read goes
   // first (at 1B points + 250M segments: 6 GB of the canonical order's peak).

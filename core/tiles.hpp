@@ -21,6 +21,7 @@
 #include <functional>
 #include <limits>
 #include <span>
+#include <stdexcept>
 #include <string_view>
 #include <vector>
 
@@ -52,6 +53,9 @@ struct TileRect {
   double x0 = -std::numeric_limits<double>::infinity(), x1 = std::numeric_limits<double>::infinity();
   double y0 = -std::numeric_limits<double>::infinity(), y1 = std::numeric_limits<double>::infinity();
 };
+
+// The tiles' shape (core/tile_plan.hpp).
+enum class TileShape { automatic, squares, slabs };
 
 // A tile as a TileFinalizer takes it: its vertices are all[ids[i]] (ids sorted), its segments in those local
 // indices (sorted).
@@ -92,12 +96,22 @@ struct TileOptions {
   // once (one on the device, the next gathered meanwhile) bound host memory by the tile size.
   unsigned tiles_in_flight = 0;
   const TileSharing* sharing = nullptr;  // null: every tile here
+  TileShape shape = TileShape::automatic;  // core/tile_plan.hpp; tests force slabs on small inputs
+  // Tiles begun before the resolve ends (core/tiles_ahead.hpp): a first-level tile waits for wait_clean(x), x
+  // the largest x of its vertices and segments, and the merge for wait_clean(+inf); false throws
+  // InputChangedByResolve. Empty: the input is resolved already.
+  std::function<bool(double x)> wait_clean;
   // Tiles (of every level) through this instead of the triangulator plus the host's final test; the merges
   // still take the triangulator. Empty: the host's test.
   TileFinalizer finalize;
   // Told a first-level tile's vertex count (tile_staging_points) before the plan, and again after it if a tile
   // is larger: a GPU finalizer allocates its pinned staging meanwhile.
   std::function<void(uint64_t vertices)> reserve;
+};
+
+// tiled_cdt's throw when options.wait_clean says that the resolve changes the input it was begun on.
+struct InputChangedByResolve : std::runtime_error {
+  InputChangedByResolve() : std::runtime_error("the resolve changes the input the tiles were begun on") {}
 };
 
 struct TileStats {

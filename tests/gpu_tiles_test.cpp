@@ -125,7 +125,8 @@ TEST(GpuTiles, DeviceFinalTestIsWithinTheHostsTest) {
   expect_final_within_host(cdt, g.vertices, g.constraints, TileRect{10, 40, 5, 50}, "grid, sides on grid lines");
 }
 
-// Every hard layout in tiles of 16, 50 and 500 points with the device's final test: the single run's mesh.
+// Every hard layout in tiles of 16, 50 and 500 points, and in slabs of 100 (a tile whose ids are a range), with
+// the device's final test: the single run's mesh.
 TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
   const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
   const gpu::GpuCdt cdt(ctx);
@@ -133,9 +134,10 @@ TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
   for (const auto& [name, in] : tile_layouts::all()) {
     const PreparedInput p = prepare(in);
     const CdtResult single = triangulate_cgal(p);
-    for (uint64_t tp : {16, 50, 500}) {
+    for (uint64_t tp : {16, 50, 500, 100}) {
       TileOptions opt;
       opt.max_tile_points = tp;
+      opt.shape = tp == 100 ? TileShape::slabs : TileShape::automatic;
       opt.finalize = tiles.finalize;
       if (tp == 50) opt.reserve = tiles.reserve;  // staging allocated ahead, and regrown by a later layout's tiles
       TileStats ts;

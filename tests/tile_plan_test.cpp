@@ -24,8 +24,9 @@ bool strictly_inside(const TileRect& r, const Point3& p) {
   return p.x > r.x0 && p.x < r.x1 && p.y > r.y0 && p.y < r.y1;
 }
 
-void expect_plan(const Points& v, uint64_t max_points, const std::string& what) {
-  const TilePlan plan = plan_tiles(v, max_points);
+void expect_plan(const Points& v, uint64_t max_points, const std::string& what,
+                 TileShape shape = TileShape::squares) {
+  const TilePlan plan = plan_tiles(v, max_points, shape);
   const uint64_t tiles_asked = (v.size() + max_points - 1) / max_points;
   EXPECT_GE(plan.tiles.size(), tiles_asked) << what;
   EXPECT_LE(plan.tiles.size(), tiles_asked + tiles_asked / 2 + 1) << what;  // columns round the count up
@@ -40,6 +41,9 @@ void expect_plan(const Points& v, uint64_t max_points, const std::string& what) 
       owner[id] = int(t);
       ASSERT_TRUE(inside_closed(node.rect, v[id])) << what << ": vertex " << id << " outside tile " << t;
       ASSERT_TRUE(id >= node.column_lo && id < node.column_hi) << what << ": vertex " << id << " off its column";
+    }
+    if (shape == TileShape::slabs) {
+      EXPECT_EQ(node.hi - node.lo, node.column_hi - node.column_lo) << what << ": tile " << t << " is not a slab";
     }
   }
   for (size_t id = 0; id < v.size(); ++id) {
@@ -69,6 +73,35 @@ TEST(TilePlan, GridPointsTieOnEveryRowAndColumn) {
     for (int y = 0; y < 200; ++y) v.push_back({double(x), double(y), 0});
   for (uint64_t max_points : {60'000ull, 7'000ull, 999ull, 16ull})
     expect_plan(v, max_points, "grid, " + std::to_string(max_points));
+}
+
+TEST(TilePlan, SlabsAreWholeColumns) {
+  std::mt19937_64 rng(5);
+  Points v(200'000);
+  for (Point3& p : v) p = {double(rng() % 100000) / 8, double(rng() % 100000) / 8, 0};
+  v = sorted(std::move(v));
+  auto same = [](const Point3& a, const Point3& b) { return a.x == b.x && a.y == b.y; };
+  v.erase(std::unique(v.begin(), v.end(), same), v.end());
+  for (uint64_t max_points : {60'000ull, 7'000ull})
+    expect_plan(v, max_points, "random slabs, " + std::to_string(max_points), TileShape::slabs);
+  Points grid;
+  for (int x = 0; x < 30; ++x)
+    for (int y = 0; y < 200; ++y) grid.push_back({double(x), double(y), 0});
+  expect_plan(grid, 999, "grid slabs, ties on every column", TileShape::slabs);
+}
+
+TEST(TilePlan, AutomaticSlabsOnlyForLargeTilesThatAreNotTooThin) {
+  Points v;
+  for (int x = 0; x < 64; ++x)
+    for (int y = 0; y < 64; ++y) v.push_back({double(x), double(y), 0});
+  auto columns = [](const TilePlan& plan) {
+    size_t slabs = 0;
+    for (uint32_t t : plan.tiles) slabs += plan.nodes[t].hi - plan.nodes[t].lo == plan.nodes[t].column_hi - plan.nodes[t].column_lo;
+    return slabs;
+  };
+  // Small tiles: about square (4 x 4 of 256 points), whatever `automatic` would do for large ones.
+  EXPECT_EQ(columns(plan_tiles(v, 256, TileShape::automatic)), 0u);
+  EXPECT_EQ(columns(plan_tiles(v, 256, TileShape::slabs)), 16u);
 }
 
 TEST(TilePlan, FewerPointsThanATile) {

@@ -1,0 +1,27 @@
+// Tiles begun before the resolve ends: the GPU's tiles of a large input need their segments resolved (no
+// crossings, no vertex inside one), and at 1B points + 250M segments the resolve took 4-6 s on all cores
+// while the devices waited. The resolve's first sweep goes over the input in x order, roughly, and tells which
+// x it has cleared (ResolveProgress); a tile of the prepared input starts once everything up to its largest x
+// is, and the merge once all is. Nearly every real input (contours, breaklines, footprints) has nothing to
+// split: its tiles are the run's. One that has is tiled again from its resolved input: the same bytes.
+//
+//   ResolveProgress progress;
+//   auto resolving = std::async(std::launch::async, [&] { return resolve_if_needed(prepared, progress); });
+//   std::optional<Triangles> t = tiled_cdt_ahead(prepared, progress, options, triangulate, &stats);
+//   ResolvedInput in = resolving.get();  // t: in.unchanged, and t is the mesh of prepared.vertices
+#pragma once
+#include <optional>
+
+#include "core/resolve.hpp"
+#include "core/tiles.hpp"
+
+namespace cdtgpu {
+
+// tiled_cdt of the prepared input while its resolve runs elsewhere, reporting to `progress`: its triangles
+// (canonical) when the resolve found nothing to split, nullopt as soon as it found something (the tiles done
+// so far are dropped). `options.wait_clean` is set here.
+std::optional<Triangles> tiled_cdt_ahead(const PreparedInput& prepared, const ResolveProgress& progress,
+                                         TileOptions options, const TileTriangulator& triangulate,
+                                         TileStats* stats = nullptr);
+
+}  // namespace cdtgpu
