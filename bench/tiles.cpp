@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -16,7 +17,9 @@
 #include "bench/figures.hpp"
 #include "core/canonical.hpp"
 #include "core/cdt_cgal.hpp"
+#include "core/parallel.hpp"
 #include "core/resolve.hpp"
+#include "core/uninit.hpp"
 #include "core/tiles.hpp"
 #include "core/tiles_ahead.hpp"
 #include "core/workloads.hpp"
@@ -88,14 +91,23 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
   if (finalize) {  // a device's tiles: begun beside the resolve (core/tiles_ahead.hpp), as cdtgpu triangulate does
     ResolveProgress progress;
     auto resolving = std::async(std::launch::async, [&] {
+      lower_this_thread_priority();
       ResolvedInput r = resolve_if_needed(p, progress);
       out.resolve_ms.push_back(ms_since(t));
       return r;
     });
+    // The mesh's vertices: cdtgpu triangulate moves the prepared ones; `p` serves every run here, so they are
+    // copied, on all cores beside the tiles, as the resolve's copy of them was before.
+    Points vertices;
+    auto copying = std::async(std::launch::async, [&] {
+      resize_unwritten(vertices, p.vertices.size());
+      copy_on_all_cores(p.vertices.data(), p.vertices.size(), vertices.data());
+    });
     std::optional<Triangles> ahead = tiled_cdt_ahead(p, progress, opt, tri, &out.tiles);
     ResolvedInput in = resolving.get();
+    copying.get();
     if (ahead) {
-      out.mesh.vertices = p.vertices;
+      out.mesh.vertices = std::move(vertices);
       out.mesh.triangles = std::move(*ahead);
       return;
     }
