@@ -56,13 +56,19 @@ void expect_plan(const Points& v, uint64_t max_points, const std::string& what,
   }
 }
 
-TEST(TilePlan, RandomPointsInTilesOfAtMostTheirSize) {
-  std::mt19937_64 rng(3);
-  Points v(3'000'000);
-  for (Point3& p : v) p = {double(rng() % 1000000) / 8, double(rng() % 1000000) / 8, 0};
+// n random points on a grid of eighths `side` wide, sorted and unique (as the resolve leaves them).
+Points random_sorted(size_t n, uint64_t seed, uint64_t side) {
+  std::mt19937_64 rng(seed);
+  Points v(n);
+  for (Point3& p : v) p = {double(rng() % side) / 8, double(rng() % side) / 8, 0};
   v = sorted(std::move(v));
   auto same = [](const Point3& a, const Point3& b) { return a.x == b.x && a.y == b.y; };
   v.erase(std::unique(v.begin(), v.end(), same), v.end());
+  return v;
+}
+
+TEST(TilePlan, RandomPointsInTilesOfAtMostTheirSize) {
+  const Points v = random_sorted(3'000'000, 3, 1000000);
   for (uint64_t max_points : {1'600'000ull, 400'000ull, 100'000ull})
     expect_plan(v, max_points, "random, " + std::to_string(max_points));
 }
@@ -76,12 +82,7 @@ TEST(TilePlan, GridPointsTieOnEveryRowAndColumn) {
 }
 
 TEST(TilePlan, SlabsAreWholeColumns) {
-  std::mt19937_64 rng(5);
-  Points v(200'000);
-  for (Point3& p : v) p = {double(rng() % 100000) / 8, double(rng() % 100000) / 8, 0};
-  v = sorted(std::move(v));
-  auto same = [](const Point3& a, const Point3& b) { return a.x == b.x && a.y == b.y; };
-  v.erase(std::unique(v.begin(), v.end(), same), v.end());
+  const Points v = random_sorted(200'000, 5, 100000);
   for (uint64_t max_points : {60'000ull, 7'000ull})
     expect_plan(v, max_points, "random slabs, " + std::to_string(max_points), TileShape::slabs);
   Points grid;
