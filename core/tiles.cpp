@@ -535,6 +535,11 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
             tbb::make_filter<size_t, void>(tbb::filter_mode::parallel,
                                            [&](size_t t) { finish(t, std::move(gathered[t])); }));
   }
+  // Before the ranks' exchange: every rank runs the same resolve on the same input, so all of them give up here
+  // or none does (a rank whose tiles all lay below the first event would otherwise wait in the exchange for
+  // ranks that gave up).
+  if (options.wait_clean && !options.wait_clean(std::numeric_limits<double>::infinity()))
+    throw InputChangedByResolve();
   if (sharing) {
     // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
     // triangles' count and ids, the border's count and ids.
@@ -579,8 +584,6 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   }
 
   const double tiles_wall_ms = ms_since(t_tiles);
-  if (options.wait_clean && !options.wait_clean(std::numeric_limits<double>::infinity()))
-    throw InputChangedByResolve();
   // The merge: the vertices not inside the final region, the segments between them (a segment with an end
   // inside the final region lies inside it) and the final region's border. What only the tiles read goes
   // first (at 1B points + 250M segments: 6 GB of the canonical order's peak).

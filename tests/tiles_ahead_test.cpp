@@ -102,6 +102,44 @@ TEST(TilesAhead, EachTileWaitsForItsXRange) {
   EXPECT_GT(before_the_end.load(), 0) << "no tile began before the input was cleared everywhere";
 }
 
+// Ranks (MPI) give up before their exchange: a rank whose tiles all lie below the first event would otherwise
+// wait there for ranks that gave up. Rank 0 of 2 holds the left of two slabs, cleared at once; the event comes
+// 100 ms later.
+TEST(TilesAhead, RanksGiveUpBeforeTheirExchange) {
+  InputSet in = uniform_points(20000, 13);
+  add_dt_edge_constraints(in, 5000, 0.2, 8);
+  const PreparedInput p = prepare(in);
+  ResolveProgress progress;
+  const double lo = p.vertices.front().x, hi = p.vertices.back().x;
+  progress.publish(lo + (hi - lo) * 0.75, false);
+  std::thread finding([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    progress.publish(-kInf, true);
+  });
+  int exchanges = 0;
+  TileSharing sharing;
+  sharing.rank = 0;
+  sharing.ranks = 2;
+  sharing.gather = [&](std::vector<uint32_t>) {
+    ++exchanges;
+    return std::vector<std::vector<uint32_t>>{};
+  };
+  TileOptions opt;
+  opt.max_tile_points = p.vertices.size() / 2 + 1;
+  opt.shape = TileShape::slabs;
+  opt.sharing = &sharing;
+  int tiles = 0;
+  const TileTriangulator counted = [&](const Points& v, const std::vector<Edge>& s, std::string_view what) {
+    ++tiles;
+    return cgal_tile_triangulator()(v, s, what);
+  };
+  const std::optional<Triangles> t = tiled_cdt_ahead(p, progress, opt, counted);
+  finding.join();
+  EXPECT_FALSE(t.has_value());
+  EXPECT_EQ(tiles, 1) << "rank 0's slab, cleared at once";
+  EXPECT_EQ(exchanges, 0) << "the rank went to the exchange although the resolve changes the input";
+}
+
 TEST(TilesAhead, CrossingConstraintsDropTheEarlyTiles) {
   const PreparedInput p = prepare(tile_layouts::crossing_constraints());
   const CdtResult single = triangulate_cgal(p);
