@@ -91,7 +91,6 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
   if (finalize) {  // a device's tiles: begun beside the resolve (core/tiles_ahead.hpp), as cdtgpu triangulate does
     ResolveProgress progress;
     auto resolving = std::async(std::launch::async, [&] {
-      lower_this_thread_priority();
       ResolvedInput r = resolve_if_needed(p, progress);
       out.resolve_ms.push_back(ms_since(t));
       return r;

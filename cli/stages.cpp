@@ -575,7 +575,6 @@ void triangulate_job(Job& job) {
   std::future<ResolvedInput> resolving;
   if (job.want_gpu)
     resolving = std::async(std::launch::async, [&] {
-      if (ahead) lower_this_thread_priority();  // beside the tiles (core/tiles_ahead.hpp)
       const auto t0 = std::chrono::steady_clock::now();
       ResolvedInput r =
           ahead ? resolve_if_needed(job.prepared, progress) : resolve_constraints(job.prepared, progress);

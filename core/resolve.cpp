@@ -28,6 +28,9 @@
 #include "core/resolve.hpp"
 
 #include <CGAL/Exact_rational.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 #include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -67,6 +70,16 @@ constexpr int kMaxRounds = 200;
 constexpr double kCellVertices = 4;
 constexpr size_t kRowItems = 6;
 
+// Set on the calling thread while resolve_if_needed runs (beside tiles): the threads parallel_chunks starts run
+// at nice 10. The calling thread keeps its priority, so that TBB's workers, should it start any, do not inherit
+// a lower one.
+thread_local bool t_beside_tiles = false;
+
+void lower_this_thread_priority() {
+  // Linux: PRIO_PROCESS with a thread id sets that thread's nice value alone. Best effort.
+  (void)setpriority(PRIO_PROCESS, id_t(syscall(SYS_gettid)), 10);
+}
+
 // body(begin, end, worker) over [0, n) in chunks taken from a shared counter by `threads` workers
 // (worker < threads). Runs inline for small n. The first exception of a worker is rethrown.
 template <class Body>
@@ -91,7 +104,12 @@ void parallel_chunks(size_t n, unsigned threads, size_t grain, const Body& body)
   const unsigned used = unsigned(std::min<size_t>(threads, chunks));
   std::vector<std::thread> pool;
   pool.reserve(used - 1);
-  for (unsigned w = 1; w < used; ++w) pool.emplace_back(work, w);
+  const bool lower = t_beside_tiles;
+  for (unsigned w = 1; w < used; ++w)
+    pool.emplace_back([&work, lower, w] {
+      if (lower) lower_this_thread_priority();
+      work(w);
+    });
   work(0);
   for (std::thread& t : pool) t.join();
   for (const std::exception_ptr& e : errors)
@@ -981,6 +999,10 @@ ResolvedInput resolve_constraints(const PreparedInput& prepared, ResolveProgress
 }
 
 ResolvedInput resolve_if_needed(const PreparedInput& prepared, ResolveProgress& progress, unsigned threads) {
+  struct Beside {
+    Beside() { t_beside_tiles = true; }
+    ~Beside() { t_beside_tiles = false; }
+  } beside;
   try {
     Resolver r(prepared.vertices, prepared.constraints, thread_count(threads), &progress, /*lazily=*/true);
     ResolvedInput out = r.run();

@@ -6,10 +6,7 @@
 // split: its tiles are the run's. One that has is tiled again from its resolved input: the same bytes.
 //
 //   ResolveProgress progress;
-//   auto resolving = std::async(std::launch::async, [&] {
-//     lower_this_thread_priority();
-//     return resolve_if_needed(prepared, progress);
-//   });
+//   auto resolving = std::async(std::launch::async, [&] { return resolve_if_needed(prepared, progress); });
 //   std::optional<Triangles> t = tiled_cdt_ahead(prepared, progress, options, triangulate, &stats);
 //   ResolvedInput in = resolving.get();  // t: in.unchanged, and t is the mesh of prepared.vertices
 #pragma once
@@ -26,11 +23,5 @@ namespace cdtgpu {
 std::optional<Triangles> tiled_cdt_ahead(const PreparedInput& prepared, const ResolveProgress& progress,
                                          TileOptions options, const TileTriangulator& triangulate,
                                          TileStats* stats = nullptr);
-
-// The resolve beside the tiles runs on a thread of lower priority (nice 10; the threads it starts inherit it):
-// its sweep keeps every core busy, and the devices' threads, waking from their fences, and the tiles' gathers
-// must not wait for it (on 2 x H200 at 1B points, the first tiles beside it took 2.6-5.2 s, 1.1-2.0 s after it).
-// For the calling thread's life: a thread of its own.
-void lower_this_thread_priority();
 
 }  // namespace cdtgpu

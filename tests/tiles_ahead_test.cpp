@@ -5,6 +5,9 @@
 #include "core/tiles_ahead.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -173,9 +176,12 @@ TEST(ResolveProgress, ClearedXGrowsAndEndsAtInfinityOnlyWhenNothingIsSplit) {
         last = now;
       }
     });
+    const int nice_before = getpriority(PRIO_PROCESS, id_t(syscall(SYS_gettid)));
     const ResolvedInput r = resolve_if_needed(p, progress, 2);
     done = true;
     watcher.join();
+    EXPECT_EQ(getpriority(PRIO_PROCESS, id_t(syscall(SYS_gettid))), nice_before)
+        << name << ": only the resolve's own threads run at a lower priority";
     EXPECT_FALSE(shrank.load()) << name;
     EXPECT_EQ(r.unchanged, !splits) << name;
     EXPECT_EQ(progress.changes.load(), splits) << name;
