@@ -179,8 +179,8 @@ int run_tiles(const BenchOptions& o) {
   std::printf(
       "workload: uniform points + a quarter as many Delaunay-edge constraints (seed %llu), in process; "
       "median of %d runs (single CPU run: %d) after 1 warm-up (none for 1 run); total = resolve + tiles + "
-      "merge + canonical "
-      "order (single runs: the whole backend call); same = the mesh equals the first single run's\n\n",
+      "merge + canonical order (GPU tiled rows: their tiles begin beside the resolve, core/tiles_ahead.hpp; "
+      "single runs: the whole backend call); same = the mesh equals the first single run's\n\n",
       static_cast<unsigned long long>(o.seed), o.runs, cgal_runs);
   std::printf("%9s %-6s %-6s %7s %6s %6s %7s %9s %9s %9s %9s %9s %9s %7s %s\n", "points", "mode", "backend",
               "tile", "tiles", "levels", "final%", "merge v", "resolve", "tiles ms", "merge ms", "total ms",
