@@ -406,7 +406,11 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // The tiles' staging, allocated beside the plan (if the caller has not yet), again after it if a tile is larger.
   const uint64_t reserved = level == 1 && options.reserve ? tile_staging_points(n, options.max_tile_points) : 0;
   if (reserved) options.reserve(reserved);
-  Plan plan = plan_tiles(v, options.max_tile_points, options.shape);
+  // Slabs only for a device's tiles: the CPU's merge is one core's CGAL run, where a slab's longer border costs
+  // more than the selection it saves.
+  const TileShape shape =
+      options.shape == TileShape::automatic && !options.finalize ? TileShape::squares : options.shape;
+  Plan plan = plan_tiles(v, options.max_tile_points, shape);
   const size_t tiles = plan.tiles.size();
   if (reserved) {
     uint64_t largest = 0;

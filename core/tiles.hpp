@@ -96,7 +96,8 @@ struct TileOptions {
   // once (one on the device, the next gathered meanwhile) bound host memory by the tile size.
   unsigned tiles_in_flight = 0;
   const TileSharing* sharing = nullptr;  // null: every tile here
-  TileShape shape = TileShape::automatic;  // core/tile_plan.hpp; tests force slabs on small inputs
+  // core/tile_plan.hpp; `automatic` is squares without a finalizer (the CPU's tiles); tests force slabs.
+  TileShape shape = TileShape::automatic;
   // Tiles begun before the resolve ends (core/tiles_ahead.hpp): a first-level tile waits for wait_clean(x), x
   // the largest x of its vertices and segments, and the merge for wait_clean(+inf); false throws
   // InputChangedByResolve. Empty: the input is resolved already.
