@@ -72,9 +72,10 @@ TEST(TilesAhead, CleanInputGivesTheSingleRunsTrianglesWithoutWaitingForTheWholeR
   }
 }
 
-// The tiles' side, with the progress driven by hand: cleared in ten steps over the input's x-range, 30 ms
-// apart. No tile may be triangulated before its x-range is cleared, the first ones are before the last step,
-// and the mesh is the single run's.
+// The tiles' side, with the progress driven by hand: cleared in nine steps over the input's x-range, 30 ms
+// apart, then everywhere once a tile has been triangulated (or after 10 s: a tile that never begins before
+// that is what this test catches). No tile may be triangulated before its x-range is cleared, and the mesh is
+// the single run's.
 TEST(TilesAhead, EachTileWaitsForItsXRange) {
   InputSet in = uniform_points(40000, 11);
   add_dt_edge_constraints(in, 10000, 0.2, 6);
@@ -90,10 +91,13 @@ TEST(TilesAhead, EachTileWaitsForItsXRange) {
   };
   std::thread clearing([&] {
     const double lo = p.vertices.front().x, hi = p.vertices.back().x;
-    for (int k = 1; k <= 10; ++k) {
+    for (int k = 1; k < 10; ++k) {
       std::this_thread::sleep_for(std::chrono::milliseconds(30));
-      progress.publish(k == 10 ? kInf : lo + (hi - lo) * k / 10, false);
+      progress.publish(lo + (hi - lo) * k / 10, false);
     }
+    for (int waited = 0; before_the_end.load() == 0 && waited < 1000; ++waited)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    progress.publish(kInf, false);
   });
   TileOptions opt;
   opt.max_tile_points = 1000;
@@ -106,8 +110,8 @@ TEST(TilesAhead, EachTileWaitsForItsXRange) {
 }
 
 // Ranks (MPI) give up before their exchange: a rank whose tiles all lie below the first event would otherwise
-// wait there for ranks that gave up. Rank 0 of 2 holds the left of two slabs, cleared at once; the event comes
-// 100 ms later.
+// wait there for ranks that gave up. Rank 0 of 2 holds the left of two slabs, cleared at once; the event is
+// found while that slab is being triangulated.
 TEST(TilesAhead, RanksGiveUpBeforeTheirExchange) {
   InputSet in = uniform_points(20000, 13);
   add_dt_edge_constraints(in, 5000, 0.2, 8);
@@ -115,10 +119,6 @@ TEST(TilesAhead, RanksGiveUpBeforeTheirExchange) {
   ResolveProgress progress;
   const double lo = p.vertices.front().x, hi = p.vertices.back().x;
   progress.publish(lo + (hi - lo) * 0.75, false);
-  std::thread finding([&] {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    progress.publish(-kInf, true);
-  });
   int exchanges = 0;
   TileSharing sharing;
   sharing.rank = 0;
@@ -134,10 +134,10 @@ TEST(TilesAhead, RanksGiveUpBeforeTheirExchange) {
   int tiles = 0;
   const TileTriangulator counted = [&](const Points& v, const std::vector<Edge>& s, std::string_view what) {
     ++tiles;
+    progress.publish(-kInf, true);  // the resolve finds an event meanwhile
     return cgal_tile_triangulator()(v, s, what);
   };
   const std::optional<Triangles> t = tiled_cdt_ahead(p, progress, opt, counted);
-  finding.join();
   EXPECT_FALSE(t.has_value());
   EXPECT_EQ(tiles, 1) << "rank 0's slab, cleared at once";
   EXPECT_EQ(exchanges, 0) << "the rank went to the exchange although the resolve changes the input";
