@@ -354,12 +354,13 @@ TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const 
   r.gather_ms = g.gather_ms;
   TileFinal f = finalize ? finalize_tile(finalize, TileJob{v, ids, g.local_segments, node.rect, name}, r)
                          : final_on_host(v, ids, g.local_segments, node.rect, triangulate, name, r);
-  // Back to the whole's ids, in place (a fresh 1.5 GB array for a 64M-point tile was zeroed on one core):
-  // sorted ids keep a canonical list canonical.
+  // Back to the whole's ids, in place (a fresh 1.5 GB array for a 64M-point tile was zeroed on one core), unless
+  // the finalizer did it: sorted ids keep a canonical list canonical.
   r.final_triangles = std::move(f.triangles);
-  tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
-    for (uint32_t& v : r.final_triangles[i]) v = ids[v];
-  });
+  if (!f.global_ids)
+    tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
+      for (uint32_t& v : r.final_triangles[i]) v = ids[v];
+    });
   r.border = std::move(f.border);
   tbb::parallel_for(size_t(0), r.border.size(), [&](size_t i) {
     for (uint32_t& v : r.border[i]) v = ids[v];

@@ -72,6 +72,9 @@ struct TileJob {
 struct TileFinal {
   Triangles triangles;
   std::vector<Edge> border;
+  // The triangles are in the whole's ids already (ids[] applied; still canonical, ids being sorted): a GPU
+  // finalizer maps them as it copies them out of its staging, one pass over them fewer.
+  bool global_ids = false;
 };
 // A triangulator that finds a tile's final triangles and border itself (the GPU's, next to its neighbours),
 // instead of handing back the whole tile for the host to test. It may take fewer triangles as final than

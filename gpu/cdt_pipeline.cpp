@@ -295,4 +295,16 @@ void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, TileF
   copy_on_all_cores(static_cast<const Triangle*>(staging.mapped), count, f.triangles.data());
 }
 
+void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, std::span<const uint32_t> ids,
+                               TileFinal& f) {
+  resize_unwritten(f.triangles, count);
+  const Triangle* from = static_cast<const Triangle*>(staging.mapped);
+  Triangle* to = f.triangles.data();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      to[i] = {ids[from[i][0]], ids[from[i][1]], ids[from[i][2]]};
+  });
+  f.global_ids = true;
+}
+
 }  // namespace cdtgpu::gpu

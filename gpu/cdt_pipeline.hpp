@@ -82,6 +82,10 @@ class GpuCdt {
   static void stage_points(const TileJob& job, HostStaging& staging);
   uint32_t finalize_staged(const TileJob& job, HostStaging& staging, TileFinal& f, GpuCdtStats* stats = nullptr) const;
   static void unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f);
+  // The same, each vertex mapped through `ids` on the way (the job's: f.global_ids). At 1B points a tile's
+  // 250M triangles were copied, then read and written again to map them: 6 GB of host memory a tile.
+  static void unstage_triangles(const HostStaging& staging, uint32_t count, std::span<const uint32_t> ids,
+                                TileFinal& f);
   // Tiles of about `vertices` points to come (core/tiles' tile_staging_points, known before the plan): a tile of
   // made-up points that size run through `staging` and dropped, so that the device's buffers for tiles are
   // made while the host resolves and plans. At 1B points the first tile's device call took 1.1 s longer than

@@ -175,7 +175,7 @@ class OnDevice {
                         job.what, ms(t1 - slot_taken), ms(slot_taken - t0), ms(t2 - t1), ms(t3 - t2));
           count = cdt.finalize_staged(job, staging, f, &one);
         }
-        GpuCdt::unstage_triangles(staging, count, f);
+        GpuCdt::unstage_triangles(staging, count, job.ids, f);
         if (sum_) add_up(one);
         return f;
       } catch (const DeviceError& e) {
