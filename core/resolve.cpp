@@ -302,7 +302,7 @@ class Resolver {
   // overlaps with the sweep's computing. The copy itself on all cores (TBB): on one, 120 MB (5M vertices)
   // outlasted the sweep on the 16-core H100 machine.
   // `lazily`: the copy only once round 1 has found something to split; a clean input is not copied at all
-  // (unchanged() tells).
+  // (the result says `unchanged`).
   Resolver(const Points& vertices, const std::vector<Edge>& constraints, unsigned threads,
            ResolveProgress* progress = nullptr, bool lazily = false)
       : threads_(threads), progress_(progress), lazily_(lazily), vr_(&vertices), sr_(&constraints) {
@@ -312,8 +312,6 @@ class Resolver {
     else
       v_ = vertices, seg_ = constraints;
   }
-
-  bool unchanged() const { return unchanged_; }
 
   ResolvedInput run() {
     ResolvedInput out;
@@ -338,7 +336,7 @@ class Resolver {
     if (copier_.joinable()) copier_.join();
     if (lazily_) {
       if (clean) {
-        unchanged_ = true;
+        out.unchanged = true;
         return out;
       }
       copy_input(*vr_, *sr_);
@@ -956,7 +954,6 @@ class Resolver {
   const unsigned threads_;
   ResolveProgress* const progress_ = nullptr;
   const bool lazily_ = false;
-  bool unchanged_ = false;
   Points v_;        // prepared vertices
   Points steiner_;  // Steiner vertices in creation order: vertex n0_ + i is steiner_[i]
   std::vector<Edge> seg_;        // prepared constraints, then the pieces of splits (in order along them)
@@ -1004,10 +1001,7 @@ ResolvedInput resolve_if_needed(const PreparedInput& prepared, ResolveProgress& 
     ~Beside() { t_beside_tiles = false; }
   } beside;
   try {
-    Resolver r(prepared.vertices, prepared.constraints, thread_count(threads), &progress, /*lazily=*/true);
-    ResolvedInput out = r.run();
-    out.unchanged = r.unchanged();
-    return out;
+    return Resolver(prepared.vertices, prepared.constraints, thread_count(threads), &progress, /*lazily=*/true).run();
   } catch (...) {
     progress.publish(-std::numeric_limits<double>::infinity(), true);  // nobody waits on it for ever
     throw;
