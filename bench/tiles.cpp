@@ -88,31 +88,23 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
   opt.finalize = finalize;
   opt.reserve = reserve;
   out.tile_points = tile_points;
-  if (finalize) {  // a device's tiles: begun beside the resolve (core/tiles_ahead.hpp), as cdtgpu triangulate does
-    ResolveProgress progress;
-    auto resolving = std::async(std::launch::async, [&] {
-      ResolvedInput r = resolve_if_needed(p, progress);
-      out.resolve_ms.push_back(ms_since(t));
-      return r;
-    });
+  if (finalize) {  // a device's tiles check themselves, no resolve unless one has something (core/tiles_ahead.hpp)
     // The mesh's vertices: cdtgpu triangulate moves the prepared ones; `p` serves every run here, so they are
-    // copied, on all cores beside the tiles, as the resolve's copy of them was before.
+    // copied, on all cores beside the tiles.
     Points vertices;
     auto copying = std::async(std::launch::async, [&] {
       resize_unwritten(vertices, p.vertices.size());
       copy_on_all_cores(p.vertices.data(), p.vertices.size(), vertices.data());
     });
-    std::optional<Triangles> ahead = tiled_cdt_ahead(p, progress, opt, tri, &out.tiles);
-    ResolvedInput in = resolving.get();
+    std::optional<Triangles> checked = tiled_cdt_unresolved(p, opt, tri, &out.tiles);
     copying.get();
-    if (ahead) {
+    if (checked) {
+      out.resolve_ms.push_back(0);
       out.mesh.vertices = std::move(vertices);
-      out.mesh.triangles = std::move(*ahead);
+      out.mesh.triangles = std::move(*checked);
       return;
     }
     out.tiles = TileStats{};
-    out.mesh = triangulate_tiled(std::move(in), opt, tri, &out.tiles).mesh;
-    return;
   }
   ResolvedInput in = resolve_constraints(p);
   out.resolve_ms.push_back(ms_since(t));
@@ -120,39 +112,8 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
 }
 
 // Above kDtEdgesMaxPoints the Delaunay-edge constraints (a CGAL triangulation of half the points, minutes at
-// 256M) give way to contour-like chains: the points of every fourth band of one point spacing's height joined
-// in x order, about n / 4 segments of about one spacing. Chains of disjoint bands never cross, and an
-// x-monotone chain through all of a band's points has no vertex inside a segment.
+// 256M) give way to contour-like chains (add_band_chains, core/workloads.hpp).
 constexpr uint64_t kDtEdgesMaxPoints = 20'000'000;
-
-void add_band_chains(InputSet& in) {
-  const size_t n = in.points.size();
-  const double spacing = kUniformSide / std::sqrt(double(n));
-  const auto band_of = [&](size_t i) { return uint64_t((in.points[i].y - kUniformY0) / spacing); };
-  // Points of every fourth band, grouped by band (a counting sort), then each band sorted by (x, y, index) on
-  // its own core: one std::sort of 250M (band, index) pairs through the points took minutes at 1B.
-  const uint64_t chains = uint64_t(kUniformSide / spacing) / 4 + 1;  // bands 0, 4, 8, ... up to side / spacing
-  std::vector<uint64_t> first(chains + 1, 0);
-  for (size_t i = 0; i < n; ++i)
-    if (const uint64_t b = band_of(i); b % 4 == 0 && b / 4 < chains) ++first[b / 4 + 1];
-  for (uint64_t c = 0; c < chains; ++c) first[c + 1] += first[c];
-  std::vector<uint32_t> members(first[chains]);
-  std::vector<uint64_t> at(first.begin(), first.end() - 1);
-  for (size_t i = 0; i < n; ++i)
-    if (const uint64_t b = band_of(i); b % 4 == 0 && b / 4 < chains) members[at[b / 4]++] = uint32_t(i);
-  std::vector<Polyline> lines(chains);
-  tbb::parallel_for(uint64_t(0), chains, [&](uint64_t c) {
-    const auto begin = members.begin() + first[c], end = members.begin() + first[c + 1];
-    std::sort(begin, end, [&](uint32_t a, uint32_t b) {
-      const Point3& p = in.points[a];
-      const Point3& q = in.points[b];
-      return p.x != q.x ? p.x < q.x : p.y != q.y ? p.y < q.y : a < b;
-    });
-    for (auto it = begin; it != end; ++it) lines[c].points.push_back(in.points[*it]);
-  });
-  for (Polyline& line : lines)
-    if (line.points.size() >= 2) in.lines.push_back(std::move(line));
-}
 
 }  // namespace
 
@@ -179,7 +140,8 @@ int run_tiles(const BenchOptions& o) {
   std::printf(
       "workload: uniform points + a quarter as many Delaunay-edge constraints (seed %llu), in process; "
       "median of %d runs (single CPU run: %d) after 1 warm-up (none for 1 run); total = resolve + tiles + "
-      "merge + canonical order (GPU tiled rows: their tiles begin beside the resolve, core/tiles_ahead.hpp; "
+      "merge + canonical order (GPU tiled rows: their tiles check themselves, no resolve unless one finds a "
+      "constraint to split, core/tiles_ahead.hpp; "
       "single runs: the whole backend call); same = the mesh equals the first single run's\n\n",
       static_cast<unsigned long long>(o.seed), o.runs, cgal_runs);
   std::printf("%9s %-6s %-6s %7s %6s %6s %7s %9s %9s %9s %9s %9s %9s %7s %s\n", "points", "mode", "backend",

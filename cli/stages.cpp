@@ -180,6 +180,11 @@ bool tiled_on_any_device(const Job& job) {
   return m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device();
 }
 
+// Whether that run's tiles check themselves for what the resolve would split (core/tiles_ahead.hpp,
+// tiled_cdt_unresolved), so that no resolve runs unless one has something: in one process. MPI ranks keep the
+// resolve beside their tiles: they must all give up together, before their exchange.
+bool tiles_check_themselves(const Job& job) { return job.options.sharing == nullptr || job.options.sharing->ranks <= 1; }
+
 // resolve_if_needed's result made whole: an unchanged input is the prepared one, moved where no later stage reads
 // it.
 ResolvedInput filled(Job& job, ResolvedInput&& r) {
@@ -323,14 +328,22 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
         try {
           gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
-          if (ahead && !got) {  // the prepared input's tiles beside the resolve; what it splits, tiled again below
+          if (ahead && !got) {  // the prepared input's tiles; what the resolve splits, tiled again below
             const TileOptions opt =
                 tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
             TileStats ts;
+            const bool checked = tiles_check_themselves(job);
             std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
-              return tiled_cdt_ahead(job.prepared, progress, opt, tiles.triangulate, &ts);
+              return checked ? tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts)
+                             : tiled_cdt_ahead(job.prepared, progress, opt, tiles.triangulate, &ts);
             });
             if (t) {
+              if (checked) {  // no resolve ran: the prepared input is the resolved one
+                ResolvedInput same;
+                same.unchanged = true;
+                got.emplace(filled(job, std::move(same)));
+                drop_prepared(job);
+              }
               CdtResult r;
               r.mesh.vertices = std::move(input().vertices);  // unchanged: the prepared vertices
               r.mesh.triangles = std::move(*t);
@@ -571,10 +584,11 @@ void triangulate_job(Job& job) {
   ResolveProgress progress;
   const uint64_t vertices = job.prepared.vertices.size();
   const bool ahead = job.want_gpu && tiled_on_any_device(job);
-  // Declared after what its task reads: a throw before get() waits for the task before those go.
+  // Declared after what its task reads: a throw before get() waits for the task before those go. Tiles that
+  // check themselves: run only if one has something to split (or the device fails them).
   std::future<ResolvedInput> resolving;
   if (job.want_gpu)
-    resolving = std::async(std::launch::async, [&] {
+    resolving = std::async(ahead && tiles_check_themselves(job) ? std::launch::deferred : std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
       ResolvedInput r =
           ahead ? resolve_if_needed(job.prepared, progress) : resolve_constraints(job.prepared, progress);

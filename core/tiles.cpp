@@ -347,12 +347,13 @@ GatheredTile gather_tile(const std::vector<Edge>& segments, const Plan& plan, co
 }
 
 TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const TileTriangulator& triangulate,
-                       const TileFinalizer& finalize, const std::string& name, std::vector<uint8_t>& in_final) {
+                       const TileFinalizer& finalize, const std::string& name, std::vector<uint8_t>& in_final,
+                       bool unresolved) {
   const auto t0 = Clock::now();
   const RawVector<uint32_t>& ids = g.ids;
   TileResult r;
   r.gather_ms = g.gather_ms;
-  TileFinal f = finalize ? finalize_tile(finalize, TileJob{v, ids, g.local_segments, node.rect, name}, r)
+  TileFinal f = finalize ? finalize_tile(finalize, TileJob{v, ids, g.local_segments, node.rect, name, unresolved}, r)
                          : final_on_host(v, ids, g.local_segments, node.rect, triangulate, name, r);
   // Back to the whole's ids, in place (a fresh 1.5 GB array for a 64M-point tile was zeroed on one core), unless
   // the finalizer did it: sorted ids keep a canonical list canonical.
@@ -394,6 +395,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   const uint64_t n = v.size();
   const uint64_t level = s.levels + 1;
   if (options.max_tile_points < 3 || n <= options.max_tile_points) {
+    // Nothing would check an unresolved input's one piece: left to the resolve.
+    if (level == 1 && options.unresolved) throw UnresolvedTile("one piece, not tiles: the resolve checks it");
     const auto t = Clock::now();
     Triangles all = triangulate(v, segments, "the whole input").triangles;
     canonicalize_triangles(all);
@@ -411,6 +414,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // more than the selection it saves.
   const TileShape shape =
       options.shape == TileShape::automatic && !options.finalize ? TileShape::squares : options.shape;
+  if (options.unresolved && !options.finalize)
+    throw std::logic_error("tiled_cdt: an unresolved input needs a finalizer that checks its tiles");
   Plan plan = plan_tiles(v, options.max_tile_points, shape);
   const size_t tiles = plan.tiles.size();
   if (reserved) {
@@ -505,7 +510,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     const std::string name = tile_name(t);
     tbb::this_task_arena::isolate([&] {
       results[t] = finish_tile(v, std::move(g), plan.nodes[plan.tiles[t]], triangulate, options.finalize, name,
-                               in_final);
+                               in_final, level == 1 && options.unresolved);
       buckets.count(results[t].final_triangles);
     });
     const TileResult& r = results[t];

@@ -65,6 +65,9 @@ struct TileJob {
   const std::vector<Edge>& segments;
   TileRect rect;
   std::string_view what;
+  // The input is not resolved (TileOptions::unresolved): the finalizer throws UnresolvedTile when the tile has
+  // a segment through a vertex or two segments that cross.
+  bool unresolved = false;
 };
 // What a tile gives the merge, in local indices: its final triangles (closed circumdisk certainly inside the
 // open rectangle; canonical order) and the final region's border within it (final triangles' edges not shared
@@ -105,6 +108,12 @@ struct TileOptions {
   // the largest x of its vertices and segments, and the merge for wait_clean(+inf); false throws
   // InputChangedByResolve. Empty: the input is resolved already.
   std::function<bool(double x)> wait_clean;
+  // The input is not resolved, and the finalizer checks each first-level tile for what the resolve would split
+  // (TileJob::unresolved; the GPU's constraint insertion meets every such case): a tile that has some throws
+  // UnresolvedTile. The first level's tiles see every case: a segment goes to every tile it meets, so two
+  // crossing segments both go to a tile holding their crossing point, and a segment through a vertex to the
+  // tile that owns the vertex. Needs `finalize`; the merges' inputs are then clean.
+  bool unresolved = false;
   // Tiles (of every level) through this instead of the triangulator plus the host's final test; the merges
   // still take the triangulator. Empty: the host's test.
   TileFinalizer finalize;
@@ -116,6 +125,15 @@ struct TileOptions {
 // tiled_cdt's throw when options.wait_clean says that the resolve changes the input it was begun on.
 struct InputChangedByResolve : std::runtime_error {
   InputChangedByResolve() : std::runtime_error("the resolve changes the input the tiles were begun on") {}
+};
+
+// A finalizer's throw when a tile of an unresolved input (TileOptions::unresolved) has something to split.
+struct UnresolvedTile : InputChangedByResolve {
+  explicit UnresolvedTile(const std::string& why) : why_(why) {}
+  const char* what() const noexcept override { return why_.c_str(); }
+
+ private:
+  std::string why_;
 };
 
 struct TileStats {

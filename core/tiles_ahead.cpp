@@ -16,4 +16,16 @@ std::optional<Triangles> tiled_cdt_ahead(const PreparedInput& prepared, const Re
   }
 }
 
+std::optional<Triangles> tiled_cdt_unresolved(const PreparedInput& prepared, TileOptions options,
+                                              const TileTriangulator& triangulate, TileStats* stats) {
+  options.unresolved = true;
+  options.wait_clean = nullptr;
+  try {
+    return tiled_cdt(prepared.vertices, prepared.constraints, options, triangulate, stats);
+  } catch (const UnresolvedTile& e) {
+    spdlog::debug("the input has constraints to split ({}): resolved, then tiled again", e.what());
+    return std::nullopt;
+  }
+}
+
 }  // namespace cdtgpu

@@ -37,6 +37,12 @@ InputSet uniform_points(uint64_t n, uint64_t seed);
 // triangles of the full triangulation. Throws UsageError when m exceeds the subset triangulation's edges.
 void add_dt_edge_constraints(InputSet& in, uint64_t m, double f, uint64_t seed);
 
+// Appends contour-like chains (source-less polylines) to n uniform points: the points of every fourth band of one
+// point spacing's height (kUniformSide / sqrt(n)) joined in x order, about n / 4 segments of about one spacing.
+// Chains of disjoint bands never cross, and an x-monotone chain through all of a band's points has no vertex
+// inside a segment. For sizes where add_dt_edge_constraints is too slow (its CGAL run takes minutes at 256M).
+void add_band_chains(InputSet& in);
+
 struct TerrainOptions {
   uint32_t grid = 100;         // DEM nodes per side (grid x grid points)
   double spacing = 10;         // metres between DEM nodes

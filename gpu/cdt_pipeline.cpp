@@ -176,13 +176,15 @@ void GpuCdt::keep(GpuTriangulation& tri) const {
 }
 
 void GpuCdt::constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,
-                       bool recycle) const {
+                       bool recycle, bool unresolved) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
   //    constraints: the Delaunay triangulation is the answer.
   auto t = Clock::now();
   if (tri.num_slots > 0 && !constraints.empty()) {
-    ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, constraint_options);
+    ConstraintOptions options = constraint_options;
+    options.unresolved = unresolved;
+    ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, options);
     if (recycle) inserter_.recycle(std::move(edges));  // its flags, for the next tile or run
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
@@ -239,11 +241,13 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
   GpuCdtStats local;
   GpuCdtStats& s = stats ? *stats : local;
   s = GpuCdtStats{};
-  return run_staged(uint32_t(job.ids.size()), job.segments, job.rect, staging, f, s, /*copy_out=*/true);
+  return run_staged(uint32_t(job.ids.size()), job.segments, job.rect, staging, f, s, /*copy_out=*/true,
+                    job.unresolved);
 }
 
 uint32_t GpuCdt::run_staged(uint32_t n, const std::vector<Edge>& segments, const TileRect& rect,
-                            HostStaging& staging, TileFinal& f, GpuCdtStats& s, bool copy_out) const {
+                            HostStaging& staging, TileFinal& f, GpuCdtStats& s, bool copy_out,
+                            bool unresolved) const {
   const auto t_all = Clock::now();
   // The device's other copies of this call (the build's uploads, the border) go through `staging` as well, once
   // the points have left it: a pinned buffer per tile in flight and none more for the context.
@@ -255,7 +259,7 @@ uint32_t GpuCdt::run_staged(uint32_t n, const std::vector<Edge>& segments, const
   cache_.grow_by = kept_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   cache_.first_room = kept_.first_room = 1.0 / 16;
   GpuTriangulation tri = delaunay_staged(n, staging, s);
-  constrain(tri, segments, s, /*recycle=*/true);
+  constrain(tri, segments, s, /*recycle=*/true, unresolved);
   auto t = Clock::now();
   double ms = 0;
   f.border = finals_.mark(tri, rect, cache_, &ms);

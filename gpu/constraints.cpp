@@ -13,6 +13,7 @@
 #include <unordered_map>
 
 #include "core/predicates.hpp"
+#include "core/tiles.hpp"
 
 #include "gpu/check.hpp"
 #include "gpu/profiler.hpp"
@@ -125,6 +126,11 @@ void split_pseudo_polygon(const HostTriangulation& h, const std::vector<uint32_t
   split_pseudo_polygon(h, chain, apex, j, out);
 }
 
+// q on the line a-b and on b's side of a (cdt_walk.comp's on_b_side).
+bool on_b_side(pred::XY a, pred::XY q, pred::XY b) {
+  return b.x != a.x ? (q.x > a.x) == (b.x > a.x) : (q.y > a.y) == (b.y > a.y);
+}
+
 // The safety net (ConstraintOptions::stall_rounds): inserts the constraints that are not yet edges one at a time
 // into host slots by retriangulating each one's cavity, the K + 1 triangles its segment crosses, as the K + 1
 // triangles of the two pseudo-polygons on either side, written into the same slots. Exact predicates throughout.
@@ -156,9 +162,12 @@ uint32_t insert_on_host(HostTriangulation& h, std::span<const Edge> cons) {
         is_edge = true;
         break;
       }
-      if (v1 != INF_VERTEX && v2 != INF_VERTEX && pred::orient2d(xy(a), xy(v1), xy(b)) > 0 &&
-          pred::orient2d(xy(a), xy(v2), xy(b)) < 0)
-        break;
+      const int o1 = v1 == INF_VERTEX ? 1 : pred::orient2d(xy(a), xy(v1), xy(b));
+      const int o2 = v2 == INF_VERTEX ? -1 : pred::orient2d(xy(a), xy(v2), xy(b));
+      // A neighbour of a on the open segment, as in cdt_walk.comp.
+      if ((o1 == 0 && on_b_side(xy(a), xy(v1), xy(b))) || (o2 == 0 && on_b_side(xy(a), xy(v2), xy(b))))
+        fail(CDT_ERR_VERTEX_ON_CONSTRAINT);
+      if (v1 != INF_VERTEX && v2 != INF_VERTEX && o1 > 0 && o2 < 0) break;
       const uint32_t code = h.nbrs[3 * t + (k + 1) % 3];
       t = NBR_TRI(code);
       k = (NBR_EDGE(code) + 1) % 3;
@@ -252,6 +261,19 @@ void ConstraintInserter::release() const { scratch_.reset(); }
 
 ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<const Edge> constraints,
                                             ConstraintStats* stats, const ConstraintOptions& options) const {
+  if (options.unresolved) {
+    ConstraintOptions checked = options;
+    checked.unresolved = false;
+    try {
+      return insert(tri, constraints, stats, checked);
+    } catch (const TooLarge&) {
+      throw;
+    } catch (const VulkanError&) {
+      throw;
+    } catch (const DeviceError& e) {
+      throw UnresolvedTile(e.what());
+    }
+  }
   const uint32_t m = static_cast<uint32_t>(constraints.size());
   const uint32_t slots = tri.num_slots;
   const bool fixed_slots = options.layout == ConstraintOptions::Layout::FixedSlots;

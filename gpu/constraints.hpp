@@ -73,6 +73,11 @@ struct ConstraintOptions {
   // Timestamps around every kernel ("k:..." stages, summed over rounds) and every round ("r<N> insert",
   // "r<N> legalise"), in ConstraintStats::stage_ms. Their barriers add cost; for finding where time goes.
   bool profile_kernels = false;
+  // The constraints are not resolved (a tile of an unresolved input, TileOptions::unresolved): what the resolve
+  // would split makes one of the insertion's checks fail (a walk meets a vertex on its open segment, a flip or
+  // cavity would remove a constrained edge, marking after the safety net finds a constraint gone) or a round
+  // stall; any such failure is thrown as UnresolvedTile (core/tiles.hpp). TooLarge and Vulkan errors stay.
+  bool unresolved = false;
 };
 
 struct ConstraintStats {

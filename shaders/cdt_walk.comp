@@ -66,6 +66,12 @@ void mark_edge(uint t, uint k) {
   atomicOr(cflags[NBR_TRI(code)], 1u << NBR_EDGE(code));
 }
 
+// q on the line a-b (orient2d 0) and on b's side of a: q lies inside the segment, since b cannot lie inside
+// the edge a-q of a triangulation. Comparisons only: exact.
+bool on_b_side(dvec2 a, dvec2 q, dvec2 b) {
+  return b.x != a.x ? (q.x > a.x) == (b.x > a.x) : (q.y > a.y) == (b.y > a.y);
+}
+
 #define ASK_V1 0u    // orient(a, v1, b) of the current corner at a
 #define ASK_V2 1u    // orient(a, v2, b)
 #define ASK_APEX 2u  // orient(a, b, w) of the apex beyond the crossed edge
@@ -211,6 +217,12 @@ void main() {
       r = pts[w];
     }
     int s = pred_orient2d(pa, q, r);
+    if (ask != ASK_APEX && s == 0 && on_b_side(pa, q, pb)) {
+      // A neighbour of a on the open segment (turning around a would never find b's corner).
+      report(CDT_ERR_VERTEX_ON_CONSTRAINT, c);
+      found = FOUND_ERROR;
+      break;
+    }
     if (ask == ASK_V1) {
       o1 = s;
     } else if (ask == ASK_V2) {

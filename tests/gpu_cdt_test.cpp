@@ -31,6 +31,7 @@
 #include "core/cdt_cgal.hpp"
 #include "core/predicates.hpp"
 #include "core/prepare.hpp"
+#include "core/tiles.hpp"
 #include "core/repair.hpp"
 #include "core/workloads.hpp"
 #include "gpu/canonical.hpp"
@@ -430,6 +431,27 @@ TEST(GpuCdt, ReportsBrokenRequirements) {
     } catch (const gpu::DeviceError& e) {
       EXPECT_NE(std::string(e.what()).find("passes through a vertex"), std::string::npos) << e.what();
     }
+  }
+  // Through a neighbour of its first end (the walk turns around that end and never finds b's corner): along a
+  // grid row, a column (both directions) and a diagonal of a cell.
+  for (const Edge& c : {Edge{index(1, 1), index(4, 1)}, Edge{index(2, 5), index(2, 2)}, Edge{index(2, 2), index(2, 5)},
+                        Edge{index(3, 3), index(5, 5)}}) {
+    const Edge through = {std::min(c[0], c[1]), std::max(c[0], c[1])};
+    gpu::GpuTriangulation tri = gpu::upload_triangulation(ctx(), host);
+    try {
+      inserter().insert(tri, {&through, 1});
+      ADD_FAILURE() << "a constraint through a neighbour of its end was accepted";
+    } catch (const gpu::DeviceError& e) {
+      EXPECT_NE(std::string(e.what()).find("passes through a vertex"), std::string::npos) << e.what();
+    }
+  }
+  // A tile of an unresolved input: each is UnresolvedTile, not a device error.
+  for (const std::vector<Edge>& broken : {std::vector<Edge>{{index(1, 2), index(4, 3)}, {index(2, 1), index(3, 4)}},
+                                          std::vector<Edge>{{index(1, 1), index(4, 1)}}}) {
+    gpu::GpuTriangulation tri = gpu::upload_triangulation(ctx(), host);
+    gpu::ConstraintOptions o;
+    o.unresolved = true;
+    EXPECT_THROW(inserter().insert(tri, broken, nullptr, o), UnresolvedTile);
   }
   no_validation_messages();
 }

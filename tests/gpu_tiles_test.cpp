@@ -15,6 +15,7 @@
 #include "core/prepare.hpp"
 #include "core/resolve.hpp"
 #include "core/tiles.hpp"
+#include "core/tiles_ahead.hpp"
 #include "core/workloads.hpp"
 #include "gpu/check.hpp"
 #include "gpu/cdt_pipeline.hpp"
@@ -149,6 +150,39 @@ TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
       }
     }
   }
+}
+
+// Tiles of the prepared input that check themselves (core/tiles_ahead, tiled_cdt_unresolved): every hard layout
+// whose resolve splits nothing gives the single run's mesh, and every one whose resolve splits something (crossing
+// constraints, a constraint through grid vertices) gives up, in tiles, slabs and one piece alike.
+TEST(GpuTiles, TilesOfAnUnresolvedInputCheckThemselves) {
+  const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
+  const gpu::GpuCdt cdt(ctx);
+  const gpu::GpuTiles tiles = gpu::gpu_tiles({&cdt});
+  std::vector<std::pair<std::string, InputSet>> layouts = tile_layouts::all();
+  InputSet along_a_row = tile_layouts::dem_grid();  // through the grid's vertices, each a neighbour of the last
+  along_a_row.lines.push_back(tile_layouts::line({{0, 20, 0}, {39, 20, 0}}));
+  layouts.emplace_back("a constraint along a grid row", std::move(along_a_row));
+  int clean = 0, split = 0;
+  for (const auto& [name, in] : layouts) {
+    const PreparedInput p = prepare(in);
+    const ResolvedInput resolved = resolve_constraints(p);
+    const bool changes = resolved.steiner_points + resolved.split_at_vertices > 0;
+    (changes ? split : clean) += 1;
+    const CdtResult single = triangulate_cgal(p);
+    for (uint64_t tp : {16, 100, 500, 100000}) {
+      TileOptions opt;
+      opt.max_tile_points = tp;
+      opt.shape = tp == 100 ? TileShape::slabs : TileShape::automatic;
+      opt.finalize = tiles.finalize;
+      const std::optional<Triangles> t = tiled_cdt_unresolved(p, opt, tiles.triangulate);
+      const bool one_piece = p.vertices.size() <= tp;
+      EXPECT_EQ(t.has_value(), !changes && !one_piece) << name << ", tiles of " << tp;
+      if (t) EXPECT_TRUE(*t == single.mesh.triangles) << name << ", tiles of " << tp;
+    }
+  }
+  EXPECT_GE(clean, 5);
+  EXPECT_GE(split, 3);
 }
 
 TEST(GpuTiles, DeviceListsAreChecked) {
