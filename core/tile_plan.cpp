@@ -36,8 +36,6 @@ constexpr double kMaxSlabAspect = 16;
 TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape) {
   const size_t n = v.size();
   TilePlan plan;
-  resize_unwritten(plan.order, n);
-  tbb::parallel_for(size_t(0), n, [&](size_t i) { plan.order[i] = uint32_t(i); });
   // The height from about 2^20 of the vertices: it only shapes the columns (a pass over all of them read
   // 6 GB at 256M).
   const size_t stride = std::max<size_t>(1, n >> 20);
@@ -71,6 +69,10 @@ TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape) {
                       (h <= 0 || double(tiles) * h <= kMaxSlabAspect * w));
   const uint64_t columns = slabs ? tiles : squares;
   plan.slabs = slabs;
+  if (!slabs) {  // a slab's ids are its range: no order (4 GB written at 1B points)
+    resize_unwritten(plan.order, n);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) { plan.order[i] = uint32_t(i); });
+  }
   auto column_start = [&](uint64_t c) { return uint32_t(c * n / columns); };
   auto cell_count = [&](uint64_t c) {
     return std::max<uint64_t>(1, (column_start(c + 1) - column_start(c) + max_points - 1) / max_points);

@@ -3,7 +3,7 @@
 //
 //   Plan plan = plan_tiles(vertices, 1 << 20);  // vertices sorted by (x, y), as the resolve leaves them
 //   for (uint32_t t : plan.tiles) {
-//     const TileNode& node = plan.nodes[t];  // its rectangle, its ids plan.order[node.lo, node.hi)
+//     const TileNode& node = plan.nodes[t];  // its rectangle, its ids plan.order[node.lo, node.hi) (slabs: node.lo ..)
 //   }
 #pragma once
 #include <cstdint>
@@ -24,7 +24,7 @@ struct TileNode {
 };
 
 struct TilePlan {
-  RawVector<uint32_t> order;      // vertex ids, each node's a contiguous range
+  RawVector<uint32_t> order;      // vertex ids, each node's a contiguous range; empty for slabs (order[i] = i)
   std::vector<TileNode> nodes;    // nodes[0]: the root
   std::vector<uint32_t> tiles;    // the leaf nodes, left to right in the tree
   bool slabs = false;             // one tile a column

@@ -18,9 +18,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <span>
 #include <thread>
@@ -214,12 +216,13 @@ TileFinal finalize_tile(const TileFinalizer& finalize, const TileJob& job, TileR
 
 // The same from the triangulator's whole CDT of the tile, tested here.
 TileFinal final_on_host(const Points& v, std::span<const uint32_t> ids,
-                        const std::vector<Edge>& segments, const Rect& rect, const TileTriangulator& triangulate,
+                        std::span<const Edge> tile_segments, const Rect& rect, const TileTriangulator& triangulate,
                         const std::string& name, TileResult& r) {
   auto t = Clock::now();
   Points local;
   resize_unwritten(local, ids.size());
   tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) { local[i] = v[ids[i]]; });
+  const std::vector<Edge> segments(tile_segments.begin(), tile_segments.end());  // the triangulator's type
   r.gather_ms += ms_since(t);
   t = Clock::now();
   TileMesh mesh = triangulate(local, segments, name);
@@ -266,7 +269,7 @@ TileFinal final_on_host(const Points& v, std::span<const uint32_t> ids,
 // A tile's input: its vertex ids of the whole (sorted) and its segments in local ids.
 struct GatheredTile {
   RawVector<uint32_t> ids;
-  std::vector<Edge> local_segments;
+  RawVector<Edge> local_segments;
   double gather_ms = 0;
 };
 
@@ -338,7 +341,9 @@ GatheredTile gather_tile(const std::vector<Edge>& segments, const Plan& plan, co
     if (!inside(id)) return uint32_t(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
     return slab ? uint32_t(below + (id - c0)) : rank[id - c0];
   };
-  std::vector<Edge> local_segments(tile_segments.size());
+  // Unwritten: value-initialised, 31M segments (250 MB) were zeroed on one core in the tiles' serial gather.
+  RawVector<Edge> local_segments;
+  resize_unwritten(local_segments, tile_segments.size());
   tbb::parallel_for(size_t(0), tile_segments.size(), [&](size_t i) {
     local_segments[i] = {local_of(segments[tile_segments[i]][0]), local_of(segments[tile_segments[i]][1])};
   });
@@ -423,6 +428,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     for (uint32_t t : plan.tiles) largest = std::max<uint64_t>(largest, plan.nodes[t].hi - plan.nodes[t].lo);
     if (staging_room(largest) > reserved) options.reserve(staging_room(largest));
   }
+  const auto t_segments = Clock::now();
   std::vector<uint32_t> tile_of_node(plan.nodes.size(), 0);
   for (size_t t = 0; t < tiles; ++t) tile_of_node[plan.tiles[t]] = uint32_t(t);
 
@@ -488,11 +494,17 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   block_count.clear();
 
   s.plan_ms += ms_since(t_tiles);
-  spdlog::debug("tiles, level {}: {} {} of at most {} points planned in {:.0f} ms", level, tiles,
-                plan.slabs ? "slabs" : "tiles", options.max_tile_points, ms_since(t_tiles));
+  spdlog::debug("tiles, level {}: {} {} of at most {} points planned in {:.0f} ms (their segments {:.0f} ms)", level,
+                tiles, plan.slabs ? "slabs" : "tiles", options.max_tile_points, ms_since(t_tiles),
+                ms_since(t_segments));
+  // The final region's vertex marks and the final triangles' buckets, 5 bytes a vertex zeroed on all cores (5 GB,
+  // ~0.2 s at 1B points): beside the first tiles, which need them only once their CDT is done.
   std::vector<uint8_t> in_final;
-  resize_touched(in_final, n);  // zeroed on all cores
-  TriangleBuckets buckets(n);
+  std::optional<TriangleBuckets> buckets_made;
+  const std::shared_future<void> bookkeeping = std::async(std::launch::async, [&] {
+                                                 resize_touched(in_final, n);
+                                                 buckets_made.emplace(n);
+                                               }).share();
   std::vector<TileResult> results(tiles);
   auto tile_name = [&](size_t t) {
     return "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);
@@ -508,10 +520,11 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     // Its ids are sorted: the last has the largest x of its vertices and segments.
     if (options.wait_clean && !g.ids.empty() && !options.wait_clean(v[g.ids.back()].x)) throw InputChangedByResolve();
     const std::string name = tile_name(t);
+    bookkeeping.get();  // rethrows its error
     tbb::this_task_arena::isolate([&] {
       results[t] = finish_tile(v, std::move(g), plan.nodes[plan.tiles[t]], triangulate, options.finalize, name,
                                in_final, level == 1 && options.unresolved);
-      buckets.count(results[t].final_triangles);
+      buckets_made->count(results[t].final_triangles);
     });
     const TileResult& r = results[t];
     spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms", name,
@@ -545,6 +558,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
             tbb::make_filter<size_t, void>(tbb::filter_mode::parallel,
                                            [&](size_t t) { finish(t, std::move(gathered[t])); }));
   }
+  bookkeeping.get();  // its error, if any
+  TriangleBuckets& buckets = *buckets_made;
   // Before the ranks' exchange: every rank runs the same resolve on the same input, so all of them give up here
   // or none does (a rank whose tiles all lay below the first event would otherwise wait in the exchange for
   // ranks that gave up).
@@ -714,10 +729,11 @@ std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points) {
   if (v.empty()) return {};
   const Plan plan = plan_tiles(v, std::max<uint64_t>(1, tile_points));
   const size_t tiles = plan.tiles.size();
+  auto id_at = [&](uint32_t i) { return plan.slabs ? i : plan.order[i]; };
   std::vector<uint32_t> owner(v.size(), 0);
   for (size_t t = 0; t < tiles; ++t) {
     const Node& node = plan.nodes[plan.tiles[t]];
-    for (uint32_t i = node.lo; i < node.hi; ++i) owner[plan.order[i]] = uint32_t(t);
+    for (uint32_t i = node.lo; i < node.hi; ++i) owner[id_at(i)] = uint32_t(t);
   }
   std::vector<uint8_t> used(v.size(), 0);
   std::vector<std::vector<uint32_t>> triangles_of(tiles);  // canonical order kept: the mesh's is
@@ -730,7 +746,7 @@ std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points) {
     const Node& node = plan.nodes[plan.tiles[t]];
     std::vector<uint32_t> ids;
     for (uint32_t i = node.lo; i < node.hi; ++i)
-      if (!used[plan.order[i]]) ids.push_back(plan.order[i]);
+      if (!used[id_at(i)]) ids.push_back(id_at(i));
     for (uint32_t i : triangles_of[t])
       for (uint32_t id : mesh.triangles[i]) ids.push_back(id);
     std::sort(ids.begin(), ids.end());

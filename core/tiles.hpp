@@ -62,7 +62,7 @@ enum class TileShape { automatic, squares, slabs };
 struct TileJob {
   const Points& all;
   std::span<const uint32_t> ids;
-  const std::vector<Edge>& segments;
+  std::span<const Edge> segments;
   TileRect rect;
   std::string_view what;
   // The input is not resolved (TileOptions::unresolved): the finalizer throws UnresolvedTile when the tile has

@@ -175,7 +175,7 @@ void GpuCdt::keep(GpuTriangulation& tri) const {
   if (tri.vertex_slots.buffer) cache_.give(kPoints4[0], std::move(tri.vertex_slots));  // the build's loc
 }
 
-void GpuCdt::constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,
+void GpuCdt::constrain(GpuTriangulation& tri, std::span<const Edge> constraints, GpuCdtStats& s,
                        bool recycle, bool unresolved) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
@@ -245,7 +245,7 @@ uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileF
                     job.unresolved);
 }
 
-uint32_t GpuCdt::run_staged(uint32_t n, const std::vector<Edge>& segments, const TileRect& rect,
+uint32_t GpuCdt::run_staged(uint32_t n, std::span<const Edge> segments, const TileRect& rect,
                             HostStaging& staging, TileFinal& f, GpuCdtStats& s, bool copy_out,
                             bool unresolved) const {
   const auto t_all = Clock::now();

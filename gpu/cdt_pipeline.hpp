@@ -127,12 +127,12 @@ class GpuCdt {
   GpuTriangulation build(Buffer points, uint32_t n, GpuCdtStats& s, BufferCache* keep) const;
   // finalize_staged's work for n staged points; copy_out: the sorted final triangles left in `staging`.
   // unresolved: TileJob::unresolved.
-  uint32_t run_staged(uint32_t n, const std::vector<Edge>& segments, const TileRect& rect, HostStaging& staging,
+  uint32_t run_staged(uint32_t n, std::span<const Edge> segments, const TileRect& rect, HostStaging& staging,
                       TileFinal& f, GpuCdtStats& s, bool copy_out, bool unresolved = false) const;
   // Stage 3: the constraints inserted.
   // recycle: the inserter's flags stay in the cache for the next tile or run. unresolved:
   // ConstraintOptions::unresolved.
-  void constrain(GpuTriangulation& tri, const std::vector<Edge>& constraints, GpuCdtStats& s,
+  void constrain(GpuTriangulation& tri, std::span<const Edge> constraints, GpuCdtStats& s,
                  bool recycle = false, bool unresolved = false) const;
   // The triangulation's buffers into kept_ (and the shared cache) for the next tile or run.
   void keep(GpuTriangulation& tri) const;

@@ -178,7 +178,9 @@ TEST(GpuTiles, TilesOfAnUnresolvedInputCheckThemselves) {
       const std::optional<Triangles> t = tiled_cdt_unresolved(p, opt, tiles.triangulate);
       const bool one_piece = p.vertices.size() <= tp;
       EXPECT_EQ(t.has_value(), !changes && !one_piece) << name << ", tiles of " << tp;
-      if (t) EXPECT_TRUE(*t == single.mesh.triangles) << name << ", tiles of " << tp;
+      if (t) {
+        EXPECT_TRUE(*t == single.mesh.triangles) << name << ", tiles of " << tp;
+      }
     }
   }
   EXPECT_GE(clean, 5);

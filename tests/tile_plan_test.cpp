@@ -35,7 +35,7 @@ void expect_plan(const Points& v, uint64_t max_points, const std::string& what,
     const TileNode& node = plan.nodes[plan.tiles[t]];
     EXPECT_LE(node.hi - node.lo, max_points) << what << ", tile " << t;
     for (uint32_t i = node.lo; i < node.hi; ++i) {
-      const uint32_t id = plan.order[i];
+      const uint32_t id = plan.slabs ? i : plan.order[i];
       ASSERT_LT(id, v.size());
       ASSERT_EQ(owner[id], -1) << what << ": vertex " << id << " in two tiles";
       owner[id] = int(t);
@@ -44,6 +44,7 @@ void expect_plan(const Points& v, uint64_t max_points, const std::string& what,
     }
     if (shape == TileShape::slabs) {
       EXPECT_EQ(node.hi - node.lo, node.column_hi - node.column_lo) << what << ": tile " << t << " is not a slab";
+      EXPECT_EQ(node.lo, node.column_lo) << what << ": a slab's ids are its range";
     }
   }
   for (size_t id = 0; id < v.size(); ++id) {
