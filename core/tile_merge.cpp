@@ -55,13 +55,6 @@ auto same_first(std::span<const Triangle> run) {
   return [run](size_t i) { return run[i][0] == run[i - 1][0]; };
 }
 
-// Gives the whole pages inside [p, p + bytes) back to the system: their contents are dead. The allocation
-// stays (freed later as usual); a page touched again comes back zeroed.
-void release_pages(const void* p, size_t bytes) {
-  const uintptr_t page = 4096, a = (uintptr_t(p) + page - 1) & ~(page - 1), b = (uintptr_t(p) + bytes) & ~(page - 1);
-  if (b > a) madvise(reinterpret_cast<void*>(a), b - a, MADV_DONTNEED);
-}
-
 }  // namespace
 
 TriangleBuckets::TriangleBuckets(size_t n) {
@@ -111,13 +104,15 @@ Triangles TriangleBuckets::place(std::vector<Triangles>& runs) {
       if (to == done[r]) return;  // a run's vertices lie in its tile's column: most waves miss it
       const std::span<const Triangle> part(run.data() + done[r], to - done[r]);
       // Triangle by triangle, not a copy call a group: most groups hold one or two triangles.
+      // Each block's pages given back as it goes: one call for the whole part (512 MB of 4 KiB pages) took
+      // ~19 ms on one core, 64 of them ~0.9 s at 1B points.
       group_blocks(part.size(), 1 << 16, same_first(part), [&](size_t i, size_t j) {
-        for (; i < j; ++i) {
-          const uint32_t v = part[i][0];
-          out[base[v / kBlock] + count_[v]++] = part[i];
+        for (size_t k = i; k < j; ++k) {
+          const uint32_t v = part[k][0];
+          out[base[v / kBlock] + count_[v]++] = part[k];
         }
+        release_pages(part.data() + i, (j - i) * sizeof(Triangle));
       });
-      release_pages(part.data(), part.size_bytes());
       done[r] = to;
     };
     tbb::parallel_for(size_t(0), runs.size() - 1, size_t(1), place_part);

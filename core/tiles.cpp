@@ -613,9 +613,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // inside the final region lies inside it) and the final region's border. What only the tiles read goes
   // first (at 1B points + 250M segments: 6 GB of the canonical order's peak).
   const auto t_merge_input = Clock::now();
-  free_storage(plan.order);
-  free_storage(tile_segments);
-  free_storage(only_tile);
+  free_storage_on_all_cores(plan.order);
+  free_storage_on_all_cores(tile_segments);
+  free_storage_on_all_cores(only_tile);
   std::vector<Triangles> runs(tiles);
   std::vector<Edge> border;
   uint64_t final_count = 0;
@@ -633,7 +633,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // local_of only where it is read.
   RawVector<uint8_t> in_merge(n);
   tbb::parallel_for(size_t(0), n, [&](size_t i) { in_merge[i] = !in_final[i]; });
-  free_storage(in_final);
+  free_storage_on_all_cores(in_final);
   for (const Edge& e : border) in_merge[e[0]] = in_merge[e[1]] = 1;
   const std::vector<uint32_t> ids = compact<uint32_t>(
       n, [&](size_t i) { return in_merge[i]; },

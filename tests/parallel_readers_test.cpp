@@ -78,6 +78,25 @@ TEST(ResizeTouched, KeepsTheElementsItHasAndZeroesTheNew) {
   EXPECT_EQ(std::count(v.begin() + 10, v.end(), Point3{0, 0, 0}), 10);
 }
 
+// release_pages gives back exactly the whole pages inside its range, in pieces on all cores past 64 MB: they
+// read as zeros again, the bytes of the pages it only partly covers keep their values.
+TEST(ReleasePages, GivesBackTheWholePagesInsideItsRangeOnly) {
+  RawVector<uint8_t> v;
+  resize_unwritten(v, size_t(200) << 20);
+  std::fill(v.begin(), v.end(), uint8_t(5));
+  const size_t from = 1000, to = v.size() - 3000;  // neither on a page boundary (the storage is page-aligned)
+  release_pages(v.data() + from, to - from);
+  const size_t first_whole = (reinterpret_cast<uintptr_t>(v.data()) + from + 4095) / 4096 * 4096 -
+                             reinterpret_cast<uintptr_t>(v.data());
+  const size_t end_whole = (reinterpret_cast<uintptr_t>(v.data()) + to) / 4096 * 4096 - reinterpret_cast<uintptr_t>(v.data());
+  ASSERT_LT(first_whole, end_whole);
+  EXPECT_EQ(std::count(v.begin(), v.begin() + first_whole, uint8_t(5)), ptrdiff_t(first_whole));
+  EXPECT_EQ(std::count(v.begin() + first_whole, v.begin() + end_whole, uint8_t(0)), ptrdiff_t(end_whole - first_whole));
+  EXPECT_EQ(std::count(v.begin() + end_whole, v.end(), uint8_t(5)), ptrdiff_t(v.size() - end_whole));
+  free_storage_on_all_cores(v);
+  EXPECT_EQ(v.capacity(), 0u);
+}
+
 TEST(TextSource, SplitLinesEndsEveryChunkAtALineEndAndNumbersLines) {
   const std::string text = "a\nbb\nccc\ndddd\ne";
   const std::vector<Chunk> chunks = split_lines(text, 3);
