@@ -435,9 +435,34 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // Every segment goes to every tile whose rectangle it meets (whole, with its endpoints): blocks of segments
   // count their tiles, then write them in block order, so each tile's list is in segment order without a
   // sort.
+  // Slabs (rectangles unbounded in y, in x order): meets() is then whether the x-ranges overlap, closed, since a
+  // segment passes through every vertical strip of its own box; two comparisons a slab instead of the tree.
+  // At 1B points + 250M segments the tree took ~1 s of the plan on 32 cores.
+  std::vector<double> slab_x0, slab_x1;
+  std::vector<uint32_t> slab_tile;
+  if (plan.slabs) {
+    for (size_t t = 0; t < tiles; ++t) slab_tile.push_back(uint32_t(t));
+    std::sort(slab_tile.begin(), slab_tile.end(), [&](uint32_t p, uint32_t q) {
+      const Rect &r = plan.nodes[plan.tiles[p]].rect, &s = plan.nodes[plan.tiles[q]].rect;
+      return r.x0 != s.x0 ? r.x0 < s.x0 : r.x1 < s.x1;  // a slab of no width (a cut repeated) first
+    });
+    for (uint32_t t : slab_tile) {
+      const Rect& r = plan.nodes[plan.tiles[t]].rect;
+      if (r.y0 != -kInf || r.y1 != kInf || (!slab_x1.empty() && r.x0 < slab_x1.back()))
+        throw std::logic_error("tiles: slabs that are not strips side by side");
+      slab_x0.push_back(r.x0);
+      slab_x1.push_back(r.x1);
+    }
+  }
   auto for_tiles_of = [&](size_t i, auto&& f) {
     const Point3& a = v[segments[i][0]];
     const Point3& b = v[segments[i][1]];
+    if (plan.slabs) {  // a.x <= b.x: ids are in (x, y) order and a < b
+      size_t k = size_t(std::partition_point(slab_x1.begin(), slab_x1.end(), [&](double x1) { return x1 < a.x; }) -
+                        slab_x1.begin());
+      for (; k < slab_x0.size() && slab_x0[k] <= b.x; ++k) f(slab_tile[k]);
+      return;
+    }
     uint32_t stack[64];  // the tree's depth is about log2(tiles)
     int top = 0;
     stack[top++] = 0;

@@ -9,6 +9,7 @@
 #include <limits>
 #include <set>
 #include <thread>
+#include <tuple>
 
 #include "core/canonical.hpp"
 #include "core/cdt_cgal.hpp"
@@ -185,6 +186,27 @@ TEST(GpuTiles, TilesOfAnUnresolvedInputCheckThemselves) {
   }
   EXPECT_GE(clean, 5);
   EXPECT_GE(split, 3);
+}
+
+// A segment along a slab's cut line, through vertices that only one of the two slabs owns: that slab must get it
+// (the closed rule: its x-range [2, 2] meets both slabs), or nothing reports the vertices on it. A 40 x 40 grid
+// in slabs of 100 points: the cut at x = 2 splits that grid column, rows 0-19 left, 20-39 right.
+TEST(GpuTiles, UnresolvedSlabsSeeASegmentAlongTheirCut) {
+  const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
+  const gpu::GpuCdt cdt(ctx);
+  const gpu::GpuTiles tiles = gpu::gpu_tiles({&cdt});
+  for (const auto& [y0, y1, owner] : {std::tuple{25.0, 35.0, "right"}, std::tuple{3.0, 13.0, "left"}}) {
+    InputSet in = tile_layouts::dem_grid();
+    in.lines.push_back(tile_layouts::line({{2, y0, 0}, {2, y1, 0}}));
+    const PreparedInput p = prepare(in);
+    TileOptions opt;
+    opt.max_tile_points = 100;
+    opt.shape = TileShape::slabs;
+    opt.finalize = tiles.finalize;
+    TileStats ts;
+    EXPECT_FALSE(tiled_cdt_unresolved(p, opt, tiles.triangulate, &ts).has_value())
+        << "a segment through vertices of the " << owner << " slab only";
+  }
 }
 
 TEST(GpuTiles, DeviceListsAreChecked) {
