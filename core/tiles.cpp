@@ -435,34 +435,51 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // Every segment goes to every tile whose rectangle it meets (whole, with its endpoints): blocks of segments
   // count their tiles, then write them in block order, so each tile's list is in segment order without a
   // sort.
-  // Slabs (rectangles unbounded in y, in x order): meets() is then whether the x-ranges overlap, closed, since a
-  // segment passes through every vertical strip of its own box; two comparisons a slab instead of the tree.
-  // At 1B points + 250M segments the tree took ~1 s of the plan on 32 cores.
-  std::vector<double> slab_x0, slab_x1;
-  std::vector<uint32_t> slab_tile;
+  // Slabs (rectangles unbounded in y, side by side): meets() is then whether the x-ranges overlap, closed, since a
+  // segment passes through every vertical strip of its own box. That needs no coordinates: a segment (a < b)
+  // meets the slabs from a's to b's (ids are in (x, y) order and a slab's ids are a range), and one more on a
+  // side where that end lies on the slab's cut (the vertices on a cut are one id range; a slab of no width
+  // repeats its cut, so the step may repeat). At 1B points + 250M segments the tree took ~1 s of the plan on 32
+  // cores, the x-ranges ~0.7 s. The step to a neighbour keeps the closed rule, though such a segment cannot reach
+  // into the neighbour's open rectangle, where its final triangles lie: leaving it out changes no output.
+  std::vector<uint32_t> slab_tile, slab_lo;           // in id (so x) order: the tile, its first id
+  std::vector<std::pair<uint32_t, uint32_t>> on_cut;  // on_cut[k]: the ids with x equal to slab k's left cut
   if (plan.slabs) {
     for (size_t t = 0; t < tiles; ++t) slab_tile.push_back(uint32_t(t));
-    std::sort(slab_tile.begin(), slab_tile.end(), [&](uint32_t p, uint32_t q) {
-      const Rect &r = plan.nodes[plan.tiles[p]].rect, &s = plan.nodes[plan.tiles[q]].rect;
-      return r.x0 != s.x0 ? r.x0 < s.x0 : r.x1 < s.x1;  // a slab of no width (a cut repeated) first
-    });
+    std::sort(slab_tile.begin(), slab_tile.end(),
+              [&](uint32_t p, uint32_t q) { return plan.nodes[plan.tiles[p]].lo < plan.nodes[plan.tiles[q]].lo; });
+    uint32_t next = 0;
+    double x1 = -kInf;
     for (uint32_t t : slab_tile) {
-      const Rect& r = plan.nodes[plan.tiles[t]].rect;
-      if (r.y0 != -kInf || r.y1 != kInf || (!slab_x1.empty() && r.x0 < slab_x1.back()))
+      const Node& node = plan.nodes[plan.tiles[t]];
+      const Rect& r = node.rect;
+      if (r.y0 != -kInf || r.y1 != kInf || node.lo != next || r.x0 != x1 || (next == 0) != (r.x0 == -kInf))
         throw std::logic_error("tiles: slabs that are not strips side by side");
-      slab_x0.push_back(r.x0);
-      slab_x1.push_back(r.x1);
+      next = node.hi;
+      x1 = r.x1;
+      slab_lo.push_back(node.lo);
+      const auto at = [&](auto below) {
+        return uint32_t(std::partition_point(v.begin(), v.end(), below) - v.begin());
+      };
+      on_cut.emplace_back(at([&](const Point3& p) { return p.x < r.x0; }), at([&](const Point3& p) { return p.x <= r.x0; }));
     }
+    if (next != n) throw std::logic_error("tiles: slabs that leave vertices out");
   }
+  auto slab_of = [&](uint32_t id) {
+    return size_t(std::upper_bound(slab_lo.begin(), slab_lo.end(), id) - slab_lo.begin()) - 1;
+  };
+  auto on_left_cut = [&](size_t k, uint32_t id) { return k > 0 && id >= on_cut[k].first && id < on_cut[k].second; };
   auto for_tiles_of = [&](size_t i, auto&& f) {
-    const Point3& a = v[segments[i][0]];
-    const Point3& b = v[segments[i][1]];
-    if (plan.slabs) {  // a.x <= b.x: ids are in (x, y) order and a < b
-      size_t k = size_t(std::partition_point(slab_x1.begin(), slab_x1.end(), [&](double x1) { return x1 < a.x; }) -
-                        slab_x1.begin());
-      for (; k < slab_x0.size() && slab_x0[k] <= b.x; ++k) f(slab_tile[k]);
+    if (plan.slabs) {
+      const uint32_t a = segments[i][0], b = segments[i][1];
+      size_t lo = slab_of(a), hi = slab_of(b);
+      while (on_left_cut(lo, a)) --lo;
+      while (hi + 1 < slab_lo.size() && on_left_cut(hi + 1, b)) ++hi;
+      for (size_t k = lo; k <= hi; ++k) f(slab_tile[k]);
       return;
     }
+    const Point3& a = v[segments[i][0]];
+    const Point3& b = v[segments[i][1]];
     uint32_t stack[64];  // the tree's depth is about log2(tiles)
     int top = 0;
     stack[top++] = 0;
@@ -491,7 +508,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     count.assign(tiles, 0);
     const size_t end = std::min(segments.size(), (b + 1) * kSegmentBlock);
     for (size_t i = b * kSegmentBlock; i < end; ++i) {
-      if (i + 16 < end) __builtin_prefetch(&v[segments[i + 16][1]]);
+      if (!plan.slabs && i + 16 < end) __builtin_prefetch(&v[segments[i + 16][1]]);
       uint32_t met = 0, last = 0;
       for_tiles_of(i, [&](uint32_t t) { ++count[t], ++met, last = t; });
       only_tile[i] = met == 1 ? last : kSeveral;
