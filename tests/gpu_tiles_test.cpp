@@ -127,6 +127,15 @@ TEST(GpuTiles, DeviceFinalTestIsWithinTheHostsTest) {
   expect_final_within_host(cdt, g.vertices, g.constraints, TileRect{10, 40, 5, 50}, "grid, sides on grid lines");
 }
 
+// Tiles of at most tp points with the device's final test; tp = 100: slabs (a tile whose ids are a range).
+TileOptions device_tiles(uint64_t tp, const gpu::GpuTiles& tiles) {
+  TileOptions opt;
+  opt.max_tile_points = tp;
+  opt.shape = tp == 100 ? TileShape::slabs : TileShape::automatic;
+  opt.finalize = tiles.finalize;
+  return opt;
+}
+
 // Every hard layout in tiles of 16, 50 and 500 points, and in slabs of 100 (a tile whose ids are a range), with
 // the device's final test: the single run's mesh.
 TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
@@ -137,10 +146,7 @@ TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
     const PreparedInput p = prepare(in);
     const CdtResult single = triangulate_cgal(p);
     for (uint64_t tp : {16, 50, 500, 100}) {
-      TileOptions opt;
-      opt.max_tile_points = tp;
-      opt.shape = tp == 100 ? TileShape::slabs : TileShape::automatic;
-      opt.finalize = tiles.finalize;
+      TileOptions opt = device_tiles(tp, tiles);
       if (tp == 50) opt.reserve = tiles.reserve;  // staging allocated ahead, and regrown by a later layout's tiles
       TileStats ts;
       const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate, &ts);
@@ -172,11 +178,7 @@ TEST(GpuTiles, TilesOfAnUnresolvedInputCheckThemselves) {
     (changes ? split : clean) += 1;
     const CdtResult single = triangulate_cgal(p);
     for (uint64_t tp : {16, 100, 500, 100000}) {
-      TileOptions opt;
-      opt.max_tile_points = tp;
-      opt.shape = tp == 100 ? TileShape::slabs : TileShape::automatic;
-      opt.finalize = tiles.finalize;
-      const std::optional<Triangles> t = tiled_cdt_unresolved(p, opt, tiles.triangulate);
+      const std::optional<Triangles> t = tiled_cdt_unresolved(p, device_tiles(tp, tiles), tiles.triangulate);
       const bool one_piece = p.vertices.size() <= tp;
       EXPECT_EQ(t.has_value(), !changes && !one_piece) << name << ", tiles of " << tp;
       if (t) {
@@ -188,9 +190,10 @@ TEST(GpuTiles, TilesOfAnUnresolvedInputCheckThemselves) {
   EXPECT_GE(split, 3);
 }
 
-// A segment along a slab's cut line, through vertices that only one of the two slabs owns: that slab must get it
-// (the closed rule: its x-range [2, 2] meets both slabs), or nothing reports the vertices on it. A 40 x 40 grid
-// in slabs of 100 points: the cut at x = 2 splits that grid column, rows 0-19 left, 20-39 right.
+// A segment along a slab's cut line, through vertices that only one of the two slabs owns: that slab must get it,
+// or no tile reports the vertices on it (and the merge refuses it). A 40 x 40 grid in slabs of 100 points: the
+// cut at x = 2 splits that grid column, rows 0-19 left, 20-39 right. Segments found by x-range (de30fc5) failed
+// this with either bound made strict.
 TEST(GpuTiles, UnresolvedSlabsSeeASegmentAlongTheirCut) {
   const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
   const gpu::GpuCdt cdt(ctx);
@@ -199,12 +202,7 @@ TEST(GpuTiles, UnresolvedSlabsSeeASegmentAlongTheirCut) {
     InputSet in = tile_layouts::dem_grid();
     in.lines.push_back(tile_layouts::line({{2, y0, 0}, {2, y1, 0}}));
     const PreparedInput p = prepare(in);
-    TileOptions opt;
-    opt.max_tile_points = 100;
-    opt.shape = TileShape::slabs;
-    opt.finalize = tiles.finalize;
-    TileStats ts;
-    EXPECT_FALSE(tiled_cdt_unresolved(p, opt, tiles.triangulate, &ts).has_value())
+    EXPECT_FALSE(tiled_cdt_unresolved(p, device_tiles(100, tiles), tiles.triangulate).has_value())
         << "a segment through vertices of the " << owner << " slab only";
   }
 }
