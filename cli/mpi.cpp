@@ -164,6 +164,11 @@ MpiSession::MpiSession(int* argc, char*** argv) {
     sharing_.gather = [rank, ranks](std::vector<uint32_t> mine) {
       return gather_at_rank0(std::move(mine), rank, ranks);
     };
+    sharing_.any = [](bool mine) {
+      int in = mine ? 1 : 0, out = 0;
+      MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD);
+      return out != 0;
+    };
     read_share_.index = uint32_t(rank);
     read_share_.count = uint32_t(ranks);
     read_share_.all_sizes = [ranks](uint64_t mine) {

@@ -172,18 +172,13 @@ void drop_prepared(Job& job) {
 }
 
 // Whether a GPU run is tiled on any device (--max-tile-points below its vertices, or more of them than a device
-// takes): its tiles begin before the resolve ends (core/tiles_ahead.hpp), and the resolve copies the prepared
-// input only if it splits something (at 1B points the copy was 24 bytes a vertex of the resolve's peak).
+// takes): its tiles check their own constraints and begin at once (core/tiles_ahead.hpp, tiled_cdt_unresolved);
+// the resolve runs only if one has something to split, and copies the prepared input only then.
 bool tiled_on_any_device(const Job& job) {
   const uint64_t n = job.prepared.vertices.size();
   const int64_t m = job.options.max_tile_points;
   return m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device();
 }
-
-// Whether that run's tiles check themselves for what the resolve would split (core/tiles_ahead.hpp,
-// tiled_cdt_unresolved), so that no resolve runs unless one has something: in one process. MPI ranks keep the
-// resolve beside their tiles: they must all give up together, before their exchange.
-bool tiles_check_themselves(const Job& job) { return job.options.sharing == nullptr || job.options.sharing->ranks <= 1; }
 
 // resolve_if_needed's result made whole: an unchanged input is the prepared one, moved where no later stage reads
 // it.
@@ -274,7 +269,8 @@ gpu::TileDevices tile_devices(Job& job, GpuStart& start) {
 }
 
 // The GPU backend on a started device, the CPU's resolve stage running on other threads meanwhile.
-// `ahead`: the resolve is resolve_if_needed's, and tiles begin before it ends (tiled_on_any_device).
+// `ahead`: tiles of the prepared input that check themselves; the resolve (resolve_if_needed's, deferred) only if
+// they find something to split (tiled_on_any_device).
 CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const ResolveProgress& progress,
                           const double& resolve_ms, bool ahead) {
   const uint64_t vertices = job.prepared.vertices.size();
@@ -328,22 +324,18 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
         try {
           gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
-          if (ahead && !got) {  // the prepared input's tiles; what the resolve splits, tiled again below
+          if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
             const TileOptions opt =
                 tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
             TileStats ts;
-            const bool checked = tiles_check_themselves(job);
             std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
-              return checked ? tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts)
-                             : tiled_cdt_ahead(job.prepared, progress, opt, tiles.triangulate, &ts);
+              return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
             });
-            if (t) {
-              if (checked) {  // no resolve ran: the prepared input is the resolved one
-                ResolvedInput same;
-                same.unchanged = true;
-                got.emplace(filled(job, std::move(same)));
-                drop_prepared(job);
-              }
+            if (t) {  // no resolve ran: the prepared input is the resolved one
+              ResolvedInput same;
+              same.unchanged = true;
+              got.emplace(filled(job, std::move(same)));
+              drop_prepared(job);
               CdtResult r;
               r.mesh.vertices = std::move(input().vertices);  // unchanged: the prepared vertices
               r.mesh.triangles = std::move(*t);
@@ -588,7 +580,7 @@ void triangulate_job(Job& job) {
   // check themselves: run only if one has something to split (or the device fails them).
   std::future<ResolvedInput> resolving;
   if (job.want_gpu)
-    resolving = std::async(ahead && tiles_check_themselves(job) ? std::launch::deferred : std::launch::async, [&] {
+    resolving = std::async(ahead ? std::launch::deferred : std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
       ResolvedInput r =
           ahead ? resolve_if_needed(job.prepared, progress) : resolve_constraints(job.prepared, progress);

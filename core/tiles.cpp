@@ -461,7 +461,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
       const auto at = [&](auto below) {
         return uint32_t(std::partition_point(v.begin(), v.end(), below) - v.begin());
       };
-      on_cut.emplace_back(at([&](const Point3& p) { return p.x < r.x0; }), at([&](const Point3& p) { return p.x <= r.x0; }));
+      on_cut.emplace_back(at([&](const Point3& p) { return p.x < r.x0; }),
+                          at([&](const Point3& p) { return p.x <= r.x0; }));
     }
     if (next != n) throw std::logic_error("tiles: slabs that leave vertices out");
   }
@@ -577,28 +578,44 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   std::vector<size_t> mine;
   for (size_t t = 0; t < tiles; ++t)
     if (!sharing || int(t % size_t(sharing->ranks)) == sharing->rank) mine.push_back(t);
-  if (options.tiles_in_flight == 0 || options.tiles_in_flight >= mine.size()) {
-    tbb::parallel_for(size_t(0), mine.size(), size_t(1), [&](size_t k) { finish(mine[k], gather(mine[k])); });
+  auto run_mine = [&] {
+    if (options.tiles_in_flight == 0 || options.tiles_in_flight >= mine.size()) {
+      tbb::parallel_for(size_t(0), mine.size(), size_t(1), [&](size_t k) { finish(mine[k], gather(mine[k])); });
+    } else {
+      // tiles_in_flight tiles on the devices, one more gathered: tiles are gathered one at a time, in order, on
+      // every core, so the next tile is ready when a device is free (gathered beside the tiles' own finishing,
+      // a tile's gather took as long as its GPU call and the device waited).
+      std::vector<GatheredTile> gathered(tiles);
+      size_t next = 0;
+      tbb::parallel_pipeline(
+          options.tiles_in_flight + 1,
+          tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
+                                         [&](tbb::flow_control& fc) -> size_t {
+                                           if (next == mine.size()) fc.stop();
+                                           return next < mine.size() ? mine[next++] : 0;
+                                         }) &
+              tbb::make_filter<size_t, size_t>(tbb::filter_mode::serial_in_order,
+                                               [&](size_t t) {
+                                                 gathered[t] = gather(t);
+                                                 return t;
+                                               }) &
+              tbb::make_filter<size_t, void>(tbb::filter_mode::parallel,
+                                             [&](size_t t) { finish(t, std::move(gathered[t])); }));
+    }
+  };
+  if (sharing && options.unresolved) {
+    // Ranks whose tiles check themselves all give up together, before their exchange: a rank that gave up alone
+    // would leave the others waiting in it.
+    std::string why;
+    try {
+      run_mine();
+    } catch (const UnresolvedTile& e) {
+      why = e.what();
+    }
+    if (sharing->any(!why.empty()))
+      throw UnresolvedTile(why.empty() ? "another rank's tile has constraints to split" : why);
   } else {
-    // tiles_in_flight tiles on the devices, one more gathered: tiles are gathered one at a time, in order, on
-    // every core, so the next tile is ready when a device is free (gathered beside the tiles' own finishing,
-    // a tile's gather took as long as its GPU call and the device waited).
-    std::vector<GatheredTile> gathered(tiles);
-    size_t next = 0;
-    tbb::parallel_pipeline(
-        options.tiles_in_flight + 1,
-        tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
-                                       [&](tbb::flow_control& fc) -> size_t {
-                                         if (next == mine.size()) fc.stop();
-                                         return next < mine.size() ? mine[next++] : 0;
-                                       }) &
-            tbb::make_filter<size_t, size_t>(tbb::filter_mode::serial_in_order,
-                                             [&](size_t t) {
-                                               gathered[t] = gather(t);
-                                               return t;
-                                             }) &
-            tbb::make_filter<size_t, void>(tbb::filter_mode::parallel,
-                                           [&](size_t t) { finish(t, std::move(gathered[t])); }));
+    run_mine();
   }
   bookkeeping.get();  // its error, if any
   TriangleBuckets& buckets = *buckets_made;

@@ -91,6 +91,9 @@ using TileFinalizer = std::function<TileFinal(const TileJob&)>;
 struct TileSharing {
   int rank = 0, ranks = 1;
   std::function<std::vector<std::vector<uint32_t>>(std::vector<uint32_t> mine)> gather;
+  // Whether any rank passes true, on every rank (TileOptions::unresolved: whether some rank's tile has
+  // constraints to split).
+  std::function<bool(bool mine)> any;
 };
 
 struct TileOptions {
