@@ -583,7 +583,7 @@ void triangulate_job(Job& job) {
     resolving = std::async(ahead ? std::launch::deferred : std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
       ResolvedInput r =
-          ahead ? resolve_if_needed(job.prepared, progress) : resolve_constraints(job.prepared, progress);
+          ahead ? resolve_if_needed(job.prepared) : resolve_constraints(job.prepared, progress);
       resolve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
     });

@@ -28,9 +28,6 @@
 #include "core/resolve.hpp"
 
 #include <CGAL/Exact_rational.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
 #include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -44,7 +41,6 @@
 #include <exception>
 #include <limits>
 #include <map>
-#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -70,16 +66,6 @@ constexpr int kMaxRounds = 200;
 constexpr double kCellVertices = 4;
 constexpr size_t kRowItems = 6;
 
-// Set on the calling thread while resolve_if_needed runs (beside tiles): the threads parallel_chunks starts run
-// at nice 10. The calling thread keeps its priority, so that TBB's workers, should it start any, do not inherit
-// a lower one.
-thread_local bool t_beside_tiles = false;
-
-void lower_this_thread_priority() {
-  // Linux: PRIO_PROCESS with a thread id sets that thread's nice value alone. Best effort.
-  (void)setpriority(PRIO_PROCESS, id_t(syscall(SYS_gettid)), 10);
-}
-
 // body(begin, end, worker) over [0, n) in chunks taken from a shared counter by `threads` workers
 // (worker < threads). Runs inline for small n. The first exception of a worker is rethrown.
 template <class Body>
@@ -104,12 +90,7 @@ void parallel_chunks(size_t n, unsigned threads, size_t grain, const Body& body)
   const unsigned used = unsigned(std::min<size_t>(threads, chunks));
   std::vector<std::thread> pool;
   pool.reserve(used - 1);
-  const bool lower = t_beside_tiles;
-  for (unsigned w = 1; w < used; ++w)
-    pool.emplace_back([&work, lower, w] {
-      if (lower) lower_this_thread_priority();
-      work(w);
-    });
+  for (unsigned w = 1; w < used; ++w) pool.emplace_back(work, w);
   work(0);
   for (std::thread& t : pool) t.join();
   for (const std::exception_ptr& e : errors)
@@ -327,11 +308,7 @@ class Resolver {
       spdlog::debug("resolve: setup {:.1f} ms, round 1 {:.1f} ms", ms(t0, t1), ms(t1, std::chrono::steady_clock::now()));
     }
     const bool clean = ev.on.empty() && ev.cross.empty();
-    if (progress_) {
-      progress_->crossings.store(ev.cross.empty() ? 0 : 1);
-      progress_->publish(clean ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity(),
-                         !clean);
-    }
+    if (progress_) progress_->crossings.store(ev.cross.empty() ? 0 : 1);
     const auto t2 = std::chrono::steady_clock::now();
     if (copier_.joinable()) copier_.join();
     if (lazily_) {
@@ -548,26 +525,12 @@ class Resolver {
     });
     for (size_t b = 1; b < reach_.size(); ++b) reach_[b] = std::max(reach_[b], reach_[b - 1]);
     std::vector<SweepState> states(ranges);
-    // Round 1 tells the progress, range by range, the x below which it has found nothing: the left side of the
-    // first range not yet swept. Every event lies in the column of its x (vertex on a segment: the vertex's;
-    // crossing: the rounded point's), and no x below a column's left() is in it or a later one.
-    std::vector<uint8_t> swept(ranges, 0);
-    size_t cleared = 0;
-    std::mutex sweeping;
     parallel_chunks(ranges, threads_, 1, [&](size_t t0, size_t t1, unsigned) {
       for (size_t t = t0; t < t1; ++t) {
         if (everything)
           sweep_range<true>(bound[t], bound[t + 1], states[t]);
         else
           sweep_range<false>(bound[t], bound[t + 1], states[t]);
-        if (everything && progress_) {
-          std::lock_guard<std::mutex> lock(sweeping);
-          swept[t] = 1;
-          while (cleared < ranges && swept[cleared]) ++cleared;
-          const bool found = !states[t].events.on.empty() || !states[t].events.cross.empty();
-          progress_->publish(cleared == ranges ? std::numeric_limits<double>::infinity() : cols_.left(bound[cleared]),
-                             found);
-        }
       }
     });
     Events all;
@@ -995,35 +958,8 @@ ResolvedInput resolve_constraints(const PreparedInput& prepared, ResolveProgress
   return Resolver(prepared.vertices, prepared.constraints, thread_count(threads), &progress).run();
 }
 
-ResolvedInput resolve_if_needed(const PreparedInput& prepared, ResolveProgress& progress, unsigned threads) {
-  struct Beside {
-    Beside() { t_beside_tiles = true; }
-    ~Beside() { t_beside_tiles = false; }
-  } beside;
-  try {
-    return Resolver(prepared.vertices, prepared.constraints, thread_count(threads), &progress, /*lazily=*/true).run();
-  } catch (...) {
-    progress.publish(-std::numeric_limits<double>::infinity(), true);  // nobody waits on it for ever
-    throw;
-  }
-}
-
-void ResolveProgress::publish(double below, bool found) {
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    if (found) changes.store(true);
-    if (below > clean_below.load()) clean_below.store(below);
-  }
-  moved.notify_all();
-}
-
-bool ResolveProgress::wait_clean(double x) const {
-  std::unique_lock<std::mutex> lock(mutex);
-  moved.wait(lock, [&] {
-    const double b = clean_below.load();
-    return changes.load() || b == std::numeric_limits<double>::infinity() || x < b;
-  });
-  return !changes.load();
+ResolvedInput resolve_if_needed(const PreparedInput& prepared, unsigned threads) {
+  return Resolver(prepared.vertices, prepared.constraints, thread_count(threads), nullptr, /*lazily=*/true).run();
 }
 
 ResolvedInput resolve_constraints(PreparedInput&& prepared, unsigned threads) {

@@ -3,9 +3,6 @@
 // never cross each other and never pass through a vertex.
 #pragma once
 #include <atomic>
-#include <condition_variable>
-#include <limits>
-#include <mutex>
 #include <cstdint>
 #include <vector>
 
@@ -50,28 +47,14 @@ ResolvedInput resolve_constraints(PreparedInput&& prepared, unsigned threads = 0
 
 // What a caller running resolve_constraints on another thread may learn early: after the first sweep (a
 // fraction of the whole), whether constraints cross (Steiner vertices are coming). -1 until then.
-// As the first sweep goes (in x order, roughly): `clean_below`, an x below which it has found no event (no
-// crossing, no vertex inside a segment), +inf once it found none anywhere; `changes`, set as soon as it finds
-// one (the resolved input will differ from the prepared one). Tiles begun on the prepared input before the
-// resolve ends (core/tiles_ahead.hpp) wait on these.
 struct ResolveProgress {
   std::atomic<int> crossings{-1};
-  std::atomic<double> clean_below{-std::numeric_limits<double>::infinity()};
-  std::atomic<bool> changes{false};
-  // Until the first sweep has ruled out events below x (true; x = +inf: everywhere) or found one (false).
-  bool wait_clean(double x) const;
-  // The sweep's side: after its last range, or on an error (`changes`: the input is not known clean).
-  void publish(double below, bool found);
-  mutable std::mutex mutex;
-  mutable std::condition_variable moved;
 };
 ResolvedInput resolve_constraints(const PreparedInput& prepared, ResolveProgress& progress, unsigned threads = 0);
 
 // resolve_constraints without copying a clean input: `unchanged` when nothing is split (the prepared vertices
-// and constraints are the resolved input); the copy is made only when something is. Made to run beside tiles
-// (core/tiles_ahead.hpp): the threads it starts run at nice 10, since its sweep keeps every core busy and the
-// devices' threads, waking from their fences, and the tiles' gathers must not wait for it (on 2 x H200 at 1B
-// points, the first tiles beside it took 2.6-5.2 s, 1.1-2.0 s after it).
-ResolvedInput resolve_if_needed(const PreparedInput& prepared, ResolveProgress& progress, unsigned threads = 0);
+// and constraints are the resolved input); the copy is made only when something is (at 1B points the copy was
+// 24 bytes a vertex of the resolve's peak).
+ResolvedInput resolve_if_needed(const PreparedInput& prepared, unsigned threads = 0);
 
 }  // namespace cdtgpu

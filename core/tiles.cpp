@@ -560,8 +560,6 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
         [&] { return gather_tile(segments, plan, plan.nodes[plan.tiles[t]], its_segments); });
   };
   auto finish = [&](size_t t, GatheredTile g) {
-    // Its ids are sorted: the last has the largest x of its vertices and segments.
-    if (options.wait_clean && !g.ids.empty() && !options.wait_clean(v[g.ids.back()].x)) throw InputChangedByResolve();
     const std::string name = tile_name(t);
     bookkeeping.get();  // rethrows its error
     tbb::this_task_arena::isolate([&] {
@@ -619,11 +617,6 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   }
   bookkeeping.get();  // its error, if any
   TriangleBuckets& buckets = *buckets_made;
-  // Before the ranks' exchange: every rank runs the same resolve on the same input, so all of them give up here
-  // or none does (a rank whose tiles all lay below the first event would otherwise wait in the exchange for
-  // ranks that gave up).
-  if (options.wait_clean && !options.wait_clean(std::numeric_limits<double>::infinity()))
-    throw InputChangedByResolve();
   if (sharing) {
     // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
     // triangles' count and ids, the border's count and ids.

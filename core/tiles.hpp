@@ -107,10 +107,6 @@ struct TileOptions {
   const TileSharing* sharing = nullptr;  // null: every tile here
   // core/tile_plan.hpp; `automatic` is squares without a finalizer (the CPU's tiles); tests force slabs.
   TileShape shape = TileShape::automatic;
-  // Tiles begun before the resolve ends (core/tiles_ahead.hpp): a first-level tile waits for wait_clean(x), x
-  // the largest x of its vertices and segments, and the merge for wait_clean(+inf); false throws
-  // InputChangedByResolve. Empty: the input is resolved already.
-  std::function<bool(double x)> wait_clean;
   // The input is not resolved, and the finalizer checks each first-level tile for what the resolve would split
   // (TileJob::unresolved; the GPU's constraint insertion meets every such case): a tile that has some throws
   // UnresolvedTile. The first level's tiles see every case: a segment goes to every tile it meets, so two
@@ -125,18 +121,9 @@ struct TileOptions {
   std::function<void(uint64_t vertices)> reserve;
 };
 
-// tiled_cdt's throw when options.wait_clean says that the resolve changes the input it was begun on.
-struct InputChangedByResolve : std::runtime_error {
-  InputChangedByResolve() : std::runtime_error("the resolve changes the input the tiles were begun on") {}
-};
-
 // A finalizer's throw when a tile of an unresolved input (TileOptions::unresolved) has something to split.
-struct UnresolvedTile : InputChangedByResolve {
-  explicit UnresolvedTile(const std::string& why) : why_(why) {}
-  const char* what() const noexcept override { return why_.c_str(); }
-
- private:
-  std::string why_;
+struct UnresolvedTile : std::runtime_error {
+  using std::runtime_error::runtime_error;
 };
 
 struct TileStats {

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <tuple>
 
 #include "core/cdt_cgal.hpp"
 #include "core/predicates.hpp"
@@ -251,6 +252,32 @@ INSTANTIATE_TEST_SUITE_P(Files, ResolvePeerInput, ::testing::ValuesIn(peer_files
 
 // ---------------------------------------------------------------------------------------------------------------
 // Documented behaviours, small cases
+
+// resolve_if_needed copies nothing from an input with nothing to split (`unchanged`, the result empty), and
+// gives resolve_constraints' result for one with crossings (what GPU tiles fall back to, core/tiles_ahead.hpp).
+TEST(Resolve, IfNeededLeavesACleanInputAlone) {
+  InputSet clean = uniform_points(20000, 3);
+  add_dt_edge_constraints(clean, 5000, 0.2, 5);
+  InputSet crossing = clean;
+  crossing.lines.push_back({{{kUniformX0 + 10.25, kUniformY0 + 10.25, 0}, {kUniformX0 + 9000.25, kUniformY0 + 9000.25, 0}}});
+  crossing.lines.push_back({{{kUniformX0 + 10.25, kUniformY0 + 9000.25, 0}, {kUniformX0 + 9000.25, kUniformY0 + 10.25, 0}}});
+  for (const auto& [name, in, splits] : {std::tuple{"clean", clean, false}, std::tuple{"crossing", crossing, true}}) {
+    const PreparedInput p = prepare(in);
+    const ResolvedInput r = resolve_if_needed(p, 2);
+    EXPECT_EQ(r.unchanged, !splits) << name;
+    const ResolvedInput copy = resolve_constraints(p, 2);
+    if (splits) {
+      EXPECT_GT(copy.steiner_points, 0u) << name;
+      EXPECT_EQ(r.vertices, copy.vertices) << name;
+      EXPECT_EQ(r.constraints, copy.constraints) << name;
+      EXPECT_EQ(r.steiner_points, copy.steiner_points) << name;
+    } else {
+      EXPECT_TRUE(r.vertices.empty() && r.constraints.empty()) << name;
+      EXPECT_EQ(copy.vertices, p.vertices) << name;
+      EXPECT_EQ(copy.constraints, p.constraints) << name;
+    }
+  }
+}
 
 TEST(Resolve, NoConstraintsGivesTheVertices) {
   InputSet in;

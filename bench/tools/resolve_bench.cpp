@@ -33,8 +33,7 @@ const cdtgpu::PreparedInput& input(uint64_t n) {
 void resolve(benchmark::State& state) {
   const cdtgpu::PreparedInput& p = input(uint64_t(state.range(0)));
   for (auto _ : state) {
-    cdtgpu::ResolveProgress progress;
-    cdtgpu::ResolvedInput r = cdtgpu::resolve_if_needed(p, progress, unsigned(state.range(1)));
+    cdtgpu::ResolvedInput r = cdtgpu::resolve_if_needed(p, unsigned(state.range(1)));
     benchmark::DoNotOptimize(r.unchanged);
   }
   state.counters["ns/vertex/thread"] = benchmark::Counter(
