@@ -25,24 +25,6 @@ std::string gigabytes(uint64_t bytes) {
 
 }  // namespace
 
-HostMemory host_memory() {
-  HostMemory m;
-  if (const char* v = std::getenv("CDTGPU_HOST_MEMORY"); v && *v) {
-    m.total = m.available = std::strtoull(v, nullptr, 10);
-    return m;
-  }
-  std::ifstream meminfo("/proc/meminfo");
-  for (std::string line; std::getline(meminfo, line);) {
-    std::istringstream s(line);
-    std::string key;
-    uint64_t kib = 0;
-    s >> key >> kib;
-    if (key == "MemTotal:") m.total = kib * 1024;
-    if (key == "MemAvailable:") m.available = kib * 1024;
-  }
-  return m;
-}
-
 uint64_t host_bytes_per_point_cpu(uint64_t points, uint64_t in_flight_points) {
   if (!points) return 85;
   return 85 + (230 * std::min(points, in_flight_points) + points - 1) / points;

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/host_memory.hpp"
+
 namespace cdtgpu {
 
 // Resident bytes a `cdtgpu triangulate` run holds at its peak per input vertex, at least as many as measured
@@ -27,13 +29,6 @@ constexpr uint64_t kHostBytesPerPointRegions = 40;  // added to any
 // 108), tiles of 2.5M 111 (143), one CGAL run 305 (315); on 16 threads, a quarter in flight, 135 (143; session
 // 40). It was 140 for all: one CGAL run (one core, --max-tile-points 0) needs twice that.
 uint64_t host_bytes_per_point_cpu(uint64_t points, uint64_t in_flight_points);
-
-struct HostMemory {
-  uint64_t total = 0;      // MemTotal of /proc/meminfo (0: unknown)
-  uint64_t available = 0;  // MemAvailable
-};
-// The machine's memory; CDTGPU_HOST_MEMORY=BYTES stands for both (tests).
-HostMemory host_memory();
 
 // A run the machine's memory cannot hold: exit code 3, before the work.
 struct HostMemoryError : std::runtime_error {

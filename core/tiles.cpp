@@ -31,10 +31,12 @@
 
 #include "core/canonical.hpp"
 #include "core/compact.hpp"
+#include "core/host_memory.hpp"
 #include "core/parallel.hpp"
 #include "core/predicates.hpp"
 #include "core/tile_merge.hpp"
 #include "core/tile_plan.hpp"
+#include "core/tile_segments.hpp"
 #include "core/timing.hpp"
 #include "core/touched.hpp"
 #include "core/uninit.hpp"
@@ -49,21 +51,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 using Rect = TileRect;
 using Node = TileNode;
 using Plan = TilePlan;
-
-// Whether segment ab meets the closed rectangle r, exactly: the part of r inside the segment's bounding box
-// is met exactly when the segment's line does not pass strictly beside all four of its corners.
-bool meets(const Rect& r, const Point3& a, const Point3& b) {
-  const double x0 = std::max(r.x0, std::min(a.x, b.x)), x1 = std::min(r.x1, std::max(a.x, b.x));
-  const double y0 = std::max(r.y0, std::min(a.y, b.y)), y1 = std::min(r.y1, std::max(a.y, b.y));
-  if (x0 > x1 || y0 > y1) return false;
-  if (x0 == std::min(a.x, b.x) && x1 == std::max(a.x, b.x) && y0 == std::min(a.y, b.y) &&
-      y1 == std::max(a.y, b.y))
-    return true;  // the whole segment's box is in r
-  int sides = 0;
-  for (const pred::XY c : {pred::XY{x0, y0}, pred::XY{x1, y0}, pred::XY{x0, y1}, pred::XY{x1, y1}})
-    sides |= 1 << (1 + pred::orient2d({a.x, a.y}, {b.x, b.y}, c));
-  return sides != 1 && sides != 4;  // not all clockwise, not all counter-clockwise
-}
 
 // Whether the closed circumdisk of abc lies in the open interior of r, in interval arithmetic: a triangle too
 // flat or too close to the border to tell is taken as not final, which only makes the merge larger.
@@ -429,112 +416,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     if (staging_room(largest) > reserved) options.reserve(staging_room(largest));
   }
   const auto t_segments = Clock::now();
-  std::vector<uint32_t> tile_of_node(plan.nodes.size(), 0);
-  for (size_t t = 0; t < tiles; ++t) tile_of_node[plan.tiles[t]] = uint32_t(t);
-
-  // Every segment goes to every tile whose rectangle it meets (whole, with its endpoints): blocks of segments
-  // count their tiles, then write them in block order, so each tile's list is in segment order without a
-  // sort.
-  // Slabs (rectangles unbounded in y, side by side): meets() is then whether the x-ranges overlap, closed, since a
-  // segment passes through every vertical strip of its own box. That needs no coordinates: a segment (a < b)
-  // meets the slabs from a's to b's (ids are in (x, y) order and a slab's ids are a range), and one more on a
-  // side where that end lies on the slab's cut (the vertices on a cut are one id range; a slab of no width
-  // repeats its cut, so the step may repeat). At 1B points + 250M segments the tree took ~1 s of the plan on 32
-  // cores, the x-ranges ~0.7 s. The step to a neighbour keeps the closed rule, though such a segment cannot reach
-  // into the neighbour's open rectangle, where its final triangles lie: leaving it out changes no output.
-  std::vector<uint32_t> slab_tile, slab_lo;           // in id (so x) order: the tile, its first id
-  std::vector<std::pair<uint32_t, uint32_t>> on_cut;  // on_cut[k]: the ids with x equal to slab k's left cut
-  if (plan.slabs) {
-    for (size_t t = 0; t < tiles; ++t) slab_tile.push_back(uint32_t(t));
-    std::sort(slab_tile.begin(), slab_tile.end(),
-              [&](uint32_t p, uint32_t q) { return plan.nodes[plan.tiles[p]].lo < plan.nodes[plan.tiles[q]].lo; });
-    uint32_t next = 0;
-    double x1 = -kInf;
-    for (uint32_t t : slab_tile) {
-      const Node& node = plan.nodes[plan.tiles[t]];
-      const Rect& r = node.rect;
-      if (r.y0 != -kInf || r.y1 != kInf || node.lo != next || r.x0 != x1 || (next == 0) != (r.x0 == -kInf))
-        throw std::logic_error("tiles: slabs that are not strips side by side");
-      next = node.hi;
-      x1 = r.x1;
-      slab_lo.push_back(node.lo);
-      const auto at = [&](auto below) {
-        return uint32_t(std::partition_point(v.begin(), v.end(), below) - v.begin());
-      };
-      on_cut.emplace_back(at([&](const Point3& p) { return p.x < r.x0; }),
-                          at([&](const Point3& p) { return p.x <= r.x0; }));
-    }
-    if (next != n) throw std::logic_error("tiles: slabs that leave vertices out");
-  }
-  auto slab_of = [&](uint32_t id) {
-    return size_t(std::upper_bound(slab_lo.begin(), slab_lo.end(), id) - slab_lo.begin()) - 1;
-  };
-  auto on_left_cut = [&](size_t k, uint32_t id) { return k > 0 && id >= on_cut[k].first && id < on_cut[k].second; };
-  auto for_tiles_of = [&](size_t i, auto&& f) {
-    if (plan.slabs) {
-      const uint32_t a = segments[i][0], b = segments[i][1];
-      size_t lo = slab_of(a), hi = slab_of(b);
-      while (on_left_cut(lo, a)) --lo;
-      while (hi + 1 < slab_lo.size() && on_left_cut(hi + 1, b)) ++hi;
-      for (size_t k = lo; k <= hi; ++k) f(slab_tile[k]);
-      return;
-    }
-    const Point3& a = v[segments[i][0]];
-    const Point3& b = v[segments[i][1]];
-    uint32_t stack[64];  // the tree's depth is about log2(tiles)
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const uint32_t at = stack[--top];
-      const Node& node = plan.nodes[at];
-      if (node.left < 0) {
-        f(tile_of_node[at]);
-        continue;
-      }
-      for (int32_t c : {node.right, node.left})
-        if (meets(plan.nodes[c].rect, a, b)) stack[top++] = uint32_t(c);
-    }
-  };
-  // The first pass keeps the tile of a segment that meets only one (nearly all), so the second reads that
-  // instead of both ends again; for contour-like input the far end is far in memory (256M points: the plan
-  // took 1.1 s longer with 64M segments than without).
-  constexpr size_t kSegmentBlock = 1 << 15;
-  constexpr uint32_t kSeveral = UINT32_MAX;
-  const size_t segment_blocks = (segments.size() + kSegmentBlock - 1) / kSegmentBlock;
-  std::vector<std::vector<uint32_t>> block_count(segment_blocks);
-  RawVector<uint32_t> only_tile;
-  resize_unwritten(only_tile, segments.size());
-  tbb::parallel_for(size_t(0), segment_blocks, [&](size_t b) {
-    std::vector<uint32_t>& count = block_count[b];
-    count.assign(tiles, 0);
-    const size_t end = std::min(segments.size(), (b + 1) * kSegmentBlock);
-    for (size_t i = b * kSegmentBlock; i < end; ++i) {
-      if (!plan.slabs && i + 16 < end) __builtin_prefetch(&v[segments[i + 16][1]]);
-      uint32_t met = 0, last = 0;
-      for_tiles_of(i, [&](uint32_t t) { ++count[t], ++met, last = t; });
-      only_tile[i] = met == 1 ? last : kSeveral;
-    }
-  });
-  std::vector<size_t> first(tiles + 1, 0);
-  for (size_t t = 0; t < tiles; ++t) {
-    first[t + 1] = first[t];
-    for (size_t b = 0; b < segment_blocks; ++b) {
-      const uint32_t c = block_count[b][t];
-      block_count[b][t] = uint32_t(first[t + 1] - first[t]);  // the block's start within the tile's list
-      first[t + 1] += c;
-    }
-  }
-  RawVector<uint32_t> tile_segments;
-  resize_unwritten(tile_segments, first[tiles]);  // every element written below
-  tbb::parallel_for(size_t(0), segment_blocks, [&](size_t b) {
-    std::vector<uint32_t>& at = block_count[b];
-    for (size_t i = b * kSegmentBlock; i < std::min(segments.size(), (b + 1) * kSegmentBlock); ++i)
-      if (only_tile[i] != kSeveral)
-        tile_segments[first[only_tile[i]] + at[only_tile[i]]++] = uint32_t(i);
-      else
-        for_tiles_of(i, [&](uint32_t t) { tile_segments[first[t] + at[t]++] = uint32_t(i); });
-  });
-  block_count.clear();
+  TileSegments tile_segments_of = tile_segments(v, segments, plan);
 
   s.plan_ms += ms_since(t_tiles);
   spdlog::debug("tiles, level {}: {} {} of at most {} points planned in {:.0f} ms (their segments {:.0f} ms)", level,
@@ -544,9 +426,19 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // ~0.2 s at 1B points): beside the first tiles, which need them only once their CDT is done.
   std::vector<uint8_t> in_final;
   std::optional<TriangleBuckets> buckets_made;
+  // The output too, where the machine has three times its size free (the runs take as much again): touching its
+  // 24 GB at 1B points in the canonical order took ~0.4 s on the 2 x H200 host, and beside the tiles it takes
+  // only a quarter of the cores that wait for the devices.
+  const uint64_t available = host_memory().available, room_bytes = 2 * n * sizeof(Triangle);
+  const bool room = available / 3 > room_bytes;
+  spdlog::debug("tiles, level {}: the output ({:.1f} GB) {} ahead, {:.1f} GB available", level, room_bytes / 1e9,
+                room ? "made" : "not made", available / 1e9);
   const std::shared_future<void> bookkeeping = std::async(std::launch::async, [&] {
                                                  resize_touched(in_final, n);
                                                  buckets_made.emplace(n);
+                                                 if (room)
+                                                   buckets_made->make_room(
+                                                       2 * n, std::thread::hardware_concurrency() / 4);
                                                }).share();
   std::vector<TileResult> results(tiles);
   auto tile_name = [&](size_t t) {
@@ -555,7 +447,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // Isolated: a thread waiting in a tile's own parallel loops takes no other tile (whose GPU call would make it
   // wait for the device as well).
   auto gather = [&](size_t t) {
-    const std::span<const uint32_t> its_segments(tile_segments.data() + first[t], first[t + 1] - first[t]);
+    RawVector<uint32_t> scratch;
+    const std::span<const uint32_t> its_segments = tile_segments_of.of(t, scratch);
     return tbb::this_task_arena::isolate(
         [&] { return gather_tile(segments, plan, plan.nodes[plan.tiles[t]], its_segments); });
   };
@@ -568,8 +461,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
       buckets_made->count(results[t].final_triangles);
     });
     const TileResult& r = results[t];
-    spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms", name,
-                  r.final_triangles.size(), r.gather_ms, r.cdt_ms, r.other_ms - r.gather_ms);
+    spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms", name,
+                  r.final_triangles.size(), r.gather_ms, r.cdt_ms, r.other_ms - r.gather_ms, ms_since(t_tiles));
   };
   // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's).
   const TileSharing* sharing = level == 1 && options.sharing && options.sharing->ranks > 1 ? options.sharing : nullptr;
@@ -666,8 +559,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // first (at 1B points + 250M segments: 6 GB of the canonical order's peak).
   const auto t_merge_input = Clock::now();
   free_storage_on_all_cores(plan.order);
-  free_storage_on_all_cores(tile_segments);
-  free_storage_on_all_cores(only_tile);
+  free_storage_on_all_cores(tile_segments_of.ids);
   std::vector<Triangles> runs(tiles);
   std::vector<Edge> border;
   uint64_t final_count = 0;

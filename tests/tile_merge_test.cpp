@@ -1,6 +1,6 @@
-// core/tile_merge: TriangleBuckets puts a mesh split into tile runs and a merge run back into canonical order;
-// outside_final drops exactly the merge's triangles on the final side of the border, and refuses a border whose
-// sides disagree.
+// core/tile_merge: TriangleBuckets puts a mesh split into tile runs and a merge run back into canonical order
+// (into room made ahead or not); outside_final drops exactly the merge's triangles on the final side of the
+// border, and refuses a border whose sides disagree.
 #include "core/tile_merge.hpp"
 
 #include <gtest/gtest.h>
@@ -49,9 +49,14 @@ TEST(TriangleBuckets, PutsTileRunsAndTheMergeBackInCanonicalOrder) {
       for (const auto& [v, k] : in_runs) shared += k > 1;
     }
     EXPECT_GT(shared, 0u) << tiles << " tiles";
-    TriangleBuckets buckets(n);
-    for (const Triangles& run : runs) buckets.count(run);
-    EXPECT_EQ(buckets.place(runs), r.mesh.triangles) << tiles << " tiles";
+    // With the output's room made ahead (as large as asked, or too small: then left for a fresh one) and without.
+    for (size_t room : {size_t(0), 2 * n, r.mesh.triangles.size() - 1}) {
+      std::vector<Triangles> copy = runs;
+      TriangleBuckets buckets(n);
+      if (room) buckets.make_room(room, 2);
+      for (const Triangles& run : copy) buckets.count(run);
+      EXPECT_EQ(buckets.place(copy), r.mesh.triangles) << tiles << " tiles, room " << room;
+    }
   }
 }
 
