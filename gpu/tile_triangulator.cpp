@@ -175,7 +175,9 @@ class OnDevice {
                         job.what, ms(t1 - slot_taken), ms(slot_taken - t0), ms(t2 - t1), ms(t3 - t2));
           count = cdt.finalize_staged(job, staging, f, &one);
         }
+        const auto t4 = std::chrono::steady_clock::now();
         GpuCdt::unstage_triangles(staging, count, job.ids, f);
+        spdlog::debug("{}: device call {:.0f} ms, unstaged in {:.0f} ms", job.what, ms(t4 - t2), ms(std::chrono::steady_clock::now() - t4));
         if (sum_) add_up(one);
         return f;
       } catch (const DeviceError& e) {
