@@ -1,4 +1,4 @@
-// TriangleBuckets and outside_final (core/tile_merge.hpp), on all cores.
+// RunMerge and outside_final (core/tile_merge.hpp), on all cores.
 #include "core/tile_merge.hpp"
 
 #include <tbb/blocked_range.h>
@@ -8,12 +8,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <cstring>
 #include <numeric>
 #include <span>
 #include <stdexcept>
 #include <string>
 #include <utility>
-#include <chrono>
 
 #include <spdlog/spdlog.h>
 
@@ -54,27 +55,9 @@ void each_group(size_t n, size_t grain, Same&& same, F&& f) {
   });
 }
 
-// A run sorted by first vertex, grouped by it.
-auto same_first(std::span<const Triangle> run) {
-  return [run](size_t i) { return run[i][0] == run[i - 1][0]; };
-}
-
 }  // namespace
 
-TriangleBuckets::TriangleBuckets(size_t n) {
-  resize_touched(count_, n);
-  resize_touched(mixed_, n);
-}
-
-void TriangleBuckets::count(const Triangles& run) {
-  each_group(run.size(), 1 << 16, same_first(run), [&](size_t i, size_t j) {
-    const uint32_t v = run[i][0];
-    if (count_[v]) mixed_[v] = 1;
-    count_[v] += uint32_t(j - i);
-  });
-}
-
-void TriangleBuckets::make_room(size_t triangles, unsigned threads) {
+void RunMerge::make_room(size_t triangles, unsigned threads) {
   room_made_ = std::async(std::launch::async, [this, triangles, threads] {
     resize_unwritten(room_, triangles);
     char* const p = reinterpret_cast<char*>(room_.data());
@@ -87,29 +70,33 @@ void TriangleBuckets::make_room(size_t triangles, unsigned threads) {
   });
 }
 
-Triangles TriangleBuckets::place(std::vector<Triangles>& runs) {
+Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
   const auto t0 = std::chrono::steady_clock::now();
-  auto ms_from = [](auto t) { return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count(); };
-  const size_t n = count_.size(), blocks = (n + kBlock - 1) / kBlock;
-  std::vector<uint64_t> base(blocks + 1, 0);
-  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {  // count_[v]: where bucket v starts in its block
-    uint32_t at = 0;
-    for (size_t v = b * kBlock; v < std::min(n, (b + 1) * kBlock); ++v) at += std::exchange(count_[v], at);
-    base[b + 1] = at;
-  });
-  for (size_t b = 0; b < blocks; ++b) base[b + 1] += base[b];
+  auto ms_from = [](auto t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+  };
+  const size_t r_count = runs.size();
   size_t total = 0;
   for (const Triangles& run : runs) total += run.size();
-  if (total != base[blocks])
-    throw std::logic_error("tiles: " + std::to_string(total) + " triangles to order, " +
-                           std::to_string(base[blocks]) + " counted");
-  // In waves of vertex ids (about 512 MB of triangles each, at most 64), each run's part of a wave (a run is
-  // sorted by first vertex) copied, then its pages given back: the output's pages are touched as the runs' go,
-  // so the order holds the triangles about once, not twice. Run by run, the first run touched most of the
-  // output: a tile's vertices spread over its column's whole id range. Within a wave the tiles' runs (all but
-  // the last) at once, as they share no first vertex; the merge's last, as a border vertex has triangles in
-  // it and in a tile's. 64 waves of 65 runs for 2.5M vertices took 41-54 ms on 16 threads.
-  const double prefix_ms = ms_from(t0);
+  // Splitters: every step-th triangle of every run (about 4096 in all), sorted; chunk c holds what lies from
+  // splitter c - 1 up to splitter c, and begins in run r at at[c][r].
+  const size_t step = std::max<size_t>(1024, total / 4096);
+  std::vector<Triangle> cut;
+  for (const Triangles& run : runs)
+    for (size_t i = step; i < run.size(); i += step) cut.push_back(run[i]);
+  std::sort(cut.begin(), cut.end());
+  cut.erase(std::unique(cut.begin(), cut.end()), cut.end());
+  const size_t chunks = cut.size() + 1;
+  std::vector<size_t> at((chunks + 1) * r_count, 0), start(chunks + 1, 0);
+  for (size_t r = 0; r < r_count; ++r) at[chunks * r_count + r] = runs[r].size();
+  tbb::parallel_for(size_t(1), chunks, [&](size_t c) {
+    for (size_t r = 0; r < r_count; ++r)
+      at[c * r_count + r] = size_t(std::lower_bound(runs[r].begin(), runs[r].end(), cut[c - 1]) - runs[r].begin());
+  });
+  for (size_t c = 0; c <= chunks; ++c)
+    for (size_t r = 0; r < r_count; ++r) start[c] += at[c * r_count + r];
+  if (start[chunks] != total) throw std::logic_error("tiles: runs out of order for the canonical merge");
+  const double split_ms = ms_from(t0);
   Triangles out;
   if (room_made_.valid()) room_made_.get();  // rethrows its allocation's error
   if (room_.size() >= total)
@@ -118,42 +105,48 @@ Triangles TriangleBuckets::place(std::vector<Triangles>& runs) {
     free_storage(room_);
   resize_unwritten(out, total);  // within the room: only the size changes
   const double room_ms = ms_from(t0);
-  const size_t waves = std::clamp<size_t>(total * sizeof(Triangle) >> 29, 1, 64);
-  std::vector<size_t> done(runs.size(), 0);
-  for (size_t w = 1; w <= waves; ++w) {
-    const uint64_t end = uint64_t(n) * w / waves;
-    auto place_part = [&](size_t r) {
-      const Triangles& run = runs[r];
-      const size_t to = size_t(std::partition_point(run.begin() + done[r], run.end(),
-                                                    [&](const Triangle& t) { return t[0] < end; }) -
-                               run.begin());
-      if (to == done[r]) return;  // a run's vertices lie in its tile's column: most waves miss it
-      const std::span<const Triangle> part(run.data() + done[r], to - done[r]);
-      // Triangle by triangle, not a copy call a group: most groups hold one or two triangles.
-      group_blocks(part.size(), 1 << 16, same_first(part), [&](size_t i, size_t j) {
-        for (; i < j; ++i) {
-          const uint32_t v = part[i][0];
-          out[base[v / kBlock] + count_[v]++] = part[i];
-        }
-      });
-      // One call a part: a call a 768 KB block (each flushing every core's TLB) took canonical order from ~1.0
-      // to ~3.0 s in a cold run at 1B points on the 2 x H200 host, and no less in warm ones.
-      release_pages(part.data(), part.size_bytes());
-      done[r] = to;
+  auto chunk = [&](size_t c) {
+    Triangle* const to = out.data() + start[c];
+    size_t pieces = 0, only = 0;
+    for (size_t r = 0; r < r_count; ++r)
+      if (at[(c + 1) * r_count + r] > at[c * r_count + r]) ++pieces, only = r;
+    auto piece = [&](size_t r) {
+      return std::span<const Triangle>(runs[r].data() + at[c * r_count + r],
+                                       at[(c + 1) * r_count + r] - at[c * r_count + r]);
     };
-    tbb::parallel_for(size_t(0), runs.size() - 1, size_t(1), place_part);
-    place_part(runs.size() - 1);
+    if (pieces == 1) {
+      const auto p = piece(only);
+      std::memcpy(static_cast<void*>(to), p.data(), p.size_bytes());
+    } else if (pieces == 2) {
+      size_t first = 0;
+      while (at[(c + 1) * r_count + first] == at[c * r_count + first]) ++first;
+      const auto p = piece(first), q = piece(only);
+      std::merge(p.begin(), p.end(), q.begin(), q.end(), to);
+    } else if (pieces > 2) {
+      Triangle* end = to;
+      for (size_t r = 0; r < r_count; ++r) end = std::copy(piece(r).begin(), piece(r).end(), end);
+      std::sort(to, end);
+    }
+  };
+  // In waves of chunks (at most 64), each run's part of a wave given back after it: the output's pages are
+  // touched as the runs' go.
+  const size_t waves = std::clamp<size_t>(total * sizeof(Triangle) / std::max<size_t>(1, wave_bytes), 1, 64);
+  size_t done = 0;
+  for (size_t w = 1; w <= waves; ++w) {
+    const size_t end = size_t(std::upper_bound(start.begin(), start.end() - 1, total * w / waves) - start.begin()) - 1;
+    const size_t last = w == waves ? chunks : std::max(end, done);
+    tbb::parallel_for(done, last, size_t(1), chunk);
+    // One call a run and wave: a call a 768 KB block (each flushing every core's TLB) took the order from ~1.0
+    // to ~3.0 s in a cold run at 1B points on the 2 x H200 host.
+    for (size_t r = 0; r < r_count; ++r)
+      release_pages(runs[r].data() + at[done * r_count + r],
+                    (at[last * r_count + r] - at[done * r_count + r]) * sizeof(Triangle));
+    done = last;
   }
   const double waves_ms = ms_from(t0);
   for (Triangles& run : runs) free_storage(run);
-  const double free_ms = ms_from(t0);
-  each(n, [&](size_t v) {  // count_[v] is now bucket v's end in its block, count_[v - 1] its start
-    if (!mixed_[v]) return;
-    const auto at = out.begin() + base[v / kBlock];
-    std::sort(at + (v % kBlock ? count_[v - 1] : 0), at + count_[v]);
-  });
-  spdlog::debug("canonical order: prefix {:.0f} ms, room to {:.0f}, waves to {:.0f}, runs freed to {:.0f}, mixed sorted to {:.0f}", prefix_ms,
-                room_ms, waves_ms, free_ms, ms_from(t0));
+  spdlog::debug("canonical order: {} chunks split in {:.0f} ms, room at {:.0f}, merged at {:.0f}, runs freed at {:.0f}",
+                chunks, split_ms, room_ms, waves_ms, ms_from(t0));
   return out;
 }
 

@@ -1,12 +1,10 @@
 // The merge's bookkeeping for core/tiles: which of a merge's triangles to keep, and the canonical order of the
 // sorted runs (each tile's final triangles, the merge's) that together make the whole mesh.
 //
-//   TriangleBuckets buckets(vertices);
-//   buckets.make_room(2 * vertices, threads);      // optional: the output's pages beside the tiles
-//   buckets.count(tile_run);                       // as each tile's final triangles come
+//   RunMerge order;
+//   order.make_room(2 * vertices, threads);        // optional: the output's pages beside the tiles
 //   Triangles kept = outside_final(merge, border); // the merge's, outside the tiles' final region
-//   buckets.count(kept);
-//   Triangles all = buckets.place(runs);           // runs: the tiles' runs, then the merge's last
+//   Triangles all = order.merge(runs);             // runs: the tiles' runs and the merge's
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -18,35 +16,25 @@
 
 namespace cdtgpu {
 
-// The canonical order of sorted runs that together hold every triangle once (first vertices below n): each
-// triangle goes to its first vertex's bucket, laid out by counts and prefix sums. Runs are counted as they
-// come (a tile's while the others are on the device) and placed at the end. A run's triangles of one vertex
-// arrive together and in order, so only the buckets filled from two runs (vertices on the final region's
-// border: a tile's final triangles and the merge's) are sorted afterwards. A heap merge of the runs took 1.5 s
-// for 512M triangles on 16 threads.
-class TriangleBuckets {
+// The canonical order of sorted runs that together hold every triangle once: their merge, in chunks between
+// splitters sampled from the runs, on all cores. A chunk that only one run reaches (nearly all, for slabs:
+// only the merge's triangles interleave with a tile's, near the cuts) is one copy; two are merged; more
+// (square tiles' runs interleave across their column's ids) are copied and sorted. The runs' pages are given
+// back as the chunks pass them, so without room made ahead the order holds the triangles about once.
+// It replaced buckets by first vertex (counted as the tiles came, then placed triangle by triangle), which read
+// and wrote a 4-byte count a vertex and took 580-650 ms at 1B points + 250M segments on the 2 x H200 host.
+class RunMerge {
  public:
-  explicit TriangleBuckets(size_t n);  // first vertices below n
-
   // The output's pages, for up to `triangles` (an upper bound of the total), touched in the background on
-  // `threads` cores, so that place() copies into touched memory: at 1B points + 250M segments on the 2 x H200
+  // `threads` cores, so that merge() copies into touched memory: at 1B points + 250M segments on the 2 x H200
   // host (32 cores) the order's copy into fresh memory took 780-890 ms, and a copy of 24 GB into touched memory
-  // takes 350. It holds the whole output beside the runs (not about once, as place() alone does): for hosts with
-  // the memory to spare.
+  // takes 350. It holds the whole output beside the runs: for hosts with the memory to spare.
   void make_room(size_t triangles, unsigned threads);
 
-  // Runs counted at the same time have no first vertex in common: a tile's final triangles are made of its own
-  // vertices.
-  void count(const Triangles& run);
-
-  // The counted runs, freed one by one, as one sorted list. Offsets are 32-bit within blocks of vertices. Every
-  // run but the last is a tile's (no first vertex in common), the last the merge's.
-  Triangles place(std::vector<Triangles>& runs);
+  // The runs (each sorted, canonical), freed, as one sorted list; in waves of about wave_bytes of triangles.
+  Triangles merge(std::vector<Triangles>& runs, size_t wave_bytes = size_t(512) << 20);
 
  private:
-  static constexpr size_t kBlock = 1 << 16;
-  RawVector<uint32_t> count_;
-  RawVector<uint8_t> mixed_;
   Triangles room_;
   std::future<void> room_made_;  // last: joined before room_ goes
 };

@@ -379,7 +379,7 @@ TileTriangulator cgal_tile_triangulator() {
 
 namespace {
 
-// tiled_cdt's triangles in canonical order: each tile's final ones and the merge's, placed by TriangleBuckets
+// tiled_cdt's triangles in canonical order: each tile's final ones and the merge's, merged by RunMerge
 // (core/tile_merge).
 Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
                                               const TileOptions& options, const TileTriangulator& triangulate,
@@ -422,24 +422,19 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   spdlog::debug("tiles, level {}: {} {} of at most {} points planned in {:.0f} ms (their segments {:.0f} ms)", level,
                 tiles, plan.slabs ? "slabs" : "tiles", options.max_tile_points, ms_since(t_tiles),
                 ms_since(t_segments));
-  // The final region's vertex marks and the final triangles' buckets, 5 bytes a vertex zeroed on all cores (5 GB,
-  // ~0.2 s at 1B points): beside the first tiles, which need them only once their CDT is done.
+  // The final region's vertex marks, a byte a vertex zeroed on all cores (1 GB at 1B points): beside the first
+  // tiles, which need them only once their CDT is done. The output too, where the machine has three times its
+  // size free (the runs take as much again): touching its 24 GB at 1B points in the canonical order took ~0.4 s
+  // on the 2 x H200 host, and beside the tiles it takes only a quarter of the cores that wait for the devices.
   std::vector<uint8_t> in_final;
-  std::optional<TriangleBuckets> buckets_made;
-  // The output too, where the machine has three times its size free (the runs take as much again): touching its
-  // 24 GB at 1B points in the canonical order took ~0.4 s on the 2 x H200 host, and beside the tiles it takes
-  // only a quarter of the cores that wait for the devices.
+  RunMerge order;
   const uint64_t available = host_memory().available, room_bytes = 2 * n * sizeof(Triangle);
   const bool room = available / 3 > room_bytes;
   spdlog::debug("tiles, level {}: the output ({:.1f} GB) {} ahead, {:.1f} GB available", level, room_bytes / 1e9,
                 room ? "made" : "not made", available / 1e9);
-  const std::shared_future<void> bookkeeping = std::async(std::launch::async, [&] {
-                                                 resize_touched(in_final, n);
-                                                 buckets_made.emplace(n);
-                                                 if (room)
-                                                   buckets_made->make_room(
-                                                       2 * n, std::thread::hardware_concurrency() / 4);
-                                               }).share();
+  if (room) order.make_room(2 * n, std::thread::hardware_concurrency() / 4);
+  const std::shared_future<void> bookkeeping =
+      std::async(std::launch::async, [&] { resize_touched(in_final, n); }).share();
   std::vector<TileResult> results(tiles);
   auto tile_name = [&](size_t t) {
     return "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);
@@ -458,7 +453,6 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     tbb::this_task_arena::isolate([&] {
       results[t] = finish_tile(v, std::move(g), plan.nodes[plan.tiles[t]], triangulate, options.finalize, name,
                                in_final, level == 1 && options.unresolved);
-      buckets_made->count(results[t].final_triangles);
     });
     const TileResult& r = results[t];
     spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms", name,
@@ -509,7 +503,6 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     run_mine();
   }
   bookkeeping.get();  // its error, if any
-  TriangleBuckets& buckets = *buckets_made;
   if (sharing) {
     // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
     // triangles' count and ids, the border's count and ids.
@@ -543,7 +536,6 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
         r.border.resize(from[at++]);
         for (Edge& e : r.border)
           for (uint32_t& id : e) id = from[at++];
-        if (rank != 0) buckets.count(r.final_triangles);
       }
     }
     // The final region's vertices, as run_tile marks them, for the other ranks' tiles too.
@@ -634,13 +626,12 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   tbb::parallel_for(size_t(0), kept.size(), [&](size_t i) {
     for (uint32_t& id : kept[i]) id = ids[id];
   });
-  buckets.count(kept);
   runs.push_back(std::move(kept));
   const double keep_ms = ms_since(t_keep);
   s.tiles_ms += keep_ms;
   s.keep_ms += keep_ms;
   const auto t_order = Clock::now();
-  Triangles out = buckets.place(runs);
+  Triangles out = order.merge(runs);
   const double order_ms = ms_since(t_order);
   s.order_ms += order_ms;
   spdlog::debug("tiles, level {}: the merge's triangles kept in {:.0f} ms, canonical order in {:.0f} ms", level,

@@ -1,5 +1,5 @@
-// core/tile_merge: TriangleBuckets puts a mesh split into tile runs and a merge run back into canonical order
-// (into room made ahead or not); outside_final drops exactly the merge's triangles on the final side of the
+// core/tile_merge: RunMerge puts a mesh split into tile runs and a merge run back into canonical order (into
+// room made ahead or not); outside_final drops exactly the merge's triangles on the final side of the
 // border, and refuses a border whose sides disagree.
 #include "core/tile_merge.hpp"
 
@@ -17,12 +17,18 @@
 namespace cdtgpu {
 namespace {
 
-// A real canonical mesh split as core/tiles splits it: vertices in `tiles` id ranges; a triangle of one range's
-// vertices goes to that range's run unless `to_merge` takes it; every other triangle to the merge's run, last.
-std::vector<Triangles> split_runs(const Triangles& all, size_t vertices, size_t tiles, std::mt19937_64& rng) {
+// A real canonical mesh split as core/tiles splits it: vertices in `tiles` id ranges (slabs); a triangle of one
+// range's vertices goes to that range's run unless the dice take it; every other triangle to the merge's run,
+// last. Interleaved: each triangle to a run by the dice, as square tiles' runs interleave.
+std::vector<Triangles> split_runs(const Triangles& all, size_t vertices, size_t tiles, bool interleaved,
+                                  std::mt19937_64& rng) {
   std::vector<Triangles> runs(tiles + 1);
   auto tile_of = [&](uint32_t v) { return size_t(v) * tiles / vertices; };
   for (const Triangle& t : all) {
+    if (interleaved) {
+      runs[rng() % runs.size()].push_back(t);
+      continue;
+    }
     const size_t a = tile_of(t[0]);
     const bool own = a == tile_of(t[1]) && a == tile_of(t[2]) && rng() % 5 != 0;
     runs[own ? a : tiles].push_back(t);
@@ -30,34 +36,29 @@ std::vector<Triangles> split_runs(const Triangles& all, size_t vertices, size_t 
   return runs;
 }
 
-TEST(TriangleBuckets, PutsTileRunsAndTheMergeBackInCanonicalOrder) {
+TEST(RunMerge, PutsTileRunsAndTheMergeBackInCanonicalOrder) {
   InputSet in = uniform_points(30000, 3);
   add_dt_edge_constraints(in, 5000, 0.5, 3);
   const CdtResult r = triangulate_cgal(prepare(in));
-  const size_t n = r.mesh.vertices.size();
+  const size_t n = r.mesh.vertices.size(), total = r.mesh.triangles.size();
   std::mt19937_64 rng(8);
-  for (size_t tiles : {1, 3, 16}) {
-    std::vector<Triangles> runs = split_runs(r.mesh.triangles, n, tiles, rng);
-    size_t shared = 0;  // first vertices with triangles in a tile's run and in the merge's: sorted after placing
-    {
-      std::map<uint32_t, int> in_runs;
-      for (const Triangles& run : runs) {
-        uint32_t last = UINT32_MAX;
-        for (const Triangle& t : run)
-          if (t[0] != last) ++in_runs[last = t[0]];
-      }
-      for (const auto& [v, k] : in_runs) shared += k > 1;
+  for (size_t tiles : {1, 3, 16})
+    for (bool interleaved : {false, true}) {
+      const std::vector<Triangles> runs = split_runs(r.mesh.triangles, n, tiles, interleaved, rng);
+      // With the output's room made ahead (as large as asked, or too small: then left for a fresh one) and
+      // without; in one wave and in many.
+      for (size_t room : {size_t(0), 2 * n, total - 1})
+        for (size_t wave_bytes : {size_t(512) << 20, total * sizeof(Triangle) / 7}) {
+          std::vector<Triangles> copy = runs;
+          RunMerge order;
+          if (room) order.make_room(room, 2);
+          EXPECT_EQ(order.merge(copy, wave_bytes), r.mesh.triangles)
+              << tiles << " tiles, interleaved " << interleaved << ", room " << room << ", wave " << wave_bytes;
+          for (const Triangles& run : copy) EXPECT_TRUE(run.empty());
+        }
     }
-    EXPECT_GT(shared, 0u) << tiles << " tiles";
-    // With the output's room made ahead (as large as asked, or too small: then left for a fresh one) and without.
-    for (size_t room : {size_t(0), 2 * n, r.mesh.triangles.size() - 1}) {
-      std::vector<Triangles> copy = runs;
-      TriangleBuckets buckets(n);
-      if (room) buckets.make_room(room, 2);
-      for (const Triangles& run : copy) buckets.count(run);
-      EXPECT_EQ(buckets.place(copy), r.mesh.triangles) << tiles << " tiles, room " << room;
-    }
-  }
+  std::vector<Triangles> none(3);
+  EXPECT_TRUE(RunMerge().merge(none).empty());
 }
 
 // Points around (and on) rectangles whose sides are the border: no point strictly inside one, as in a merge.
