@@ -70,6 +70,8 @@ void square_segments(const Points& v, const std::vector<Edge>& segments, const T
     count.assign(tiles, 0);
     const size_t end = std::min(segments.size(), (b + 1) * kSegmentBlock);
     for (size_t i = b * kSegmentBlock; i < end; ++i) {
+      if (segments[i][0] >= segments[i][1] || (i > 0 && segments[i][0] < segments[i - 1][0]))
+        throw std::logic_error("tiles: segment " + std::to_string(i) + " is not in order (a < b, sorted)");
       if (i + 16 < end) __builtin_prefetch(&v[segments[i + 16][1]]);
       uint32_t met = 0, last = 0;
       for_tiles_of(i, [&](uint32_t t) { ++count[t], ++met, last = t; });

@@ -29,7 +29,8 @@ struct TileSegments {
   std::span<const uint32_t> of(size_t t, RawVector<uint32_t>& scratch) const;
 };
 
-// `segments` (a < b) sorted and `plan` made over `vertices` (sorted by (x, y)); a logic_error where they are not.
+// `segments` (a < b) sorted (the merge input relies on it too) and `plan` made over `vertices` (sorted by
+// (x, y)); a logic_error where the segments are not.
 TileSegments tile_segments(const Points& vertices, const std::vector<Edge>& segments, const TilePlan& plan);
 
 }  // namespace cdtgpu

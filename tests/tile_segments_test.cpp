@@ -1,6 +1,6 @@
 // tile_segments: every segment in the list of every tile whose closed rectangle it meets, in segment order. Slabs
 // against the closed x-range rule on a grid, where whole columns of vertices lie on the cuts; squares against
-// their endpoints; unsorted segments refused.
+// their endpoints; segments out of order refused (the merge input relies on their order too).
 #include "core/tile_segments.hpp"
 
 #include <gtest/gtest.h>
@@ -73,20 +73,23 @@ TEST(TileSegments, SquaresGetEverySegmentWithAnEndInTheirRectangle) {
     for (size_t i = 0; i < g.segments.size(); ++i)
       for (uint32_t id : g.segments[i]) {
         const Point3& p = g.v[id];
-        if (p.x >= r.x0 && p.x <= r.x1 && p.y >= r.y0 && p.y <= r.y1)
+        if (p.x >= r.x0 && p.x <= r.x1 && p.y >= r.y0 && p.y <= r.y1) {
           EXPECT_TRUE(std::binary_search(got.begin(), got.end(), uint32_t(i))) << "tile " << t << ", segment " << i;
+        }
       }
   }
 }
 
-TEST(TileSegments, SlabsRefuseSegmentsOutOfOrder) {
-  Graph g = grid_graph();
-  const TilePlan plan = plan_tiles(g.v, 300, TileShape::slabs);
-  std::swap(g.segments[10], g.segments[2000]);
-  EXPECT_THROW(tile_segments(g.v, g.segments, plan), std::logic_error);
-  g = grid_graph();
-  std::swap(g.segments[5][0], g.segments[5][1]);
-  EXPECT_THROW(tile_segments(g.v, g.segments, plan), std::logic_error);
+TEST(TileSegments, SegmentsOutOfOrderAreRefused) {
+  for (TileShape shape : {TileShape::slabs, TileShape::squares}) {
+    Graph g = grid_graph();
+    const TilePlan plan = plan_tiles(g.v, 300, shape);
+    std::swap(g.segments[10], g.segments[2000]);
+    EXPECT_THROW(tile_segments(g.v, g.segments, plan), std::logic_error);
+    g = grid_graph();
+    std::swap(g.segments[5][0], g.segments[5][1]);
+    EXPECT_THROW(tile_segments(g.v, g.segments, plan), std::logic_error);
+  }
 }
 
 }  // namespace
