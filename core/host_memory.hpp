@@ -1,5 +1,6 @@
-// The machine's memory, as /proc/meminfo tells it: for the refusal of a run that cannot fit (cli/memory.hpp) and
-// for work that holds more memory only where there is plenty (the tiles' output made ahead, core/tile_merge).
+// The machine's memory, as /proc/meminfo tells it: for the refusal of a run that cannot fit (cli/memory.hpp)
+// and for work that holds more memory only where there is plenty (the tiles' output made ahead,
+// core/tile_merge).
 #pragma once
 #include <cstdint>
 

@@ -1,6 +1,8 @@
 // RunMerge and outside_final (core/tile_merge.hpp), on all cores.
 #include "core/tile_merge.hpp"
 
+#include <spdlog/spdlog.h>
+#include <sys/mman.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -15,10 +17,6 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
-
-#include <spdlog/spdlog.h>
-
-#include <sys/mman.h>
 
 #include "core/compact.hpp"
 #include "core/parallel.hpp"
@@ -78,11 +76,13 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
   const size_t r_count = runs.size();
   size_t total = 0;
   for (const Triangles& run : runs) total += run.size();
-  // Splitters: every step-th triangle of every run (about 16384 in all), sorted; chunk c holds what lies from
-  // splitter c - 1 up to splitter c, and begins in run r at at[c][r]. Small chunks: where three runs meet (a
-  // slab's and its neighbour's, with the merge's between them) a chunk is sorted on one core, and at 4096
-  // chunks (500K triangles each) those sorts took the order from ~0.7 to 1.25 s at 1B points on 4 devices.
-  const size_t step = std::max<size_t>(256, total / 16384);
+  // Splitters: every step-th triangle of every run (about 16384 in all, at least 4096 triangles apart),
+  // sorted; chunk c holds what lies from splitter c - 1 up to splitter c, and begins in run r at at[c][r].
+  // Small chunks: a chunk where three runs meet (a slab's and its neighbour's, with the merge's between them)
+  // is one core's, and at 4096 chunks (500K triangles each, then sorted) those took the order from ~0.7
+  // to 1.25 s at 1B points on 4 devices. Not smaller: 2M points in 8 square tiles on 2 cores, chunks of 256
+  // triangles took 32 ms, of 4096 26 ms (the buckets before: 16).
+  const size_t step = std::max<size_t>(4096, total / 16384);
   std::vector<Triangle> cut;
   for (const Triangles& run : runs)
     for (size_t i = step; i < run.size(); i += step) cut.push_back(run[i]);
@@ -129,14 +129,18 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
       while (at[(c + 1) * r_count + first] == at[c * r_count + first]) ++first;
       const auto p = piece(first), q = piece(only);
       std::merge(p.begin(), p.end(), q.begin(), q.end(), to);
-    } else if (pieces > 2) {  // a few merged in place one after another, many sorted
-      Triangle* end = to;
-      for (size_t r = 0; r < r_count; ++r) {
-        Triangle* const mid = end;
-        end = std::copy(piece(r).begin(), piece(r).end(), end);
-        if (pieces <= 4 && mid != to) std::inplace_merge(to, mid, end);
+    } else if (pieces > 2) {  // the smallest of the pieces' heads, again and again (few pieces: a scan)
+      std::vector<std::span<const Triangle>> heads;
+      for (size_t r = 0; r < r_count; ++r)
+        if (!piece(r).empty()) heads.push_back(piece(r));
+      for (Triangle* at = to; !heads.empty(); ++at) {
+        size_t best = 0;
+        for (size_t k = 1; k < heads.size(); ++k)
+          if (heads[k].front() < heads[best].front()) best = k;
+        *at = heads[best].front();
+        heads[best] = heads[best].subspan(1);
+        if (heads[best].empty()) heads.erase(heads.begin() + best);
       }
-      if (pieces > 4) std::sort(to, end);
     }
   };
   // In waves of chunks (at most 64), each run's part of a wave given back after it: the output's pages are
@@ -144,11 +148,12 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
   const size_t waves = std::clamp<size_t>(total * sizeof(Triangle) / std::max<size_t>(1, wave_bytes), 1, 64);
   size_t done = 0;
   for (size_t w = 1; w <= waves; ++w) {
-    const size_t end = size_t(std::upper_bound(start.begin(), start.end() - 1, total * w / waves) - start.begin()) - 1;
+    const size_t end =
+        size_t(std::upper_bound(start.begin(), start.end() - 1, total * w / waves) - start.begin()) - 1;
     const size_t last = w == waves ? chunks : std::max(end, done);
     tbb::parallel_for(done, last, size_t(1), chunk);
-    // One call a run and wave: a call a 768 KB block (each flushing every core's TLB) took the order from ~1.0
-    // to ~3.0 s in a cold run at 1B points on the 2 x H200 host.
+    // One call a run and wave: a call a 768 KB block (each flushing every core's TLB) took the order from
+    // ~1.0 to ~3.0 s in a cold run at 1B points on the 2 x H200 host.
     for (size_t r = 0; r < r_count; ++r)
       release_pages(runs[r].data() + at[done * r_count + r],
                     (at[last * r_count + r] - at[done * r_count + r]) * sizeof(Triangle));
@@ -156,8 +161,9 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
   }
   const double waves_ms = ms_from(t0);
   for (Triangles& run : runs) free_storage(run);
-  spdlog::debug("canonical order: {} chunks split in {:.0f} ms, room at {:.0f}, merged at {:.0f}, runs freed at {:.0f}",
-                chunks, split_ms, room_ms, waves_ms, ms_from(t0));
+  spdlog::debug(
+      "canonical order: {} chunks split in {:.0f} ms, room at {:.0f}, merged at {:.0f}, runs freed at {:.0f}",
+      chunks, split_ms, room_ms, waves_ms, ms_from(t0));
   return out;
 }
 

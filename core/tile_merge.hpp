@@ -1,5 +1,5 @@
-// The merge's bookkeeping for core/tiles: which of a merge's triangles to keep, and the canonical order of the
-// sorted runs (each tile's final triangles, the merge's) that together make the whole mesh.
+// The merge's bookkeeping for core/tiles: which of a merge's triangles to keep, and the canonical order of
+// the sorted runs (each tile's final triangles, the merge's) that together make the whole mesh.
 //
 //   RunMerge order;
 //   order.make_room(2 * vertices, threads);        // optional: the output's pages beside the tiles
@@ -19,16 +19,17 @@ namespace cdtgpu {
 // The canonical order of sorted runs that together hold every triangle once: their merge, in chunks between
 // splitters sampled from the runs, on all cores. A chunk that only one run reaches (nearly all, for slabs:
 // only the merge's triangles interleave with a tile's, near the cuts) is one copy; two are merged; more
-// (square tiles' runs interleave across their column's ids) are copied and sorted. The runs' pages are given
-// back as the chunks pass them, so without room made ahead the order holds the triangles about once.
-// It replaced buckets by first vertex (counted as the tiles came, then placed triangle by triangle), which read
-// and wrote a 4-byte count a vertex and took 580-650 ms at 1B points + 250M segments on the 2 x H200 host.
+// (where a slab's run, the merge's and the next slab's meet, or square tiles' runs, which interleave across
+// their column's ids) give the smallest of their heads again and again. The runs' pages are given back as the
+// chunks pass them, so without room made ahead the order holds the triangles about once. It replaced buckets
+// by first vertex (counted as the tiles came, then placed triangle by triangle), which read and wrote a
+// 4-byte count a vertex and took 580-650 ms at 1B points + 250M segments on the 2 x H200 host.
 class RunMerge {
  public:
   // The output's pages, for up to `triangles` (an upper bound of the total), touched in the background on
   // `threads` cores, so that merge() copies into touched memory: at 1B points + 250M segments on the 2 x H200
-  // host (32 cores) the order's copy into fresh memory took 780-890 ms, and a copy of 24 GB into touched memory
-  // takes 350. It holds the whole output beside the runs: for hosts with the memory to spare.
+  // host (32 cores) the order's copy into fresh memory took 780-890 ms, and a copy of 24 GB into touched
+  // memory takes 350. It holds the whole output beside the runs: for hosts with the memory to spare.
   void make_room(size_t triangles, unsigned threads);
 
   // The runs (each sorted, canonical), freed, as one sorted list; in waves of about wave_bytes of triangles.

@@ -34,9 +34,10 @@ bool meets(const TileRect& r, const Point3& a, const Point3& b) {
   return sides != 1 && sides != 4;  // not all clockwise, not all counter-clockwise
 }
 
-// Squares: blocks of segments count their tiles (found in the k-d tree), then write them in block order, so each
-// tile's list is in segment order without a sort.
-void square_segments(const Points& v, const std::vector<Edge>& segments, const TilePlan& plan, TileSegments& out) {
+// Squares: blocks of segments count their tiles (found in the k-d tree), then write them in block order, so
+// each tile's list is in segment order without a sort.
+void square_segments(const Points& v, const std::vector<Edge>& segments, const TilePlan& plan,
+                     TileSegments& out) {
   const size_t tiles = plan.tiles.size();
   std::vector<uint32_t> tile_of_node(plan.nodes.size(), 0);
   for (size_t t = 0; t < tiles; ++t) tile_of_node[plan.tiles[t]] = uint32_t(t);
@@ -100,22 +101,24 @@ void square_segments(const Points& v, const std::vector<Edge>& segments, const T
   free_storage_on_all_cores(only_tile);
 }
 
-// Slabs (rectangles unbounded in y, side by side): meets() is then whether the x-ranges overlap, closed, since a
-// segment passes through every vertical strip of its own box. That needs no coordinates: a segment (a < b)
-// meets the slabs from a's to b's (ids are in (x, y) order and a slab's ids are a range), and one more on a side
-// where that end lies on the slab's cut (the vertices on a cut are one id range; a slab of no width repeats its
-// cut, so the step may repeat). The step to a neighbour keeps the closed rule, though such a segment cannot
-// reach into the neighbour's open rectangle, where its final triangles lie: leaving it out changes no output.
-// Nearly every segment meets only the slab of its first end: one pass finds the others, and no list of ids is
-// written (at 1B points + 250M segments on the 2 x H200 host, 32 cores, counting and writing each segment's
-// tiles took 530-630 ms).
-void slab_segments(const Points& v, const std::vector<Edge>& segments, const TilePlan& plan, TileSegments& out) {
+// Slabs (rectangles unbounded in y, side by side): meets() is then whether the x-ranges overlap, closed,
+// since a segment passes through every vertical strip of its own box. That needs no coordinates: a segment (a
+// < b) meets the slabs from a's to b's (ids are in (x, y) order and a slab's ids are a range), and one more
+// on a side where that end lies on the slab's cut (the vertices on a cut are one id range; a slab of no width
+// repeats its cut, so the step may repeat). The step to a neighbour keeps the closed rule, though such a
+// segment cannot reach into the neighbour's open rectangle, where its final triangles lie: leaving it out
+// changes no output. Nearly every segment meets only the slab of its first end: one pass finds the others,
+// and no list of ids is written (at 1B points + 250M segments on the 2 x H200 host, 32 cores, counting and
+// writing each segment's tiles took 530-630 ms).
+void slab_segments(const Points& v, const std::vector<Edge>& segments, const TilePlan& plan,
+                   TileSegments& out) {
   const size_t tiles = plan.tiles.size(), n = v.size();
   std::vector<uint32_t> slab_tile(tiles), slab_lo;    // in id (so x) order: the tile, its first id
   std::vector<std::pair<uint32_t, uint32_t>> on_cut;  // on_cut[k]: the ids with x equal to slab k's left cut
   std::iota(slab_tile.begin(), slab_tile.end(), 0u);
-  std::sort(slab_tile.begin(), slab_tile.end(),
-            [&](uint32_t p, uint32_t q) { return plan.nodes[plan.tiles[p]].lo < plan.nodes[plan.tiles[q]].lo; });
+  std::sort(slab_tile.begin(), slab_tile.end(), [&](uint32_t p, uint32_t q) {
+    return plan.nodes[plan.tiles[p]].lo < plan.nodes[plan.tiles[q]].lo;
+  });
   uint32_t next = 0;
   double x1 = -kInf;
   for (uint32_t t : slab_tile) {
@@ -126,8 +129,11 @@ void slab_segments(const Points& v, const std::vector<Edge>& segments, const Til
     next = node.hi;
     x1 = r.x1;
     slab_lo.push_back(node.lo);
-    const auto at = [&](auto below) { return uint32_t(std::partition_point(v.begin(), v.end(), below) - v.begin()); };
-    on_cut.emplace_back(at([&](const Point3& p) { return p.x < r.x0; }), at([&](const Point3& p) { return p.x <= r.x0; }));
+    const auto at = [&](auto below) {
+      return uint32_t(std::partition_point(v.begin(), v.end(), below) - v.begin());
+    };
+    on_cut.emplace_back(at([&](const Point3& p) { return p.x < r.x0; }),
+                        at([&](const Point3& p) { return p.x <= r.x0; }));
   }
   if (next != n) throw std::logic_error("tiles: slabs that leave vertices out");
   slab_lo.push_back(uint32_t(n));  // slab k's ids: [slab_lo[k], slab_lo[k + 1])
@@ -181,9 +187,10 @@ std::span<const uint32_t> TileSegments::of(size_t t, RawVector<uint32_t>& scratc
   resize_unwritten(scratch, more.size() + (hi - lo));
   std::copy(more.begin(), more.begin() + below, scratch.begin());
   uint32_t* const at = scratch.data() + below;
-  tbb::parallel_for(tbb::blocked_range<uint32_t>(lo, hi, 1 << 20), [&](const tbb::blocked_range<uint32_t>& r) {
-    std::iota(at + (r.begin() - lo), at + (r.end() - lo), r.begin());
-  });
+  tbb::parallel_for(tbb::blocked_range<uint32_t>(lo, hi, 1 << 20),
+                    [&](const tbb::blocked_range<uint32_t>& r) {
+                      std::iota(at + (r.begin() - lo), at + (r.end() - lo), r.begin());
+                    });
   std::copy(more.begin() + below, more.end(), at + (hi - lo));
   return {scratch.data(), scratch.size()};
 }

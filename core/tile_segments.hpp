@@ -1,5 +1,5 @@
-// Each tile's segments for core/tiles: every segment goes to every tile whose closed rectangle it meets (whole,
-// with its endpoints), each tile's list in segment order.
+// Each tile's segments for core/tiles: every segment goes to every tile whose closed rectangle it meets
+// (whole, with its endpoints), each tile's list in segment order.
 //
 //   TileSegments ts = tile_segments(vertices, segments, plan);   // segments sorted, as the tiles take them
 //   RawVector<uint32_t> scratch;
@@ -20,8 +20,8 @@ struct TileSegments {
   // Squares: tile t's ids are ids[first[t], first[t + 1]).
   RawVector<uint32_t> ids;
   std::vector<size_t> first;
-  // Slabs: tile t's are the range of segments whose first end it owns (segments are sorted by it, and a slab's
-  // vertices are a range of ids), and the few of other ranges that meet it (extra[t], in order).
+  // Slabs: tile t's are the range of segments whose first end it owns (segments are sorted by it, and a
+  // slab's vertices are a range of ids), and the few of other ranges that meet it (extra[t], in order).
   std::vector<std::pair<uint32_t, uint32_t>> range;
   std::vector<std::vector<uint32_t>> extra;
 

@@ -455,8 +455,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
                                in_final, level == 1 && options.unresolved);
     });
     const TileResult& r = results[t];
-    spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms", name,
-                  r.final_triangles.size(), r.gather_ms, r.cdt_ms, r.other_ms - r.gather_ms, ms_since(t_tiles));
+    spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms",
+                  name, r.final_triangles.size(), r.gather_ms, r.cdt_ms, r.other_ms - r.gather_ms,
+                  ms_since(t_tiles));
   };
   // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's).
   const TileSharing* sharing = level == 1 && options.sharing && options.sharing->ranks > 1 ? options.sharing : nullptr;
@@ -597,13 +598,12 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   tbb::parallel_for(size_t(0), (ids.size() + kIdBlock - 1) / kIdBlock, [&](size_t blk) {
     const size_t end = std::min(ids.size(), (blk + 1) * kIdBlock);
     auto first_end_below = [&](uint32_t id) { return [id](const Edge& e) { return e[0] < id; }; };
-    size_t at = size_t(std::partition_point(segments.begin(), segments.end(), first_end_below(ids[blk * kIdBlock])) -
-                       segments.begin());
+    const auto from = segments.begin();
+    size_t at = size_t(std::partition_point(from, segments.end(), first_end_below(ids[blk * kIdBlock])) - from);
     for (size_t i = blk * kIdBlock; i < end; ++i) {
       size_t step = 1, hi = at;
       while (hi < segments.size() && segments[hi][0] < ids[i]) hi = std::min(segments.size(), at + (step *= 2));
-      at = size_t(std::partition_point(segments.begin() + at, segments.begin() + hi, first_end_below(ids[i])) -
-                  segments.begin());
+      at = size_t(std::partition_point(from + at, from + hi, first_end_below(ids[i])) - from);
       segments_from[i] = uint32_t(at);
     }
   });

@@ -1,6 +1,6 @@
-// tile_segments: every segment in the list of every tile whose closed rectangle it meets, in segment order. Slabs
-// against the closed x-range rule on a grid, where whole columns of vertices lie on the cuts; squares against
-// their endpoints; segments out of order refused (the merge input relies on their order too).
+// tile_segments: every segment in the list of every tile whose closed rectangle it meets, in segment order.
+// Slabs against the closed x-range rule on a grid, where whole columns of vertices lie on the cuts; squares
+// against their endpoints; segments out of order refused (the merge input relies on their order too).
 #include "core/tile_segments.hpp"
 
 #include <gtest/gtest.h>
@@ -74,7 +74,8 @@ TEST(TileSegments, SquaresGetEverySegmentWithAnEndInTheirRectangle) {
       for (uint32_t id : g.segments[i]) {
         const Point3& p = g.v[id];
         if (p.x >= r.x0 && p.x <= r.x1 && p.y >= r.y0 && p.y <= r.y1) {
-          EXPECT_TRUE(std::binary_search(got.begin(), got.end(), uint32_t(i))) << "tile " << t << ", segment " << i;
+          EXPECT_TRUE(std::binary_search(got.begin(), got.end(), uint32_t(i)))
+              << "tile " << t << ", segment " << i;
         }
       }
   }
