@@ -62,6 +62,7 @@ void RunMerge::make_room(size_t triangles, unsigned threads) {
     const size_t bytes = room_.size() * sizeof(Triangle), piece = size_t(2) << 20;
     tbb::task_arena(int(std::max(1u, threads))).execute([&] {
       tbb::parallel_for(size_t(0), (bytes + piece - 1) / piece, [&](size_t i) {
+        if (stop_.load(std::memory_order_relaxed)) return;
         for (size_t at = i * piece; at < std::min(bytes, (i + 1) * piece); at += 4096) p[at] = 0;
       });
     });

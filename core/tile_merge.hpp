@@ -7,6 +7,7 @@
 //   Triangles all = order.merge(runs);             // runs: the tiles' runs and the merge's
 #pragma once
 #include <cstddef>
+#include <atomic>
 #include <cstdint>
 #include <future>
 #include <vector>
@@ -35,9 +36,14 @@ class RunMerge {
   // The runs (each sorted, canonical), freed, as one sorted list; in waves of about wave_bytes of triangles.
   Triangles merge(std::vector<Triangles>& runs, size_t wave_bytes = size_t(512) << 20);
 
+  // A run given up (a tile that throws, such as UnresolvedTile) stops the touching at once: its caller would
+  // otherwise wait for it (24 GB on a quarter of the cores at 1B points) before resolving and tiling again.
+  ~RunMerge() { stop_.store(true); }
+
  private:
   Triangles room_;
-  std::future<void> room_made_;  // last: joined before room_ goes
+  std::atomic<bool> stop_{false};
+  std::future<void> room_made_;  // last: joined (in its destructor, after ours) before room_ goes
 };
 
 // The merge's triangles outside the final region: the merge triangulates the final region's holes too, from
