@@ -2,7 +2,6 @@
 #include "core/tile_merge.hpp"
 
 #include <spdlog/spdlog.h>
-#include <sys/mman.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
@@ -19,7 +18,6 @@
 #include <utility>
 
 #include "core/compact.hpp"
-#include "core/parallel.hpp"
 #include "core/touched.hpp"
 
 namespace cdtgpu {

@@ -6,8 +6,8 @@
 //   Triangles kept = outside_final(merge, border); // the merge's, outside the tiles' final region
 //   Triangles all = order.merge(runs);             // runs: the tiles' runs and the merge's
 #pragma once
-#include <cstddef>
 #include <atomic>
+#include <cstddef>
 #include <cstdint>
 #include <future>
 #include <vector>

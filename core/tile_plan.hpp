@@ -3,7 +3,7 @@
 //
 //   Plan plan = plan_tiles(vertices, 1 << 20);  // vertices sorted by (x, y), as the resolve leaves them
 //   for (uint32_t t : plan.tiles) {
-//     const TileNode& node = plan.nodes[t];  // its rectangle, its ids plan.order[node.lo, node.hi) (slabs: node.lo ..)
+//     const TileNode& node = plan.nodes[t];  // its rectangle, its ids plan.id_at(node.lo .. node.hi - 1)
 //   }
 #pragma once
 #include <cstdint>
@@ -18,7 +18,7 @@ namespace cdtgpu {
 // (shared with a neighbour, each vertex in one of them); every vertex strictly inside it is one of its own.
 struct TileNode {
   TileRect rect;
-  uint32_t lo = 0, hi = 0;                // its own vertices: plan.order[lo, hi)
+  uint32_t lo = 0, hi = 0;                // its own vertices: plan.id_at(lo .. hi - 1)
   int32_t left = -1, right = -1;          // children; -1: a tile
   uint32_t column_lo = 0, column_hi = 0;  // a tile: the ids of its column, which hold its own
 };
@@ -28,6 +28,7 @@ struct TilePlan {
   std::vector<TileNode> nodes;    // nodes[0]: the root
   std::vector<uint32_t> tiles;    // the leaf nodes, left to right in the tree
   bool slabs = false;             // one tile a column
+  uint32_t id_at(uint32_t i) const { return slabs ? i : order[i]; }  // the vertex at place i of the order
 };
 
 // TileShape: about square tiles (the shortest border, so the smallest merge), or slabs: columns of the (x, y)

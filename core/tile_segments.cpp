@@ -34,6 +34,13 @@ bool meets(const TileRect& r, const Point3& a, const Point3& b) {
   return sides != 1 && sides != 4;  // not all clockwise, not all counter-clockwise
 }
 
+// Segment i is (a, b) with a < b, and its first end is not below the one before (the merge input relies on it
+// too: core/tiles.cpp).
+void check_order(const std::vector<Edge>& segments, size_t i) {
+  if (segments[i][0] >= segments[i][1] || (i > 0 && segments[i][0] < segments[i - 1][0]))
+    throw std::logic_error("tiles: segment " + std::to_string(i) + " is not in order (a < b, sorted)");
+}
+
 // Squares: blocks of segments count their tiles (found in the k-d tree), then write them in block order, so
 // each tile's list is in segment order without a sort.
 void square_segments(const Points& v, const std::vector<Edge>& segments, const TilePlan& plan,
@@ -71,8 +78,7 @@ void square_segments(const Points& v, const std::vector<Edge>& segments, const T
     count.assign(tiles, 0);
     const size_t end = std::min(segments.size(), (b + 1) * kSegmentBlock);
     for (size_t i = b * kSegmentBlock; i < end; ++i) {
-      if (segments[i][0] >= segments[i][1] || (i > 0 && segments[i][0] < segments[i - 1][0]))
-        throw std::logic_error("tiles: segment " + std::to_string(i) + " is not in order (a < b, sorted)");
+      check_order(segments, i);
       if (i + 16 < end) __builtin_prefetch(&v[segments[i + 16][1]]);
       uint32_t met = 0, last = 0;
       for_tiles_of(i, [&](uint32_t t) { ++count[t], ++met, last = t; });
@@ -158,8 +164,7 @@ void slab_segments(const Points& v, const std::vector<Edge>& segments, const Til
     size_t k = slab_of(segments[begin][0]);
     for (size_t i = begin; i < end; ++i) {
       const uint32_t a = segments[i][0], b = segments[i][1];
-      if (a >= b || (i > 0 && a < segments[i - 1][0]))
-        throw std::logic_error("tiles: segment " + std::to_string(i) + " is not in order (a < b, sorted)");
+      check_order(segments, i);
       while (a >= slab_lo[k + 1]) ++k;
       if (b < slab_lo[k + 1] && !on_left_cut(k, a) && !on_left_cut(k + 1, b)) continue;
       size_t lo = k, hi = slab_of(b);

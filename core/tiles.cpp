@@ -22,7 +22,6 @@
 #include <limits>
 #include <memory>
 #include <numeric>
-#include <optional>
 #include <stdexcept>
 #include <span>
 #include <thread>
@@ -696,11 +695,10 @@ std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points) {
   if (v.empty()) return {};
   const Plan plan = plan_tiles(v, std::max<uint64_t>(1, tile_points));
   const size_t tiles = plan.tiles.size();
-  auto id_at = [&](uint32_t i) { return plan.slabs ? i : plan.order[i]; };
   std::vector<uint32_t> owner(v.size(), 0);
   for (size_t t = 0; t < tiles; ++t) {
     const Node& node = plan.nodes[plan.tiles[t]];
-    for (uint32_t i = node.lo; i < node.hi; ++i) owner[id_at(i)] = uint32_t(t);
+    for (uint32_t i = node.lo; i < node.hi; ++i) owner[plan.id_at(i)] = uint32_t(t);
   }
   std::vector<uint8_t> used(v.size(), 0);
   std::vector<std::vector<uint32_t>> triangles_of(tiles);  // canonical order kept: the mesh's is
@@ -713,7 +711,7 @@ std::vector<MeshPiece> split_mesh(const Mesh& mesh, uint64_t tile_points) {
     const Node& node = plan.nodes[plan.tiles[t]];
     std::vector<uint32_t> ids;
     for (uint32_t i = node.lo; i < node.hi; ++i)
-      if (!used[id_at(i)]) ids.push_back(id_at(i));
+      if (!used[plan.id_at(i)]) ids.push_back(plan.id_at(i));
     for (uint32_t i : triangles_of[t])
       for (uint32_t id : mesh.triangles[i]) ids.push_back(id);
     std::sort(ids.begin(), ids.end());

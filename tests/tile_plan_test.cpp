@@ -35,7 +35,7 @@ void expect_plan(const Points& v, uint64_t max_points, const std::string& what,
     const TileNode& node = plan.nodes[plan.tiles[t]];
     EXPECT_LE(node.hi - node.lo, max_points) << what << ", tile " << t;
     for (uint32_t i = node.lo; i < node.hi; ++i) {
-      const uint32_t id = plan.slabs ? i : plan.order[i];
+      const uint32_t id = plan.id_at(i);
       ASSERT_LT(id, v.size());
       ASSERT_EQ(owner[id], -1) << what << ": vertex " << id << " in two tiles";
       owner[id] = int(t);
