@@ -339,7 +339,7 @@ GatheredTile gather_tile(const std::vector<Edge>& segments, const Plan& plan, co
 
 TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const TileTriangulator& triangulate,
                        const TileFinalizer& finalize, const std::string& name, std::vector<uint8_t>& in_final,
-                       bool unresolved) {
+                       const std::shared_future<void>& in_final_zeroed, bool unresolved) {
   const auto t0 = Clock::now();
   const RawVector<uint32_t>& ids = g.ids;
   TileResult r;
@@ -358,6 +358,7 @@ TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const 
     for (uint32_t& v : r.border[i]) v = ids[v];
   });
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
+  in_final_zeroed.get();  // rethrows its error
   tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
     for (uint32_t id : r.final_triangles[i])
       std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
@@ -448,10 +449,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   };
   auto finish = [&](size_t t, GatheredTile g) {
     const std::string name = tile_name(t);
-    bookkeeping.get();  // rethrows its error
     tbb::this_task_arena::isolate([&] {
       results[t] = finish_tile(v, std::move(g), plan.nodes[plan.tiles[t]], triangulate, options.finalize, name,
-                               in_final, level == 1 && options.unresolved);
+                               in_final, bookkeeping, level == 1 && options.unresolved);
     });
     const TileResult& r = results[t];
     spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms",

@@ -53,7 +53,12 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
                   : (VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
                      VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT);
   if (addressed) bi.usage |= VK_BUFFER_USAGE_SHADER_DEVICE_ADDRESS_BIT;
-  bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  // Shared by the compute and copy families: no ownership transfers between the two queues.
+  const uint32_t families[] = {ctx.queue_family, ctx.copy_family};
+  const bool shared = ctx.copy_queue && ctx.copy_family != ctx.queue_family;
+  bi.sharingMode = shared ? VK_SHARING_MODE_CONCURRENT : VK_SHARING_MODE_EXCLUSIVE;
+  bi.queueFamilyIndexCount = shared ? 2 : 0;
+  bi.pQueueFamilyIndices = shared ? families : nullptr;
   VK_CHECK(vkCreateBuffer(ctx.device, &bi, nullptr, &b.buffer));
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(ctx.device, b.buffer, &req);
@@ -109,11 +114,15 @@ void full_barrier(VkCommandBuffer cmd) {
                        0, 1, &mb, 0, nullptr, 0, nullptr);
 }
 
-// Records `record` into a fresh command buffer, submits it and waits.
-void run_once(const Context& ctx, const std::function<void(VkCommandBuffer)>& record) {
+// Records `record` into a fresh command buffer, submits it on the context's compute queue (or its copy queue,
+// where it has one) and waits.
+void run_once(const Context& ctx, const std::function<void(VkCommandBuffer)>& record, Queue on = Queue::compute) {
+  const bool aside = on == Queue::copy && ctx.copy_queue;
+  const VkQueue queue = aside ? ctx.copy_queue : ctx.queue;
+  const VkCommandPool pool = aside ? ctx.copy_pool : ctx.pool;
   VkCommandBufferAllocateInfo ai{};
   ai.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;
-  ai.commandPool = ctx.pool;
+  ai.commandPool = pool;
   ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   ai.commandBufferCount = 1;
   VkCommandBuffer cmd;
@@ -135,24 +144,27 @@ void run_once(const Context& ctx, const std::function<void(VkCommandBuffer)>& re
     si.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cmd;
-    VK_CHECK(vkQueueSubmit(ctx.queue, 1, &si, fence));
+    VK_CHECK(vkQueueSubmit(queue, 1, &si, fence));
     VK_CHECK(vkWaitForFences(ctx.device, 1, &fence, VK_TRUE, UINT64_MAX));
   } catch (...) {
     if (fence) vkDestroyFence(ctx.device, fence, nullptr);
-    vkFreeCommandBuffers(ctx.device, ctx.pool, 1, &cmd);
+    vkFreeCommandBuffers(ctx.device, pool, 1, &cmd);
     throw;
   }
   vkDestroyFence(ctx.device, fence, nullptr);
-  vkFreeCommandBuffers(ctx.device, ctx.pool, 1, &cmd);
+  vkFreeCommandBuffers(ctx.device, pool, 1, &cmd);
 }
 
 // One copy between buffers on the device, synchronously.
 void copy_region(const Context& ctx, VkBuffer src, VkDeviceSize src_offset, VkBuffer dst, VkDeviceSize dst_offset,
-                 VkDeviceSize bytes) {
-  run_once(ctx, [&](VkCommandBuffer cmd) {
-    VkBufferCopy region{src_offset, dst_offset, bytes};
-    vkCmdCopyBuffer(cmd, src, dst, 1, &region);
-  });
+                 VkDeviceSize bytes, Queue on = Queue::compute) {
+  run_once(
+      ctx,
+      [&](VkCommandBuffer cmd) {
+        VkBufferCopy region{src_offset, dst_offset, bytes};
+        vkCmdCopyBuffer(cmd, src, dst, 1, &region);
+      },
+      on);
 }
 
 void check_range(const Buffer& b, VkDeviceSize bytes, VkDeviceSize offset, const char* what) {
@@ -239,14 +251,16 @@ void HostStaging::fit(const Context& ctx, VkDeviceSize bytes) {
   VK_CHECK(vkMapMemory(ctx.device, buffer.memory, 0, VK_WHOLE_SIZE, 0, &mapped));
 }
 
-void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes) {
+void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes,
+                       Queue on) {
   check_range(dst, bytes, 0, "copy from staging");
-  if (bytes) copy_region(ctx, staging.buffer.buffer, 0, dst.buffer, 0, bytes);
+  if (bytes) copy_region(ctx, staging.buffer.buffer, 0, dst.buffer, 0, bytes, on);
 }
 
-void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes) {
+void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes,
+                     Queue on) {
   check_range(src, bytes, 0, "copy to staging");
-  if (bytes) copy_region(ctx, src.buffer, 0, staging.buffer.buffer, 0, bytes);
+  if (bytes) copy_region(ctx, src.buffer, 0, staging.buffer.buffer, 0, bytes, on);
 }
 
 void reserve_staging(const Context& ctx, VkDeviceSize bytes) {

@@ -63,9 +63,14 @@ struct HostStaging {
   // At least `bytes` long (regrown by an eighth at least; the old contents are lost).
   void fit(const Context& ctx, VkDeviceSize bytes);
 };
+// Where a copy runs: the compute queue (the caller holds the device), or the context's copy queue beside it
+// (Context::copy_queue; the compute queue where there is none). Callers on the copy queue take turns.
+enum class Queue { compute, copy };
 // The device's copies between a staging buffer (from its start) and a device buffer, synchronously.
-void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes);
-void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes);
+void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes,
+                       Queue on = Queue::compute);
+void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes,
+                     Queue on = Queue::compute);
 
 void upload(const Context& ctx, const Buffer& dst, const void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);
 void download(const Context& ctx, const Buffer& src, void* data, VkDeviceSize bytes, VkDeviceSize offset = 0);

@@ -100,14 +100,6 @@ GpuTriangulation GpuCdt::delaunay_of(std::span<const Point3> all, std::span<cons
   return build(std::move(points), n, s, keep);
 }
 
-GpuTriangulation GpuCdt::delaunay_staged(uint32_t n, const HostStaging& staged, GpuCdtStats& s) const {
-  auto t = Clock::now();
-  Buffer points = kept_.take(ctx_, "points", uint64_t(n) * 16);
-  copy_from_staging(ctx_, staged, points, uint64_t(n) * 16);
-  record_stage(s, "upload", t);
-  return build(std::move(points), n, s, &kept_);
-}
-
 GpuTriangulation GpuCdt::build(Buffer points, uint32_t n, GpuCdtStats& s, BufferCache* keep) const {
   const auto t = Clock::now();
   GpuTriangulation tri = delaunay_.build(std::move(points), n, &s.delaunay, keep);
@@ -222,11 +214,16 @@ Triangles GpuCdt::triangulate_graph(const Points& vertices, const std::vector<Ed
 }
 
 TileFinal GpuCdt::finalize_tile(const TileJob& job, GpuCdtStats* stats) const {
-  HostStaging staging;  // the three parts below, with a staging buffer of the call's own
+  GpuCdtStats local;
+  GpuCdtStats& s = stats ? *stats : local;
+  s = GpuCdtStats{};
+  HostStaging staging;  // the parts below, with a staging buffer of the call's own
   staging.fit(ctx_, staging_bytes(job.ids.size()));
   stage_points(job, staging);
   TileFinal f;
-  const uint32_t count = finalize_staged(job, staging, f, stats);
+  Buffer sorted;
+  const uint32_t count = compute_tile(job, upload_tile(uint32_t(job.ids.size()), staging, s), staging, f, sorted, s);
+  download_tile(std::move(sorted), count, staging, s);
   unstage_triangles(staging, count, f);
   return f;
 }
@@ -237,16 +234,47 @@ uint64_t GpuCdt::staging_bytes(uint64_t vertices) {
 
 void GpuCdt::stage_points(const TileJob& job, HostStaging& staging) { write_points(job.all, job.ids, staging.mapped); }
 
-uint32_t GpuCdt::finalize_staged(const TileJob& job, HostStaging& staging, TileFinal& f, GpuCdtStats* stats) const {
-  GpuCdtStats local;
-  GpuCdtStats& s = stats ? *stats : local;
-  s = GpuCdtStats{};
-  return run_staged(uint32_t(job.ids.size()), job.segments, job.rect, staging, f, s, /*copy_out=*/true,
+Buffer GpuCdt::from_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const {
+  Buffer b;
+  {
+    std::lock_guard<std::mutex> lock(shelf_->mutex);
+    auto fits = std::find_if(list.begin(), list.end(), [&](const Buffer& x) { return x.size >= bytes; });
+    if (fits == list.end() && !list.empty()) fits = list.begin();  // too small: dropped below, a lower peak
+    if (fits != list.end()) {
+      b = std::move(*fits);
+      list.erase(fits);
+    }
+  }
+  if (b.size >= bytes && b.buffer) return b;
+  b = Buffer();
+  const uint64_t want = bytes + bytes / 16;  // tiles come in sizes a few % apart
+  return addressed ? create_addressed_buffer(ctx_, want, name) : create_buffer(ctx_, want, name);
+}
+
+Buffer GpuCdt::upload_tile(uint32_t n, const HostStaging& staging, GpuCdtStats& s) const {
+  const auto t = Clock::now();
+  Buffer points = from_shelf(shelf_->points, uint64_t(n) * 16, "points", false);
+  copy_from_staging(ctx_, staging, points, uint64_t(n) * 16, Queue::copy);
+  record_stage(s, "upload", t);
+  return points;
+}
+
+uint32_t GpuCdt::compute_tile(const TileJob& job, Buffer points, HostStaging& staging, TileFinal& f, Buffer& sorted,
+                              GpuCdtStats& s) const {
+  return run_staged(std::move(points), uint32_t(job.ids.size()), job.segments, job.rect, staging, f, sorted, s,
                     job.unresolved);
 }
 
-uint32_t GpuCdt::run_staged(uint32_t n, std::span<const Edge> segments, const TileRect& rect,
-                            HostStaging& staging, TileFinal& f, GpuCdtStats& s, bool copy_out,
+void GpuCdt::download_tile(Buffer sorted, uint32_t count, const HostStaging& staging, GpuCdtStats& s) const {
+  const auto t = Clock::now();
+  copy_to_staging(ctx_, sorted, staging, uint64_t(count) * sizeof(Triangle), Queue::copy);
+  record_stage(s, "download", t);
+  std::lock_guard<std::mutex> lock(shelf_->mutex);
+  shelf_->sorted.push_back(std::move(sorted));
+}
+
+uint32_t GpuCdt::run_staged(Buffer points, uint32_t n, std::span<const Edge> segments, const TileRect& rect,
+                            HostStaging& staging, TileFinal& f, Buffer& sorted, GpuCdtStats& s,
                             bool unresolved) const {
   const auto t_all = Clock::now();
   // The device's other copies of this call (the build's uploads, the border) go through `staging` as well, once
@@ -258,7 +286,15 @@ uint32_t GpuCdt::run_staged(uint32_t n, std::span<const Edge> segments, const Ti
   } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
   cache_.grow_by = kept_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   cache_.first_room = kept_.first_room = 1.0 / 16;
-  GpuTriangulation tri = delaunay_staged(n, staging, s);
+  {
+    // The build's triangle buffer: one whose download has ended, while the last tile's may still be coming down.
+    std::lock_guard<std::mutex> lock(shelf_->mutex);
+    if (!shelf_->sorted.empty()) {
+      kept_.give("tri_nbrs", std::move(shelf_->sorted.back()));
+      shelf_->sorted.pop_back();
+    }
+  }
+  GpuTriangulation tri = build(std::move(points), n, s, &kept_);
   constrain(tri, segments, s, /*recycle=*/true, unresolved);
   auto t = Clock::now();
   double ms = 0;
@@ -268,10 +304,15 @@ uint32_t GpuCdt::run_staged(uint32_t n, std::span<const Edge> segments, const Ti
   t = Clock::now();
   const uint32_t count = sorter_.sort(tri, &ms);
   add_gpu(s, "", {{"canonical order", ms}});
-  if (copy_out) copy_to_staging(ctx_, tri.nbrs, staging, uint64_t(count) * sizeof(Triangle));
-  record_stage(s, "download", t);
+  record_stage(s, "canonical order", t);
+  // The sorted triangles stay in tri.nbrs for download_tile; the points go back to the shelf for an upload.
+  sorted = std::move(tri.nbrs);
+  {
+    std::lock_guard<std::mutex> lock(shelf_->mutex);
+    shelf_->points.push_back(std::move(tri.points));
+  }
   keep(tri);
-  s.wall_total_ms = ms_since(t_all);
+  s.wall_total_ms += ms_since(t_all);
   return count;
 }
 
@@ -291,7 +332,27 @@ void GpuCdt::warm_up_tiles(uint64_t vertices, HostStaging& staging) const {
   }
   GpuCdtStats s;
   TileFinal f;
-  run_staged(n, {}, TileRect{}, staging, f, s, /*copy_out=*/false);
+  Buffer sorted;
+  run_staged(upload_tile(n, staging, s), n, {}, TileRect{}, staging, f, sorted, s);
+  // Two of each buffer the copies hold, made now too: while a tile computes, the next one's points go up and the
+  // last one's triangles come down.
+  const uint64_t sorted_bytes = sorted.size;
+  size_t points = 0, triangles = 0;
+  {
+    std::lock_guard<std::mutex> lock(shelf_->mutex);
+    shelf_->sorted.push_back(std::move(sorted));
+    points = shelf_->points.size(), triangles = shelf_->sorted.size();
+  }
+  for (; points < 2; ++points) {
+    Buffer b = create_buffer(ctx_, uint64_t(n) * 17, "points");  // from_shelf's room
+    std::lock_guard<std::mutex> lock(shelf_->mutex);
+    shelf_->points.push_back(std::move(b));
+  }
+  for (; triangles < 2; ++triangles) {
+    Buffer b = create_addressed_buffer(ctx_, sorted_bytes, "tri_nbrs");
+    std::lock_guard<std::mutex> lock(shelf_->mutex);
+    shelf_->sorted.push_back(std::move(b));
+  }
 }
 
 void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f) {

@@ -83,6 +83,20 @@ int compute_family(VkPhysicalDevice pd, uint32_t* timestamp_bits) {
   return best;
 }
 
+// The family for copies beside the compute queue (Context::copy_queue): a transfer-only one, else the compute
+// family where it has a second queue; -1 when neither.
+int copy_family(VkPhysicalDevice pd, uint32_t compute) {
+  uint32_t n = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+  std::vector<VkQueueFamilyProperties> fams(n);
+  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
+  constexpr VkQueueFlags kWork = VK_QUEUE_COMPUTE_BIT | VK_QUEUE_GRAPHICS_BIT;
+  for (uint32_t i = 0; i < n; ++i)
+    if ((fams[i].queueFlags & VK_QUEUE_TRANSFER_BIT) && !(fams[i].queueFlags & kWork) && fams[i].queueCount > 0)
+      return int(i);
+  return compute < n && fams[compute].queueCount > 1 ? int(compute) : -1;
+}
+
 bool has_extension(VkPhysicalDevice pd, const char* name) {
   uint32_t n = 0;
   vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr);
@@ -333,6 +347,7 @@ void release(Context& c) {
     c.temp_pool.reset();
     save_cache(c);
     if (c.pool) vkDestroyCommandPool(c.device, c.pool, nullptr);
+    if (c.copy_pool) vkDestroyCommandPool(c.device, c.copy_pool, nullptr);
     vkDestroyDevice(c.device, nullptr);
   }
   if (c.messenger) {
@@ -345,6 +360,8 @@ void release(Context& c) {
   c.messenger = VK_NULL_HANDLE;
   c.device = VK_NULL_HANDLE;
   c.pool = VK_NULL_HANDLE;
+  c.copy_pool = VK_NULL_HANDLE;
+  c.copy_queue = VK_NULL_HANDLE;
 }
 }  // namespace
 
@@ -359,6 +376,9 @@ Context& Context::operator=(Context&& o) noexcept {
   device = std::exchange(o.device, VK_NULL_HANDLE);
   queue = std::exchange(o.queue, VK_NULL_HANDLE);
   pool = std::exchange(o.pool, VK_NULL_HANDLE);
+  copy_queue = std::exchange(o.copy_queue, VK_NULL_HANDLE);
+  copy_family = o.copy_family;
+  copy_pool = std::exchange(o.copy_pool, VK_NULL_HANDLE);
   queue_family = o.queue_family;
   props = o.props;
   memory = o.memory;
@@ -431,12 +451,16 @@ Context create_context(const ContextOptions& options) {
     throw DeviceError(ctx.info.name + " is a CPU Vulkan driver, not a GPU");
   step("physical devices");
 
-  float priority = 1.0f;
-  VkDeviceQueueCreateInfo qi{};
-  qi.sType = VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO;
-  qi.queueFamilyIndex = ctx.queue_family;
-  qi.queueCount = 1;
-  qi.pQueuePriorities = &priority;
+  const float priorities[] = {1.0f, 1.0f};
+  const int copies = copy_family(ctx.physical, ctx.queue_family);
+  VkDeviceQueueCreateInfo qi[2]{};
+  qi[0].sType = qi[1].sType = VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO;
+  qi[0].queueFamilyIndex = ctx.queue_family;
+  qi[0].queueCount = copies == int(ctx.queue_family) ? 2 : 1;
+  qi[0].pQueuePriorities = qi[1].pQueuePriorities = priorities;
+  qi[1].queueFamilyIndex = uint32_t(copies);
+  qi[1].queueCount = 1;
+  const uint32_t families = copies >= 0 && copies != int(ctx.queue_family) ? 2 : 1;
 
   VkPhysicalDeviceVulkan12Features f12{};
   f12.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES;
@@ -461,13 +485,17 @@ Context create_context(const ContextOptions& options) {
   VkDeviceCreateInfo di{};
   di.sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO;
   di.pNext = &f;
-  di.queueCreateInfoCount = 1;
-  di.pQueueCreateInfos = &qi;
+  di.queueCreateInfoCount = families;
+  di.pQueueCreateInfos = qi;
   di.enabledExtensionCount = ctx.shader_stats ? 2 : 1;
   di.ppEnabledExtensionNames = exts;
   VK_CHECK(vkCreateDevice(ctx.physical, &di, nullptr, &ctx.device));
   step("device");
   vkGetDeviceQueue(ctx.device, ctx.queue_family, 0, &ctx.queue);
+  if (copies >= 0) {
+    ctx.copy_family = uint32_t(copies);
+    vkGetDeviceQueue(ctx.device, ctx.copy_family, copies == int(ctx.queue_family) ? 1 : 0, &ctx.copy_queue);
+  }
   ctx.cmd_push_descriptor_set =
       reinterpret_cast<PFN_vkCmdPushDescriptorSetKHR>(vkGetDeviceProcAddr(ctx.device, "vkCmdPushDescriptorSetKHR"));
   if (!ctx.cmd_push_descriptor_set) throw DeviceError("vkCmdPushDescriptorSetKHR not found on " + ctx.info.name);
@@ -487,6 +515,10 @@ Context create_context(const ContextOptions& options) {
   pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pi.queueFamilyIndex = ctx.queue_family;
   VK_CHECK(vkCreateCommandPool(ctx.device, &pi, nullptr, &ctx.pool));
+  if (ctx.copy_queue) {
+    pi.queueFamilyIndex = ctx.copy_family;
+    VK_CHECK(vkCreateCommandPool(ctx.device, &pi, nullptr, &ctx.copy_pool));
+  }
 
   ctx.pipeline_cache_file = pipeline_cache_path(ctx.props);
   const std::vector<char> seed = load_pipeline_cache(ctx.pipeline_cache_file, ctx.props);

@@ -94,6 +94,7 @@ class OnDevice {
       : cdts_(std::move(cdts)), sum_(sum), warm_up_from_(warm_up_from), pool_(cdts_.size()),
         slots_(kSlotsPerDevice * cdts_.size()) {
     for (size_t i = 0; i < kSlotsPerDevice * cdts_.size(); ++i) staging_.push_back(std::make_unique<HostStaging>());
+    for (size_t d = 0; d < cdts_.size(); ++d) copying_.push_back(std::make_unique<std::mutex>());
     reserved_.resize(staging_.size());
   }
 
@@ -131,6 +132,7 @@ class OnDevice {
     if (tiles_begun_.load()) return;
     pool_.take(d);
     const DevicePool::Held held{pool_, d};
+    const std::lock_guard<std::mutex> lock(*copying_[d]);  // and its copy queue
     const auto t0 = std::chrono::steady_clock::now();
     try {
       cdts_[d]->warm_up_tiles(vertices, staging);
@@ -146,7 +148,7 @@ class OnDevice {
 
   // A tile in a slot of its own (a staging buffer; two a device, as many as the tiles in flight): its points are
   // written there and its final triangles copied out without the device, which is held only for the GPU part,
-  // so those host copies overlap another tile's GPU work.
+  // so those host copies overlap another tile's GPU work; so do the device's copies of them, on its copy queue.
   TileFinal staged(const TileJob& job) {
     tiles_begun_.store(true);
     return tbb::this_task_arena::isolate([&] {
@@ -163,27 +165,49 @@ class OnDevice {
         staging.fit(cdt.context(), GpuCdt::staging_bytes(job.ids.size()));
         GpuCdt::stage_points(job, staging);
         TileFinal f;
-        uint32_t count = 0;
         GpuCdtStats one;
         const auto t2 = std::chrono::steady_clock::now();
+        Buffer points = on_copy_queue(d, [&] { return cdt.upload_tile(uint32_t(job.ids.size()), staging, one); });
+        const auto t3 = std::chrono::steady_clock::now();
+        Buffer sorted;
+        uint32_t count = 0;
+        std::chrono::steady_clock::time_point held_from;
         {
           pool_.take(d);
           const DevicePool::Held held_device{pool_, d};
-          const auto t3 = std::chrono::steady_clock::now();
+          const auto t4 = std::chrono::steady_clock::now();
           spdlog::debug("{}: waited {:.0f} ms for its staging memory, {:.0f} ms for a slot, staged in {:.0f} ms, "
-                        "waited {:.0f} ms for the device",
-                        job.what, ms(t1 - slot_taken), ms(slot_taken - t0), ms(t2 - t1), ms(t3 - t2));
-          count = cdt.finalize_staged(job, staging, f, &one);
+                        "uploaded in {:.0f} ms, waited {:.0f} ms for the device",
+                        job.what, ms(t1 - slot_taken), ms(slot_taken - t0), ms(t2 - t1), ms(t3 - t2), ms(t4 - t3));
+          held_from = t4;
+          count = cdt.compute_tile(job, std::move(points), staging, f, sorted, one);
         }
-        const auto t4 = std::chrono::steady_clock::now();
+        const auto t4 = held_from;
+        const auto t5 = std::chrono::steady_clock::now();
+        on_copy_queue(d, [&] { cdt.download_tile(std::move(sorted), count, staging, one); });
+        const auto t6 = std::chrono::steady_clock::now();
         GpuCdt::unstage_triangles(staging, count, job.ids, f);
-        spdlog::debug("{}: device call {:.0f} ms, unstaged in {:.0f} ms", job.what, ms(t4 - t2), ms(std::chrono::steady_clock::now() - t4));
+        spdlog::debug("{}: device {} held from {:.0f} to {:.0f} ms, downloaded in {:.0f} ms, unstaged in {:.0f} ms",
+                      job.what, d, ms(t4 - epoch_), ms(t5 - epoch_), ms(t6 - t5), ms_since(t6));
         if (sum_) add_up(one);
         return f;
       } catch (const DeviceError& e) {
         rethrow_named(e, job.what, job.ids.size(), job.segments.size(), d);
       }
     });
+  }
+
+  // f() on device d's copy queue: in turn with the queue's other copies where the device has one
+  // (Context::copy_queue), else holding the device.
+  template <class F>
+  auto on_copy_queue(size_t d, F&& f) -> decltype(f()) {
+    if (cdts_[d]->context().copy_queue) {
+      const std::lock_guard<std::mutex> lock(*copying_[d]);
+      return f();
+    }
+    pool_.take(d);
+    const DevicePool::Held held{pool_, d};
+    return f();
   }
 
   template <class Work>
@@ -231,11 +255,13 @@ class OnDevice {
   }
 
   std::vector<const GpuCdt*> cdts_;
+  const std::chrono::steady_clock::time_point epoch_ = std::chrono::steady_clock::now();  // the -v timeline's
   GpuCdtStats* sum_;
   const uint64_t warm_up_from_;
   std::atomic<size_t> warm_ups_{0};
   DevicePool pool_;   // the devices not running a call
   DevicePool slots_;  // the staging buffers not holding a tile; slot i is device i % devices'
+  std::vector<std::unique_ptr<std::mutex>> copying_;  // a device's copy queue in use
   std::vector<std::unique_ptr<HostStaging>> staging_;
   uint64_t reserved_vertices_ = 0;                  // the largest reserve() so far
   std::atomic<bool> tiles_begun_{false};             // a tile has asked for a slot: no warm-up from now on
