@@ -31,6 +31,7 @@
 
 #include "core/big_array.hpp"
 #include "core/error.hpp"
+#include "core/half_edges.hpp"
 #include "core/parallel.hpp"
 
 namespace cdtgpu {
@@ -58,90 +59,6 @@ uint32_t next_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 1) % 3; }
 uint32_t prev_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 2) % 3; }
 uint32_t from_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][h % 3]; }
 uint32_t to_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][(h % 3 + 1) % 3]; }
-
-struct HalfEdges {
-  BigArray<uint32_t> twin;    // kNone on the hull
-  BigArray<uint32_t> start;   // per vertex v: the triangles starting at v are [start[v], start[v + 1])
-  BigArray<uint32_t> corner;  // per vertex: one half-edge leaving it (the fan around it is walked by twins)
-};
-
-// start[] of a canonical list, and corner[v] = v's last triangle's first half-edge where v starts one
-// (kNone elsewhere, until half_edges finds one). A list out of canonical order is a logic_error: the twins
-// rely on it.
-void starts(const Triangles& ts, uint32_t V, HalfEdges& e) {
-  const size_t T = ts.size();
-  e.start = BigArray<uint32_t>(size_t(V) + 1);
-  e.corner = BigArray<uint32_t>(V);
-  std::atomic<bool> canonical{true};
-  each(T + 1, [&](size_t t) {
-    const uint32_t lo = t == 0 ? 0 : ts[t - 1][0] + 1, hi = t == T ? V : ts[t][0];
-    if (t < T && (ts[t][1] <= ts[t][0] || ts[t][2] <= ts[t][0] || (t > 0 && ts[t] <= ts[t - 1])))
-      canonical.store(false, std::memory_order_relaxed);
-    for (uint32_t v = lo; v <= hi; ++v) e.start[v] = uint32_t(t);
-    for (uint32_t v = lo; v < std::min(hi, V); ++v) e.corner[v] = kNone;
-    if (t > 0 && lo <= hi) e.corner[lo - 1] = uint32_t(3 * (t - 1));
-  });
-  if (!canonical) throw std::logic_error("regions: the mesh is not in canonical order");
-}
-
-// The triangle in [start[v], start[v + 1]) whose corner k is w (half-edges between v and w), or kNone.
-uint32_t find_in_range(const Triangles& ts, const HalfEdges& e, uint32_t v, int k, uint32_t w) {
-  for (uint32_t s = e.start[v]; s < e.start[v + 1]; ++s)
-    if (ts[s][k] == w) return s;
-  return kNone;
-}
-
-struct Open {  // a middle half-edge h whose twin is not found yet, by its edge (smaller vertex first)
-  uint64_t edge;
-  uint32_t h;
-  bool operator<(const Open& o) const { return edge != o.edge ? edge < o.edge : h < o.h; }
-};
-
-// Twins from the canonical order. In triangle (a, b, c), a the smallest, the twin of a -> b (b -> a) can only
-// be the last half-edge of a triangle (a, x, b) or the middle one of a triangle starting below a; that of
-// c -> a is the first of (a, c, x) or again a middle one. So each pair is found once: a -> b looks for its
-// twin among a's triangles, a middle half-edge b -> c among min(b, c)'s, and the middle-to-middle pairs left
-// (an edge whose two triangles both start elsewhere) meet in a sort by edge.
-HalfEdges half_edges(const Mesh& mesh) {
-  const Triangles& ts = mesh.triangles;
-  const uint32_t V = uint32_t(mesh.vertices.size());
-  const size_t T = ts.size();
-  HalfEdges e;
-  starts(ts, V, e);
-  e.twin = BigArray<uint32_t>(3 * T, kNone);
-  auto pair = [&](uint32_t h, uint32_t g) { e.twin[h] = g, e.twin[g] = h; };
-  // The middle half-edges left, by edge: each block appends its own at once (one slot per triangle at most,
-  // pages touched only where written).
-  BigArray<Open> left(T);
-  std::atomic<size_t> n_left{0};
-  tbb::enumerable_thread_specific<std::vector<Open>> block_left;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
-    auto& mine = block_left.local();
-    mine.clear();
-    // Backwards: min(b, c)'s triangles come after t, so they were just visited and are still in cache.
-    for (size_t t = r.end(); t-- > r.begin();) {
-      const uint32_t a = ts[t][0], b = ts[t][1], c = ts[t][2], h = uint32_t(3 * t);
-      if (const uint32_t s = find_in_range(ts, e, a, 2, b); s != kNone) pair(h, 3 * s + 2);
-      const uint32_t lo = std::min(b, c), hi = std::max(b, c);
-      // A vertex that starts no triangle gets its corner here (any one will do).
-      if (e.start[lo] == e.start[lo + 1])
-        shared(e.corner[lo]).store(b < c ? h + 1 : h + 2, std::memory_order_relaxed);
-      if (e.start[hi] == e.start[hi + 1])
-        shared(e.corner[hi]).store(b < c ? h + 2 : h + 1, std::memory_order_relaxed);
-      if (const uint32_t s = find_in_range(ts, e, lo, b < c ? 2 : 1, hi); s != kNone)
-        pair(h + 1, 3 * s + (b < c ? 2 : 0));
-      else
-        mine.push_back({key(lo, hi), h + 1});
-    }
-    std::copy(mine.begin(), mine.end(), left.begin() + n_left.fetch_add(mine.size()));
-  });
-  const size_t n = n_left;
-  tbb::parallel_sort(left.begin(), left.begin() + n);
-  each(n, [&](size_t i) {
-    if (i + 1 < n && left[i].edge == left[i + 1].edge) pair(left[i].h, left[i + 1].h);
-  });
-  return e;
-}
 
 // Marks the mesh edges along the constraints: kConstrained, plus kRegion for region edges. Without `all`, only
 // the region edges (the nesting levels need no other; trimming needs every constraint): a boundary and a hole
@@ -444,7 +361,7 @@ std::optional<std::vector<uint32_t>> trim_long_edges(const Mesh& mesh, const Pre
     const double dx = mv[b].x - mv[a].x, dy = mv[b].y - mv[a].y;
     return dx * dx + dy * dy > limit2;  // the same either way round: the general path's test
   };
-  tbb::enumerable_thread_specific<std::vector<Open>> local;
+  tbb::enumerable_thread_specific<std::vector<HalfEdgeKey>> local;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, T, kGrain), [&](const tbb::blocked_range<size_t>& r) {
     auto& mine = local.local();
     for (size_t t = r.begin(); t < r.end(); ++t)
@@ -453,14 +370,14 @@ std::optional<std::vector<uint32_t>> trim_long_edges(const Mesh& mesh, const Pre
         if (is_long(a, b)) mine.push_back({key(std::min(a, b), std::max(a, b)), uint32_t(3 * t + k)});
       }
   });
-  std::vector<Open> longs;
+  std::vector<HalfEdgeKey> longs;
   for (auto& v : local) {
     if (longs.size() + v.size() > T / 4) return std::nullopt;  // pairing them all: the general path's work
     longs.insert(longs.end(), v.begin(), v.end());
   }
   tbb::parallel_sort(longs.begin(), longs.end());
   auto is_mesh_edge = [&](uint64_t edge) {
-    const auto it = std::lower_bound(longs.begin(), longs.end(), Open{edge, 0});
+    const auto it = std::lower_bound(longs.begin(), longs.end(), HalfEdgeKey{edge, 0});
     return it != longs.end() && it->edge == edge;
   };
 
@@ -719,7 +636,7 @@ RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const Regio
       spdlog::debug("regions:{}", passes);
       return stats;
     }
-  HalfEdges e = half_edges(mesh);
+  HalfEdges e = half_edges(mesh.triangles, uint32_t(mesh.vertices.size()));
   lap("half-edges");
   BigArray<uint8_t> flag(3 * T, 0);
   mark_constraints(mesh, prepared, rules.region_edge, rules.max_edge > 0, e, flag);

@@ -48,7 +48,8 @@ class RunMerge {
 
 // The merge's triangles outside the final region: the merge triangulates the final region's holes too, from
 // their border vertices; those triangles lie in parts of the merge, bounded by border edges, that are on the
-// final side of a border edge (tiling.md, claim 2). `border` is directed with the final region on its left.
+// final side of a border edge (tiling.md, claim 2). `border` is directed with the final region on its left; `m`
+// is in canonical order (a logic_error otherwise), as a triangulation's output is.
 Triangles outside_final(const Triangles& m, const std::vector<Edge>& border);
 
 }  // namespace cdtgpu

@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "core/canonical.hpp"
 #include "core/cdt_cgal.hpp"
 #include "core/prepare.hpp"
 #include "core/workloads.hpp"
@@ -106,7 +107,8 @@ TEST(OutsideFinal, DropsTheTrianglesOnTheBordersFinalSide) {
   std::vector<Edge> segments;
   for (const Edge& e : h.border) segments.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
   std::sort(segments.begin(), segments.end());
-  const Triangles merge = cdt_of_graph(h.vertices, segments);
+  Triangles merge = cdt_of_graph(h.vertices, segments);
+  canonicalize_triangles(merge);  // as a merge's triangles come
   auto in_a_hole = [&](const Triangle& t) {
     const double x = (h.vertices[t[0]].x + h.vertices[t[1]].x + h.vertices[t[2]].x) / 3;
     const double y = (h.vertices[t[0]].y + h.vertices[t[1]].y + h.vertices[t[2]].y) / 3;
@@ -124,6 +126,10 @@ TEST(OutsideFinal, DropsTheTrianglesOnTheBordersFinalSide) {
   std::vector<Edge> broken = h.border;
   std::swap(broken[5][0], broken[5][1]);
   EXPECT_THROW(outside_final(merge, broken), std::logic_error);
+  // Out of canonical order: its adjacency would be wrong, so it is refused.
+  Triangles shuffled = merge;
+  std::swap(shuffled[0], shuffled[1]);
+  EXPECT_THROW(outside_final(shuffled, h.border), std::logic_error);
 }
 
 }  // namespace
