@@ -5,36 +5,15 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
-#include <condition_variable>
-#include <exception>
 #include <limits>
-#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 #include "core/predicates.hpp"
 #include "core/touched.hpp"
 
 namespace cdtgpu {
-
-struct TileSegments::Extras {
-  std::vector<std::vector<uint32_t>> of_tile;  // tile t's segments from other ranges, in order
-  std::vector<size_t> needs;                   // per tile: the slabs (from the left) scanned when it is whole
-  std::mutex mutex;
-  std::condition_variable changed;
-  size_t scanned = 0;
-  std::exception_ptr error;
-  std::atomic<bool> stop{false};
-  std::jthread worker;  // last: joined before the rest goes
-  ~Extras() {
-    stop.store(true);  // a tiling given up: the ranges left are not scanned
-    if (worker.joinable()) worker.join();
-  }
-};
-
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -142,7 +121,6 @@ void slab_segments(const Points& v, const std::vector<Edge>& segments, const Til
   const size_t tiles = plan.tiles.size(), n = v.size();
   std::vector<uint32_t> slab_tile(tiles), slab_lo;    // in id (so x) order: the tile, its first id
   std::vector<std::pair<uint32_t, uint32_t>> on_cut;  // on_cut[k]: the ids with x equal to slab k's left cut
-  std::vector<bool> no_width;                         // x0 == x1
   std::iota(slab_tile.begin(), slab_tile.end(), 0u);
   std::sort(slab_tile.begin(), slab_tile.end(), [&](uint32_t p, uint32_t q) {
     return plan.nodes[plan.tiles[p]].lo < plan.nodes[plan.tiles[q]].lo;
@@ -157,7 +135,6 @@ void slab_segments(const Points& v, const std::vector<Edge>& segments, const Til
     next = node.hi;
     x1 = r.x1;
     slab_lo.push_back(node.lo);
-    no_width.push_back(r.x0 == r.x1);
     const auto at = [&](auto below) {
       return uint32_t(std::partition_point(v.begin(), v.end(), below) - v.begin());
     };
@@ -167,70 +144,41 @@ void slab_segments(const Points& v, const std::vector<Edge>& segments, const Til
   if (next != n) throw std::logic_error("tiles: slabs that leave vertices out");
   slab_lo.push_back(uint32_t(n));  // slab k's ids: [slab_lo[k], slab_lo[k + 1])
   const size_t slabs = tiles;
+  auto slab_of = [&](uint32_t id) {
+    return size_t(std::upper_bound(slab_lo.begin(), slab_lo.end() - 1, id) - slab_lo.begin()) - 1;
+  };
+  auto on_left_cut = [&](size_t k, uint32_t id) {
+    return k > 0 && k < slabs && id >= on_cut[k].first && id < on_cut[k].second;
+  };
   // Slab k's own range: the segments whose first end it owns.
   std::vector<uint32_t> range_lo(slabs + 1);
   for (size_t k = 0; k <= slabs; ++k)
     range_lo[k] = uint32_t(std::partition_point(segments.begin(), segments.end(),
                                                 [&](const Edge& e) { return e[0] < slab_lo[k]; }) -
                            segments.begin());
-  for (size_t k = 0; k < slabs; ++k)
-    if (range_lo[k + 1] < range_lo[k]) throw std::logic_error("tiles: segments that are not in order");
-  out.range.resize(tiles);
-  for (size_t k = 0; k < slabs; ++k) out.range[slab_tile[k]] = {range_lo[k], range_lo[k + 1]};
-  // A segment reaches left of its first end's slab only from that slab's left cut, and on through slabs of no
-  // width: slab k's list is whole once the ranges up to the next slab of some width are scanned.
-  auto extras = std::make_shared<TileSegments::Extras>();
-  extras->of_tile.resize(tiles);
-  extras->needs.resize(tiles);
-  for (size_t k = 0; k < slabs; ++k) {
-    size_t j = k + 1;
-    while (j < slabs && no_width[j]) ++j;
-    extras->needs[slab_tile[k]] = std::min(slabs, j + 1);
-  }
-  // The others, range by range: (slab, segment) pairs per block, in segment order.
-  TileSegments::Extras& x = *extras;
-  x.worker = std::jthread([&x, &segments, range_lo, slab_lo, on_cut, slab_tile, slabs] {
-    auto slab_of = [&](uint32_t id) {
-      return size_t(std::upper_bound(slab_lo.begin(), slab_lo.end() - 1, id) - slab_lo.begin()) - 1;
-    };
-    auto on_left_cut = [&](size_t k, uint32_t id) {
-      return k > 0 && k < slabs && id >= on_cut[k].first && id < on_cut[k].second;
-    };
-    try {
-      for (size_t k = 0; k < slabs && !x.stop.load(); ++k) {
-        const size_t first = range_lo[k], last = range_lo[k + 1];
-        const size_t blocks = (last - first + kSegmentBlock - 1) / kSegmentBlock;
-        std::vector<std::vector<std::pair<uint32_t, uint32_t>>> found(blocks);
-        tbb::parallel_for(size_t(0), blocks, [&](size_t blk) {
-          const size_t begin = first + blk * kSegmentBlock, end = std::min(last, begin + kSegmentBlock);
-          for (size_t i = begin; i < end; ++i) {
-            const uint32_t a = segments[i][0], b = segments[i][1];
-            check_order(segments, i);
-            if (b < slab_lo[k + 1] && !on_left_cut(k, a) && !on_left_cut(k + 1, b)) continue;
-            size_t lo = k, hi = slab_of(b);
-            while (on_left_cut(lo, a)) --lo;
-            while (on_left_cut(hi + 1, b)) ++hi;
-            for (size_t s = lo; s <= hi; ++s)
-              if (s != k) found[blk].emplace_back(uint32_t(s), uint32_t(i));
-          }
-        });
-        {
-          const std::lock_guard<std::mutex> lock(x.mutex);
-          for (const auto& pairs : found)
-            for (const auto& [s, i] : pairs) x.of_tile[slab_tile[s]].push_back(i);
-          x.scanned = k + 1;
-        }
-        x.changed.notify_all();
-      }
-    } catch (...) {
-      {
-        const std::lock_guard<std::mutex> lock(x.mutex);
-        x.error = std::current_exception();
-      }
-      x.changed.notify_all();
+  // The others: (slab, segment) pairs per block, in segment order.
+  const size_t blocks = (segments.size() + kSegmentBlock - 1) / kSegmentBlock;
+  std::vector<std::vector<std::pair<uint32_t, uint32_t>>> found(blocks);
+  tbb::parallel_for(size_t(0), blocks, [&](size_t blk) {
+    const size_t begin = blk * kSegmentBlock, end = std::min(segments.size(), begin + kSegmentBlock);
+    size_t k = slab_of(segments[begin][0]);
+    for (size_t i = begin; i < end; ++i) {
+      const uint32_t a = segments[i][0], b = segments[i][1];
+      check_order(segments, i);
+      while (a >= slab_lo[k + 1]) ++k;
+      if (b < slab_lo[k + 1] && !on_left_cut(k, a) && !on_left_cut(k + 1, b)) continue;
+      size_t lo = k, hi = slab_of(b);
+      while (on_left_cut(lo, a)) --lo;
+      while (on_left_cut(hi + 1, b)) ++hi;
+      for (size_t s = lo; s <= hi; ++s)
+        if (s != k) found[blk].emplace_back(uint32_t(s), uint32_t(i));
     }
   });
-  out.extras = std::move(extras);
+  out.range.resize(tiles);
+  out.extra.assign(tiles, {});
+  for (size_t k = 0; k < slabs; ++k) out.range[slab_tile[k]] = {range_lo[k], range_lo[k + 1]};
+  for (const auto& pairs : found)
+    for (const auto& [s, i] : pairs) out.extra[slab_tile[s]].push_back(i);
 }
 
 }  // namespace
@@ -238,12 +186,7 @@ void slab_segments(const Points& v, const std::vector<Edge>& segments, const Til
 std::span<const uint32_t> TileSegments::of(size_t t, RawVector<uint32_t>& scratch) const {
   if (range.empty()) return {ids.data() + first[t], first[t + 1] - first[t]};
   const auto [lo, hi] = range[t];
-  {
-    std::unique_lock<std::mutex> lock(extras->mutex);
-    extras->changed.wait(lock, [&] { return extras->error || extras->scanned >= extras->needs[t]; });
-    if (extras->error) std::rethrow_exception(extras->error);
-  }
-  const std::vector<uint32_t>& more = extras->of_tile[t];  // whole: no more appends to it
+  const std::vector<uint32_t>& more = extra[t];
   const size_t below = size_t(std::lower_bound(more.begin(), more.end(), lo) - more.begin());
   scratch.clear();
   resize_unwritten(scratch, more.size() + (hi - lo));
@@ -256,8 +199,6 @@ std::span<const uint32_t> TileSegments::of(size_t t, RawVector<uint32_t>& scratc
   std::copy(more.begin() + below, more.end(), at + (hi - lo));
   return {scratch.data(), scratch.size()};
 }
-
-size_t TileSegments::waits_for(size_t t) const { return extras->needs[t]; }
 
 TileSegments tile_segments(const Points& v, const std::vector<Edge>& segments, const TilePlan& plan) {
   TileSegments out;
