@@ -1,6 +1,6 @@
 // The Vulkan context: instance (optionally with the Khronos validation layer), the chosen physical device, a
-// logical device with one compute queue and a command pool. Also lists what the loader sees, for
-// `cdtgpu devices`.
+// logical device with one compute queue and a command pool (and a copy queue with its own pool where the device
+// has one: Context::copy_queue). Also lists what the loader sees, for `cdtgpu devices`.
 //
 //   gpu::ContextOptions options;  options.validation = true;
 //   gpu::Context ctx = gpu::create_context(options);

@@ -2,6 +2,7 @@
 // clean run, buffer limits, VK_CHECK messages, pass/recorder argument checks and the profiler.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <numeric>
 #include <vector>
 
@@ -173,6 +174,39 @@ TEST(GpuContext, BuffersRoundTripFillAndZeroSize) {
   Buffer empty = create_buffer(ctx, 0, "empty");
   EXPECT_EQ(empty.size, 0u);
   EXPECT_TRUE(download_vector<uint32_t>(ctx, empty, 0).empty());
+  for (auto& m : ctx.messages()) ADD_FAILURE() << m;
+}
+
+// The copy queue: a transfer-only family's where the device has one, else a second compute queue, else none
+// (the copies then take the compute queue). Copies through staging on it either way, with no validation
+// message.
+TEST(GpuContext, CopyQueueWhereTheDeviceHasOne) {
+  Context& ctx = shared_context();
+  ctx.clear_messages();
+  uint32_t n = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(ctx.physical, &n, nullptr);
+  std::vector<VkQueueFamilyProperties> fams(n);
+  vkGetPhysicalDeviceQueueFamilyProperties(ctx.physical, &n, fams.data());
+  bool transfer_only = false;
+  for (const auto& f : fams)
+    transfer_only |=
+        (f.queueFlags & VK_QUEUE_TRANSFER_BIT) && !(f.queueFlags & (VK_QUEUE_COMPUTE_BIT | VK_QUEUE_GRAPHICS_BIT));
+  const bool expected = transfer_only || fams[ctx.queue_family].queueCount > 1;
+  EXPECT_EQ(ctx.copy_queue != VK_NULL_HANDLE, expected);
+  EXPECT_EQ(ctx.copy_pool != VK_NULL_HANDLE, expected);
+  if (transfer_only) EXPECT_NE(ctx.copy_family, ctx.queue_family);
+  std::vector<uint32_t> v(1000);
+  std::iota(v.begin(), v.end(), 7u);
+  HostStaging staging;
+  staging.fit(ctx, v.size() * 4);
+  std::copy(v.begin(), v.end(), static_cast<uint32_t*>(staging.mapped));
+  Buffer b = create_buffer(ctx, v.size() * 4, "b");
+  copy_from_staging(ctx, staging, b, v.size() * 4, Queue::copy);
+  EXPECT_EQ(download_vector<uint32_t>(ctx, b, v.size()), v);  // written on the copy queue, read on the other
+  fill(ctx, b, 3);
+  copy_to_staging(ctx, b, staging, v.size() * 4, Queue::copy);
+  const uint32_t* back = static_cast<const uint32_t*>(staging.mapped);
+  EXPECT_EQ(std::vector<uint32_t>(back, back + v.size()), std::vector<uint32_t>(v.size(), 3));
   for (auto& m : ctx.messages()) ADD_FAILURE() << m;
 }
 
