@@ -84,14 +84,20 @@ int compute_family(VkPhysicalDevice pd, uint32_t* timestamp_bits) {
 }
 
 // The family for copies beside the compute queue (Context::copy_queue): a transfer-only one, else the compute
-// family where it has a second queue; -1 when neither.
+// family where it has a second queue; -1 when neither. CDTGPU_COPY_QUEUE=compute skips the transfer family and
+// =none gives none (the copies then take the compute queue): to compare them in one binary.
 int copy_family(VkPhysicalDevice pd, uint32_t compute) {
+  const char* env = std::getenv("CDTGPU_COPY_QUEUE");
+  const std::string want = env ? env : "";
+  if (!want.empty() && want != "transfer" && want != "compute" && want != "none")
+    throw DeviceError("CDTGPU_COPY_QUEUE=" + want + ": not transfer, compute or none");
+  if (want == "none") return -1;
   uint32_t n = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
   std::vector<VkQueueFamilyProperties> fams(n);
   vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
   constexpr VkQueueFlags kWork = VK_QUEUE_COMPUTE_BIT | VK_QUEUE_GRAPHICS_BIT;
-  for (uint32_t i = 0; i < n; ++i)
+  for (uint32_t i = 0; i < n && want != "compute"; ++i)
     if ((fams[i].queueFlags & VK_QUEUE_TRANSFER_BIT) && !(fams[i].queueFlags & kWork) && fams[i].queueCount > 0)
       return int(i);
   return compute < n && fams[compute].queueCount > 1 ? int(compute) : -1;

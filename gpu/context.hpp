@@ -88,7 +88,8 @@ struct Context {
   // A queue for copies beside the compute queue's work, with a command pool of its own: a tile's points go up and
   // another's triangles come down while a third computes (gpu/tile_triangulator). A transfer-only family's (the
   // copy engines; every buffer is then shared by both families), else a second queue of the compute family; null
-  // where neither exists (lavapipe): those copies then take the compute queue.
+  // where neither exists (lavapipe): those copies then take the compute queue. CDTGPU_COPY_QUEUE=compute or =none
+  // asks for the second compute queue or none.
   VkQueue copy_queue = VK_NULL_HANDLE;
   uint32_t copy_family = 0;
   VkCommandPool copy_pool = VK_NULL_HANDLE;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <numeric>
 #include <vector>
 
@@ -194,7 +195,9 @@ TEST(GpuContext, CopyQueueWhereTheDeviceHasOne) {
   const bool expected = transfer_only || fams[ctx.queue_family].queueCount > 1;
   EXPECT_EQ(ctx.copy_queue != VK_NULL_HANDLE, expected);
   EXPECT_EQ(ctx.copy_pool != VK_NULL_HANDLE, expected);
-  if (transfer_only) EXPECT_NE(ctx.copy_family, ctx.queue_family);
+  if (transfer_only) {
+    EXPECT_NE(ctx.copy_family, ctx.queue_family);
+  }
   std::vector<uint32_t> v(1000);
   std::iota(v.begin(), v.end(), 7u);
   HostStaging staging;
@@ -208,6 +211,18 @@ TEST(GpuContext, CopyQueueWhereTheDeviceHasOne) {
   const uint32_t* back = static_cast<const uint32_t*>(staging.mapped);
   EXPECT_EQ(std::vector<uint32_t>(back, back + v.size()), std::vector<uint32_t>(v.size(), 3));
   for (auto& m : ctx.messages()) ADD_FAILURE() << m;
+}
+
+TEST(GpuContext, CopyQueueCanBeTurnedOffOrRefusesAnUnknownChoice) {
+  setenv("CDTGPU_COPY_QUEUE", "none", 1);
+  {
+    const Context ctx = create_context();
+    EXPECT_EQ(ctx.copy_queue, VK_NULL_HANDLE);
+    EXPECT_EQ(ctx.copy_pool, VK_NULL_HANDLE);
+  }
+  setenv("CDTGPU_COPY_QUEUE", "engines", 1);
+  EXPECT_THROW(create_context(), DeviceError);
+  unsetenv("CDTGPU_COPY_QUEUE");
 }
 
 TEST(GpuContext, VkCheckNamesCallFileAndSpecialErrors) {
