@@ -44,13 +44,13 @@ uint32_t find_in_range(const Triangles& ts, const HalfEdges& e, uint32_t v, int 
   return kNoHalfEdge;
 }
 
+}  // namespace
+
 // Twins from the canonical order. In triangle (a, b, c), a the smallest, the twin of a -> b (b -> a) can only
 // be the last half-edge of a triangle (a, x, b) or the middle one of a triangle starting below a; that of
 // c -> a is the first of (a, c, x) or again a middle one. So each pair is found once: a -> b looks for its
 // twin among a's triangles, a middle half-edge b -> c among min(b, c)'s, and the middle-to-middle pairs left
 // (an edge whose two triangles both start elsewhere) meet in a sort by edge.
-}  // namespace
-
 HalfEdges half_edges(const Triangles& ts, uint32_t V) {
   const size_t T = ts.size();
   HalfEdges e;

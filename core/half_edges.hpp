@@ -31,4 +31,10 @@ struct HalfEdgeKey {
 // A list out of canonical order is a logic_error. V: the vertex count (every id below it).
 HalfEdges half_edges(const Triangles& ts, uint32_t V);
 
+// Half-edge h's neighbours in its triangle, and its ends.
+inline uint32_t next_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 1) % 3; }
+inline uint32_t prev_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 2) % 3; }
+inline uint32_t from_of(const Triangles& ts, uint32_t h) { return ts[h / 3][h % 3]; }
+inline uint32_t to_of(const Triangles& ts, uint32_t h) { return ts[h / 3][(h % 3 + 1) % 3]; }
+
 }  // namespace cdtgpu

@@ -54,12 +54,6 @@ uint32_t find_vertex(const Points& vs, const Point3& p) {
   return it != vs.end() && it->x == p.x && it->y == p.y ? uint32_t(it - vs.begin()) : kNone;
 }
 
-// Half-edge h = 3 t + k runs from triangle t's vertex k to vertex k + 1.
-uint32_t next_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 1) % 3; }
-uint32_t prev_of(uint32_t h) { return h / 3 * 3 + (h % 3 + 2) % 3; }
-uint32_t from_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][h % 3]; }
-uint32_t to_of(const Mesh& m, uint32_t h) { return m.triangles[h / 3][(h % 3 + 1) % 3]; }
-
 // Marks the mesh edges along the constraints: kConstrained, plus kRegion for region edges. Without `all`, only
 // the region edges (the nesting levels need no other; trimming needs every constraint): a boundary and a hole
 // over 500K contour segments walk 1K segments, not 500K.
@@ -143,10 +137,10 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
       uint32_t h = h0;
       bool hull = false;
       do {
-        consider(to_of(mesh, h), h);
+        consider(to_of(mesh.triangles, h), h);
         const uint32_t p = prev_of(h);
         if (e.twin[p] == kNone) {
-          consider(from_of(mesh, p), p);
+          consider(from_of(mesh.triangles, p), p);
           hull = true;
           break;
         }
@@ -154,7 +148,7 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
       } while (h != h0);
       for (h = h0; hull && e.twin[h] != kNone;) {
         h = next_of(e.twin[h]);
-        consider(to_of(mesh, h), h);
+        consider(to_of(mesh.triangles, h), h);
       }
       if (best == kNone || steps > V) {
         size_t m = uncovered.load();

@@ -136,19 +136,10 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
   return out;
 }
 
-Triangles outside_final(const Triangles& m, const std::vector<Edge>& border) {
+Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>& border) {
   // The merge's adjacency from its canonical order (core/half_edges) and its border edges listed under their
   // smaller end, each with its final side: a sort of every half-edge instead took 0.1-0.2 s at 1B points on 64
   // cores, serial work after the tiles.
-  uint32_t V = 0;
-  for (const Edge& b : border) V = std::max({V, b[0] + 1, b[1] + 1});
-  V = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, m.size(), 1 << 16), V,
-      [&](const tbb::blocked_range<size_t>& r, uint32_t v) {
-        for (size_t t = r.begin(); t < r.end(); ++t) v = std::max({v, m[t][0] + 1, m[t][1] + 1, m[t][2] + 1});
-        return v;
-      },
-      [](uint32_t a, uint32_t b) { return std::max(a, b); });
   const HalfEdges e = half_edges(m, V);
   // sides[from[v] .. from[v + 1]): the border edges whose smaller end is v, as (larger end) << 1 | forward, where
   // forward says the final side is left of (smaller, larger).
@@ -168,8 +159,6 @@ Triangles outside_final(const Triangles& m, const std::vector<Edge>& border) {
       if (sides[i] >> 1 == hi) return 1 + int(sides[i] & 1);
     return 0;
   };
-  auto from_of = [&](size_t h) { return m[h / 3][h % 3]; };
-  auto to_of = [&](size_t h) { return m[h / 3][(h % 3 + 1) % 3]; };
   // The parts: triangles joined across edges that are not border edges (union-find linking the larger root
   // under the smaller, so concurrent unions make no cycle; the parts do not depend on the order).
   std::vector<uint32_t> parent(m.size());
@@ -196,12 +185,12 @@ Triangles outside_final(const Triangles& m, const std::vector<Edge>& border) {
   const size_t halves = 3 * m.size();
   each(halves, [&](size_t h) {
     const uint32_t g = e.twin[h];
-    if (g != kNoHalfEdge && h < g && !border_side(from_of(h), to_of(h))) unite(uint32_t(h / 3), g / 3);
+    if (g != kNoHalfEdge && h < g && !border_side(from_of(m, uint32_t(h)), to_of(m, uint32_t(h)))) unite(uint32_t(h / 3), g / 3);
   });
   // Each part beside a border edge takes that edge's side: 1 final, 2 outside; a part with both is an error.
   std::vector<uint8_t> mark(m.size(), 0);
   each(halves, [&](size_t h) {
-    const uint32_t a = from_of(h), b = to_of(h);
+    const uint32_t a = from_of(m, uint32_t(h)), b = to_of(m, uint32_t(h));
     if (const int side = border_side(a, b))
       shared(mark[root(uint32_t(h / 3))]).fetch_or((a < b) == (side == 2) ? 1 : 2, std::memory_order_relaxed);
   });

@@ -3,7 +3,7 @@
 //
 //   RunMerge order;
 //   order.make_room(2 * vertices, threads);        // optional: the output's pages beside the tiles
-//   Triangles kept = outside_final(merge, border); // the merge's, outside the tiles' final region
+//   Triangles kept = outside_final(merge, vertices, border); // the merge's, outside the tiles' final region
 //   Triangles all = order.merge(runs);             // runs: the tiles' runs and the merge's
 #pragma once
 #include <atomic>
@@ -49,7 +49,7 @@ class RunMerge {
 // The merge's triangles outside the final region: the merge triangulates the final region's holes too, from
 // their border vertices; those triangles lie in parts of the merge, bounded by border edges, that are on the
 // final side of a border edge (tiling.md, claim 2). `border` is directed with the final region on its left; `m`
-// is in canonical order (a logic_error otherwise), as a triangulation's output is.
-Triangles outside_final(const Triangles& m, const std::vector<Edge>& border);
+// is in canonical order (a logic_error otherwise), as a triangulation's output is, over `vertices` vertices.
+Triangles outside_final(const Triangles& m, uint32_t vertices, const std::vector<Edge>& border);
 
 }  // namespace cdtgpu

@@ -652,7 +652,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     s.merge_segments = merge_segments.size();
   }
   const auto t_keep = Clock::now();
-  Triangles kept = outside_final(merged, local_border);  // in order, so still a sorted run
+  Triangles kept = outside_final(merged, uint32_t(ids.size()), local_border);  // in order: still a sorted run
   if (!again) s.merge_triangles = kept.size();
   tbb::parallel_for(size_t(0), kept.size(), [&](size_t i) {
     for (uint32_t& id : kept[i]) id = ids[id];

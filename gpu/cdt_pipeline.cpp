@@ -35,6 +35,9 @@ void record_stage(GpuCdtStats& s, const char* name, Clock::time_point t0) {
   spdlog::debug("gpu backend: {}: {:.1f} ms", name, s.wall_ms.back().second);
 }
 
+// A buffer the tiles' copies hold, made with room: tiles come in sizes a few % apart.
+uint64_t shelf_room(uint64_t bytes) { return bytes + bytes / 16; }
+
 // The host array for the triangles of n vertices (at most 2n), its pages touched on other cores while the GPU
 // works: fresh memory costs a page fault per 4 KiB, ~15 ms for 2.5M points, which the download would wait for.
 std::future<Triangles> triangle_storage(size_t n) {
@@ -247,8 +250,20 @@ Buffer GpuCdt::from_shelf(std::vector<Buffer>& list, uint64_t bytes, const char*
   }
   if (b.size >= bytes && b.buffer) return b;
   b = Buffer();
-  const uint64_t want = bytes + bytes / 16;  // tiles come in sizes a few % apart
-  return addressed ? create_addressed_buffer(ctx_, want, name) : create_buffer(ctx_, want, name);
+  return addressed ? create_addressed_buffer(ctx_, shelf_room(bytes), name)
+                   : create_buffer(ctx_, shelf_room(bytes), name);
+}
+
+void GpuCdt::top_up_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const {
+  for (;;) {
+    {
+      std::lock_guard<std::mutex> lock(shelf_->mutex);
+      if (list.size() >= 2) return;
+    }
+    Buffer b = addressed ? create_addressed_buffer(ctx_, bytes, name) : create_buffer(ctx_, bytes, name);
+    std::lock_guard<std::mutex> lock(shelf_->mutex);
+    list.push_back(std::move(b));
+  }
 }
 
 Buffer GpuCdt::upload_tile(uint32_t n, const HostStaging& staging, GpuCdtStats& s) const {
@@ -337,22 +352,12 @@ void GpuCdt::warm_up_tiles(uint64_t vertices, HostStaging& staging) const {
   // Two of each buffer the copies hold, made now too: while a tile computes, the next one's points go up and the
   // last one's triangles come down.
   const uint64_t sorted_bytes = sorted.size;
-  size_t points = 0, triangles = 0;
   {
     std::lock_guard<std::mutex> lock(shelf_->mutex);
     shelf_->sorted.push_back(std::move(sorted));
-    points = shelf_->points.size(), triangles = shelf_->sorted.size();
   }
-  for (; points < 2; ++points) {
-    Buffer b = create_buffer(ctx_, uint64_t(n) * 17, "points");  // from_shelf's room
-    std::lock_guard<std::mutex> lock(shelf_->mutex);
-    shelf_->points.push_back(std::move(b));
-  }
-  for (; triangles < 2; ++triangles) {
-    Buffer b = create_addressed_buffer(ctx_, sorted_bytes, "tri_nbrs");
-    std::lock_guard<std::mutex> lock(shelf_->mutex);
-    shelf_->sorted.push_back(std::move(b));
-  }
+  top_up_shelf(shelf_->points, shelf_room(uint64_t(n) * 16), "points", false);
+  top_up_shelf(shelf_->sorted, sorted_bytes, "tri_nbrs", true);
 }
 
 void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f) {

@@ -140,6 +140,8 @@ class GpuCdt {
                       bool unresolved = false) const;
   // One of the shelf's buffers at least `bytes` long (made when none is).
   Buffer from_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const;
+  // Buffers of `bytes` added to the shelf's `list` until it holds two.
+  void top_up_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const;
   // Stage 3: the constraints inserted.
   // recycle: the inserter's flags stay in the cache for the next tile or run. unresolved:
   // ConstraintOptions::unresolved.

@@ -171,18 +171,16 @@ class OnDevice {
         const auto t3 = std::chrono::steady_clock::now();
         Buffer sorted;
         uint32_t count = 0;
-        std::chrono::steady_clock::time_point held_from;
+        std::chrono::steady_clock::time_point t4;
         {
           pool_.take(d);
           const DevicePool::Held held_device{pool_, d};
-          const auto t4 = std::chrono::steady_clock::now();
+          t4 = std::chrono::steady_clock::now();
           spdlog::debug("{}: waited {:.0f} ms for its staging memory, {:.0f} ms for a slot, staged in {:.0f} ms, "
                         "uploaded in {:.0f} ms, waited {:.0f} ms for the device",
                         job.what, ms(t1 - slot_taken), ms(slot_taken - t0), ms(t2 - t1), ms(t3 - t2), ms(t4 - t3));
-          held_from = t4;
           count = cdt.compute_tile(job, std::move(points), staging, f, sorted, one);
         }
-        const auto t4 = held_from;
         const auto t5 = std::chrono::steady_clock::now();
         on_copy_queue(d, [&] { cdt.download_tile(std::move(sorted), count, staging, one); });
         const auto t6 = std::chrono::steady_clock::now();

@@ -109,6 +109,7 @@ TEST(OutsideFinal, DropsTheTrianglesOnTheBordersFinalSide) {
   std::sort(segments.begin(), segments.end());
   Triangles merge = cdt_of_graph(h.vertices, segments);
   canonicalize_triangles(merge);  // as a merge's triangles come
+  const uint32_t V = uint32_t(h.vertices.size());
   auto in_a_hole = [&](const Triangle& t) {
     const double x = (h.vertices[t[0]].x + h.vertices[t[1]].x + h.vertices[t[2]].x) / 3;
     const double y = (h.vertices[t[0]].y + h.vertices[t[1]].y + h.vertices[t[2]].y) / 3;
@@ -117,19 +118,19 @@ TEST(OutsideFinal, DropsTheTrianglesOnTheBordersFinalSide) {
   Triangles outside, inside;
   for (const Triangle& t : merge) (in_a_hole(t) ? inside : outside).push_back(t);
   ASSERT_GT(inside.size(), 20u);
-  EXPECT_EQ(outside_final(merge, h.border), outside);
+  EXPECT_EQ(outside_final(merge, V, h.border), outside);
   // The border turned round: the final region is now outside the rectangles.
   std::vector<Edge> reversed;
   for (const Edge& e : h.border) reversed.push_back({e[1], e[0]});
-  EXPECT_EQ(outside_final(merge, reversed), inside);
+  EXPECT_EQ(outside_final(merge, V, reversed), inside);
   // One edge turned round: a part on both sides of the border.
   std::vector<Edge> broken = h.border;
   std::swap(broken[5][0], broken[5][1]);
-  EXPECT_THROW(outside_final(merge, broken), std::logic_error);
+  EXPECT_THROW(outside_final(merge, V, broken), std::logic_error);
   // Out of canonical order: its adjacency would be wrong, so it is refused.
   Triangles shuffled = merge;
   std::swap(shuffled[0], shuffled[1]);
-  EXPECT_THROW(outside_final(shuffled, h.border), std::logic_error);
+  EXPECT_THROW(outside_final(shuffled, V, h.border), std::logic_error);
 }
 
 }  // namespace
