@@ -33,7 +33,8 @@ class RunMerge {
   // memory takes 350. It holds the whole output beside the runs: for hosts with the memory to spare.
   void make_room(size_t triangles, unsigned threads);
 
-  // The runs (each sorted, canonical), freed, as one sorted list; in waves of about wave_bytes of triangles.
+  // The runs (each sorted, canonical), freed, as one sorted list; in waves of about wave_bytes of triangles,
+  // or, in room made ahead, in one wave, the runs freed on another thread after it.
   Triangles merge(std::vector<Triangles>& runs, size_t wave_bytes = size_t(512) << 20);
 
   // A run given up (a tile that throws, such as UnresolvedTile) stops the touching at once: its caller would
