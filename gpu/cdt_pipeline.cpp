@@ -209,9 +209,12 @@ Triangles GpuCdt::triangulate_graph(const Points& vertices, const std::vector<Ed
   s = GpuCdtStats{};
   const auto t_all = Clock::now();
   std::future<Triangles> storage = triangle_storage(vertices.size());
-  GpuTriangulation tri = delaunay_of(vertices, {}, s);
-  constrain(tri, segments, s);
+  // With the tiles' buffers, given back after: a merge after tiles of 125M points took the inserter's flags and
+  // the build's numbering from the caches and freed them (1.6 GB, 38 ms on the run's serial path).
+  GpuTriangulation tri = delaunay_of(vertices, {}, s, &kept_);
+  constrain(tri, segments, s, true);
   Triangles triangles = download_sorted(tri, s, storage.get());
+  keep(tri);
   s.wall_total_ms = ms_since(t_all);
   return triangles;
 }

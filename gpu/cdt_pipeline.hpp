@@ -69,7 +69,7 @@ class GpuCdt {
 
   // The CDT of a graph resolved already (vertices sorted and unique, segments meeting only at shared endpoints and
   // through no vertex: a tile of core/tiles): stages 2-4 without the resolve stage or any copy of the input.
-  // Triangles in canonical order.
+  // Triangles in canonical order. Its buffers stay for the next call, as a tile's do (a merge after tiles).
   Triangles triangulate_graph(const Points& vertices, const std::vector<Edge>& segments,
                                           GpuCdtStats* stats = nullptr) const;
 
