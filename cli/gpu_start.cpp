@@ -100,7 +100,8 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
 }
 
 GpuStart::~GpuStart() {
-  if (closing_.joinable()) closing_.join();
+  if (closing_.joinable()) closing_.join();  // it joins closing_later_ first
+  if (closing_later_.joinable()) closing_later_.join();
   if (pending_.valid()) pending_.wait();
   if (ready_) ready_->cdt.reset();  // its passes before the context
 }
@@ -118,6 +119,7 @@ void GpuStart::settle() {
 void GpuStart::close_in_background() {
   if (closing_.joinable()) return;
   closing_ = std::thread([this] {
+    if (closing_later_.joinable()) closing_later_.join();  // it may free staging on this device
     settle();  // a start that failed has nothing to close
     if (!ready_) return;
     ready_->cdt.reset();  // its passes before the context
@@ -125,11 +127,17 @@ void GpuStart::close_in_background() {
   });
 }
 
+void GpuStart::close_later(std::function<void()> close) {
+  if (closing_later_.joinable()) closing_later_.join();
+  closing_later_ = std::thread(std::move(close));
+}
+
 void GpuStart::leave_for_exit() {
   if (closing_.joinable()) {
     closing_.join();
     return;
   }
+  if (closing_later_.joinable()) closing_later_.join();
   settle();  // a start that failed has nothing to leave
   if (!ready_) return;
   gpu::store_pipeline_cache(ready_->ctx);

@@ -75,8 +75,9 @@ std::string gpu_refused(const gpu::DeviceError& e) {
 // in_flight: tiles worked on at once (0: as many as the cores take; a device's: 2, core/tiles.hpp).
 // finalize: the tiles' own (the GPU's, core/tiles.hpp); empty: the host's test.
 TileOptions tile_options(const Job& job, uint64_t tile_points, unsigned in_flight, TileFinalizer finalize,
-                         std::function<void(uint64_t)> reserve) {
+                         std::function<void(uint64_t)> reserve, unsigned ramp = 0) {
   TileOptions opt;
+  opt.ramp = ramp;
   opt.finalize = std::move(finalize);
   opt.reserve = std::move(reserve);
   opt.max_tile_points = tile_points;
@@ -89,8 +90,10 @@ void record_tiles(Job& job, const TileStats& ts, uint64_t tile_points);
 
 CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
                                const TileTriangulator& triangulate, unsigned in_flight = 0,
-                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {}) {
-  const TileOptions opt = tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve));
+                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {},
+                               unsigned ramp = 0) {
+  const TileOptions opt =
+      tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve), ramp);
   TileStats ts;
   CdtResult r = timed(job, "triangulate: tiles and merge", [&] {
     return triangulate_tiled(std::move(in), opt, triangulate, &ts);
@@ -317,16 +320,34 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       }
       return *got;
     };
+    // The devices opened here and the tiles' staging, closed beside the outputs' writing however this ends.
+    std::shared_ptr<gpu::TileDevices> opened;
+    std::shared_ptr<gpu::GpuTiles> staged;
+    struct CloseLater {
+      GpuStart& start;
+      std::shared_ptr<gpu::TileDevices>& devices;
+      std::shared_ptr<gpu::GpuTiles>& tiles;
+      ~CloseLater() {
+        start.close_later([d = std::move(devices), t = std::move(tiles)]() mutable {
+          t.reset();  // the staging, on the devices' contexts, first
+          d.reset();
+        });
+      }
+    } close_later{start, opened, staged};
     try {
-      const gpu::TileDevices devices = timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); });
+      opened = std::make_shared<gpu::TileDevices>(
+          timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); }));
+      const gpu::TileDevices& devices = *opened;
       if (options.max_tile_points < 0) tile_here = std::min(tile_here, devices.max_tile_points());
       for (;; ++retries) {
         try {
-          gpu::GpuTiles tiles = gpu::gpu_tiles(devices.cdts());
+          staged = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts()));
+          gpu::GpuTiles& tiles = *staged;
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
           if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
             const TileOptions opt =
-                tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
+                tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve,
+                             tiles.ramp);
             TileStats ts;
             std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
@@ -346,7 +367,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           }
           CdtResult r = triangulate_in_tiles(job, std::move(input()), tile_here, tiles.triangulate,
                                              unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
-                                             std::move(tiles.reserve));
+                                             std::move(tiles.reserve), tiles.ramp);
           stats.counts["gpu_tile_retries"] = retries;
           return r;
         } catch (const gpu::DeviceError& e) {

@@ -33,7 +33,7 @@ constexpr double kMaxSlabAspect = 16;
 // order, at the coordinate of the first one after it: every vertex strictly before that coordinate is on the
 // near side, so by induction every vertex strictly inside a tile's rectangle is one of the tile's own. A
 // binary tree over the cuts serves the segments' descent.
-TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape) {
+TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape, unsigned ramp) {
   const size_t n = v.size();
   TilePlan plan;
   // The height from about 2^20 of the vertices: it only shapes the columns (a pass over all of them read
@@ -67,13 +67,27 @@ TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape) {
   const bool slabs = shape == TileShape::slabs ||
                      (shape == TileShape::automatic && max_points >= kSlabTilePoints &&
                       (h <= 0 || double(tiles) * h <= kMaxSlabAspect * w));
-  const uint64_t columns = slabs ? tiles : squares;
+  // Columns of equal counts; with a ramp, the first and the last slab cut into `ramp` each.
+  std::vector<uint32_t> starts;
+  if (slabs && ramp > 1 && tiles >= 2 && n / tiles >= ramp) {
+    auto thin = [&](uint64_t lo, uint64_t hi) {
+      for (uint64_t i = 0; i < ramp; ++i) starts.push_back(uint32_t(lo + (hi - lo) * i / ramp));
+    };
+    thin(0, n / tiles);
+    for (uint64_t k = 1; k + 1 < tiles; ++k) starts.push_back(uint32_t(k * n / tiles));
+    thin((tiles - 1) * n / tiles, n);
+  } else {
+    const uint64_t even = slabs ? tiles : squares;
+    for (uint64_t c = 0; c < even; ++c) starts.push_back(uint32_t(c * n / even));
+  }
+  starts.push_back(uint32_t(n));
+  const uint64_t columns = starts.size() - 1;
   plan.slabs = slabs;
   if (!slabs) {  // a slab's ids are its range: no order (4 GB written at 1B points)
     resize_unwritten(plan.order, n);
     tbb::parallel_for(size_t(0), n, [&](size_t i) { plan.order[i] = uint32_t(i); });
   }
-  auto column_start = [&](uint64_t c) { return uint32_t(c * n / columns); };
+  auto column_start = [&](uint64_t c) { return starts[c]; };
   auto cell_count = [&](uint64_t c) {
     return std::max<uint64_t>(1, (column_start(c + 1) - column_start(c) + max_points - 1) / max_points);
   };

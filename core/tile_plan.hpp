@@ -34,6 +34,9 @@ struct TilePlan {
 // TileShape: about square tiles (the shortest border, so the smallest merge), or slabs: columns of the (x, y)
 // order, which need no selection, each tile a range of ids. `automatic`: slabs for tiles of 2^24 points or more
 // (a GPU's) unless they would be over 16 times as tall as wide, else squares.
-TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape = TileShape::squares);
+// ramp (slabs only; 0 or 1: none): the first and the last slab each cut into `ramp` thinner ones, so that the
+// devices start on small tiles (each device's first waits for the plan and the tiles gathered before it) and
+// end on small ones (the last tile's copies and bookkeeping come before the merge).
+TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape = TileShape::squares, unsigned ramp = 0);
 
 }  // namespace cdtgpu

@@ -408,7 +408,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
       options.shape == TileShape::automatic && !options.finalize ? TileShape::squares : options.shape;
   if (options.unresolved && !options.finalize)
     throw std::logic_error("tiled_cdt: an unresolved input needs a finalizer that checks its tiles");
-  Plan plan = plan_tiles(v, options.max_tile_points, shape);
+  Plan plan = plan_tiles(v, options.max_tile_points, shape, options.ramp);
   const size_t tiles = plan.tiles.size();
   if (reserved) {
     uint64_t largest = 0;

@@ -10,7 +10,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
+#include <thread>
 
 #include "gpu/passes.hpp"
 
@@ -124,7 +126,9 @@ bool save_pipeline_cache(const std::string& path, const VkPhysicalDeviceProperti
   if (path.empty()) return false;
   std::error_code ec;
   std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  // Per process and thread: a tiled run's devices, closed at once on threads of their own, may share a path.
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid()) + "-" +
+                          std::to_string(std::hash<std::thread::id>{}(std::this_thread::get_id()));
   const Header h = header_for(props, payload);
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);

@@ -29,6 +29,9 @@ struct GpuTiles {
   // `warm_up_from` points also warms each device up (GpuCdt::warm_up_tiles) unless a tile has begun.
   std::function<void(uint64_t vertices)> reserve;
   std::function<size_t()> warm_ups;  // devices warmed up so far
+  // TileOptions::ramp: a small slab to start and to end on for each device, at least 2 (one device's first
+  // tile waits for its gather and staging, its last one's copies for the merge).
+  unsigned ramp = 2;
 };
 // Tiles from which a warm-up pays on these devices: 100M points on hardware GPUs. At 1B points (tiles of 134M)
 // the resolve and plan take 6-14 s, the warm-up 1-2 s; at 256M (tiles of 64M) they take ~0.6 s, less than
@@ -47,6 +50,12 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t w
 //   TileTriangulator tri = gpu_tile_triangulator(d.cdts());   // 2 * d.cdts().size() tiles in flight
 class TileDevices {
  public:
+  TileDevices() = default;
+  TileDevices(TileDevices&&) = default;
+  TileDevices& operator=(TileDevices&&) = delete;
+  // The opened devices closed at once, each on a thread of its own: after tiles of 1B points each took ~1.2 s
+  // to free its buffers.
+  ~TileDevices();
   void borrow(const GpuCdt& cdt);
   void open(const std::vector<size_t>& indices, const ContextOptions& options);
   const std::vector<const GpuCdt*>& cdts() const { return cdts_; }

@@ -46,8 +46,10 @@ TEST(GpuTiles, TwoDevicesGiveTheSingleRunsBytes) {
       gpu::GpuCdtStats sum;
       gpu::GpuTiles tiles = gpu::gpu_tiles({&a, &b}, &sum);
       if (on_device) opt.finalize = tiles.finalize, opt.reserve = tiles.reserve;
+      if (in_flight == 4) opt.shape = TileShape::slabs, opt.ramp = tiles.ramp;  // as cdtgpu triangulate's large tiles
       const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate, &ts);
-      const std::string what = std::to_string(in_flight) + " in flight, final test on the " + (on_device ? "device" : "host");
+      const std::string what = std::to_string(in_flight) + " in flight, final test on the " +
+                               (on_device ? "device" : "host") + (in_flight == 4 ? ", ramped slabs" : "");
       EXPECT_GE(ts.tiles, 8u);
       EXPECT_GT(sum.wall_total_ms, 0.0);
       EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << what;

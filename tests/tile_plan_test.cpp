@@ -25,11 +25,12 @@ bool strictly_inside(const TileRect& r, const Point3& p) {
 }
 
 void expect_plan(const Points& v, uint64_t max_points, const std::string& what,
-                 TileShape shape = TileShape::squares) {
-  const TilePlan plan = plan_tiles(v, max_points, shape);
+                 TileShape shape = TileShape::squares, unsigned ramp = 0) {
+  const TilePlan plan = plan_tiles(v, max_points, shape, ramp);
   const uint64_t tiles_asked = (v.size() + max_points - 1) / max_points;
-  EXPECT_GE(plan.tiles.size(), tiles_asked) << what;
-  EXPECT_LE(plan.tiles.size(), tiles_asked + tiles_asked / 2 + 1) << what;  // columns round the count up
+  const uint64_t thin = ramp > 1 ? 2 * (ramp - 1) : 0;  // the ramp's extra slabs
+  EXPECT_GE(plan.tiles.size(), tiles_asked + thin) << what;
+  EXPECT_LE(plan.tiles.size(), tiles_asked + tiles_asked / 2 + 1 + thin) << what;  // columns round the count up
   std::vector<int> owner(v.size(), -1);
   for (size_t t = 0; t < plan.tiles.size(); ++t) {
     const TileNode& node = plan.nodes[plan.tiles[t]];
@@ -90,6 +91,25 @@ TEST(TilePlan, SlabsAreWholeColumns) {
   for (int x = 0; x < 30; ++x)
     for (int y = 0; y < 200; ++y) grid.push_back({double(x), double(y), 0});
   expect_plan(grid, 999, "grid slabs, ties on every column", TileShape::slabs);
+}
+
+TEST(TilePlan, ARampCutsTheFirstAndTheLastSlab) {
+  const Points v = random_sorted(200'000, 9, 100000);
+  const size_t n = v.size();
+  expect_plan(v, 40'000, "random slabs, a ramp of 3", TileShape::slabs, 3);
+  const TilePlan plan = plan_tiles(v, 40'000, TileShape::slabs, 3);
+  ASSERT_EQ(plan.tiles.size(), 5u + 4u);  // 5 slabs, the first and the last in three
+  std::vector<size_t> sizes;
+  for (uint32_t t : plan.tiles) sizes.push_back(plan.nodes[t].hi - plan.nodes[t].lo);
+  for (size_t t : {0, 1, 2, 6, 7, 8}) EXPECT_NEAR(double(sizes[t]), double(n) / 15, 1) << "thin slab " << t;
+  for (size_t t : {3, 4, 5}) EXPECT_NEAR(double(sizes[t]), double(n) / 5, 1) << "slab " << t;
+  // Squares, and slabs too few to cut, take no ramp.
+  EXPECT_EQ(plan_tiles(v, 40'000, TileShape::squares, 3).tiles.size(), plan_tiles(v, 40'000).tiles.size());
+  EXPECT_EQ(plan_tiles(v, n, TileShape::slabs, 3).tiles.size(), 1u);
+  Points grid;
+  for (int x = 0; x < 30; ++x)
+    for (int y = 0; y < 200; ++y) grid.push_back({double(x), double(y), 0});
+  expect_plan(grid, 999, "grid slabs, ties on every column, a ramp of 4", TileShape::slabs, 4);
 }
 
 TEST(TilePlan, AutomaticSlabsOnlyForLargeTilesThatAreNotTooThin) {

@@ -37,19 +37,24 @@ TileTriangulator without_neighbours() {
 }
 
 // The tiled mesh against the single run, at several tile sizes, with and without the triangulator's
-// neighbours, and as slabs; returns the stats of the smallest tiles.
+// neighbours, as slabs and as slabs whose first and last are cut into three (TileOptions::ramp); returns the
+// stats of the smallest tiles.
 TileStats expect_same_as_single_run(const InputSet& in, std::vector<uint64_t> tile_points = {16, 50, 500}) {
   const PreparedInput p = prepare(in);
   const CdtResult single = triangulate_cgal(p);
   TileStats smallest;
   for (uint64_t tp : tile_points)
-    for (const int variant : {0, 1, 2}) {  // with the triangulator's neighbours, without them, slabs
+    for (const int variant : {0, 1, 2, 3}) {  // with the triangulator's neighbours, without them, slabs, ramped
       const bool neighbours = variant != 1;
-      SCOPED_TRACE(variant == 0 ? "with neighbours" : variant == 1 ? "without neighbours" : "slabs");
+      SCOPED_TRACE(variant == 0   ? "with neighbours"
+                   : variant == 1 ? "without neighbours"
+                   : variant == 2 ? "slabs"
+                                  : "slabs with a ramp of 3");
       TileStats ts;
       TileOptions opt;
       opt.max_tile_points = tp;
-      opt.shape = variant == 2 ? TileShape::slabs : TileShape::automatic;
+      opt.shape = variant >= 2 ? TileShape::slabs : TileShape::automatic;
+      opt.ramp = variant == 3 ? 3 : 0;
       const CdtResult tiled = triangulate_tiled(
           resolve_constraints(p), opt, neighbours ? cgal_tile_triangulator() : without_neighbours(), &ts);
       EXPECT_EQ(tiled.steiner_points, single.steiner_points) << "tiles of " << tp;
