@@ -341,6 +341,10 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
   cmd->add_flag("--points-only", o.points_only, "tiles: uniform points without constraint segments");
   cmd->add_option("--tiles-in-flight", o.tiles_in_flight, "tiles: GPU tiles worked on at once, per device (cdtgpu triangulate: 2)")
       ->check(CLI::Range(1, 16));
+  cmd->add_option("--tile-ramps", o.tile_ramps,
+                  "tiles: a GPU tiled row for each of these ramps, the first and the last slab cut into this many "
+                  "(1: none; 0, the default: cdtgpu triangulate's, the device count, at least 2)")
+      ->delimiter(',');
   cmd->add_option("--devices", o.devices,
                   "tiles: also GPU tiled rows on several devices, 2, 4, ... up to all of these (all, or indices "
                   "0,1,... as `cdtgpu devices` lists them)");

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <future>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -50,7 +49,10 @@ struct Row {
   std::vector<double> total_ms, resolve_ms, tiles_ms, merge_ms;
   TileStats tiles;
   uint64_t tile_points = 0;
-  Mesh mesh;
+  Mesh mesh;               // the first row's; the others' only until compared with it (keep below)
+  uint64_t triangles = 0;  // the mesh's
+  bool same = true;        // the first row's mesh, byte for byte
+  double timed_ms = -1;    // set by a run that times itself: the bench's own copies left out
 };
 
 // One way of triangulating `p`, timed `runs` times after a warm-up (none for a single timed run: CGAL's
@@ -65,7 +67,7 @@ Row time_row(const std::string& mode, const std::string& backend, int runs, F&& 
     const auto t = Clock::now();
     once(one);
     if (r < 0) continue;
-    row.total_ms.push_back(ms_since(t));
+    row.total_ms.push_back(one.timed_ms >= 0 ? one.timed_ms : ms_since(t));
     row.resolve_ms.insert(row.resolve_ms.end(), one.resolve_ms.begin(), one.resolve_ms.end());
     if (mode == "tiled")
       row.tiles_ms.push_back(one.tiles.tiles_ms), row.merge_ms.push_back(one.tiles.merge_ms);
@@ -78,7 +80,7 @@ Row time_row(const std::string& mode, const std::string& backend, int runs, F&& 
 
 void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangulator& tri, Row& out,
                 unsigned in_flight = 0, const TileFinalizer& finalize = {},
-                const std::function<void(uint64_t)>& reserve = {}) {
+                const std::function<void(uint64_t)>& reserve = {}, unsigned ramp = 0) {
   const auto t = Clock::now();
   // As cdtgpu triangulate does: the tiles' staging (and the devices' warm-up) begun before the resolve.
   if (reserve) reserve(tile_staging_points(p.vertices.size(), tile_points));
@@ -87,20 +89,18 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
   opt.tiles_in_flight = in_flight;
   opt.finalize = finalize;
   opt.reserve = reserve;
+  opt.ramp = ramp;
   out.tile_points = tile_points;
   if (finalize) {  // a device's tiles check themselves, no resolve unless one has something (core/tiles_ahead.hpp)
-    // The mesh's vertices: cdtgpu triangulate moves the prepared ones; `p` serves every run here, so they are
-    // copied, on all cores beside the tiles.
-    Points vertices;
-    auto copying = std::async(std::launch::async, [&] {
-      resize_unwritten(vertices, p.vertices.size());
-      copy_on_all_cores(p.vertices.data(), p.vertices.size(), vertices.data());
-    });
     std::optional<Triangles> checked = tiled_cdt_unresolved(p, opt, tri, &out.tiles);
-    copying.get();
     if (checked) {
+      // The mesh's vertices: cdtgpu triangulate moves the prepared ones; `p` serves every run here, so they are
+      // copied, untimed. Copied beside the tiles, they took the host's memory from the first tile's gather and
+      // staging (16 GB at 1B points), which triangulate does not.
+      out.timed_ms = ms_since(t);
       out.resolve_ms.push_back(0);
-      out.mesh.vertices = std::move(vertices);
+      resize_unwritten(out.mesh.vertices, p.vertices.size());
+      copy_on_all_cores(p.vertices.data(), p.vertices.size(), out.mesh.vertices.data());
       out.mesh.triangles = std::move(*checked);
       return;
     }
@@ -170,15 +170,26 @@ int run_tiles(const BenchOptions& o) {
     const PreparedInput p = prepare(in);
     in = InputSet{};
     std::vector<Row> results;
+    // Each row's mesh compared with the first's as it comes, then dropped: at 1B points a mesh is 40 GB, and
+    // nine rows' left the later ones short of the host's memory (the output's room not made ahead).
+    auto keep = [&](Row r) {
+      r.triangles = r.mesh.triangles.size();
+      if (!results.empty()) {
+        const Mesh& first = results.front().mesh;
+        r.same = r.mesh.vertices == first.vertices && r.mesh.triangles == first.triangles;
+        r.mesh = Mesh{};
+      }
+      results.push_back(std::move(r));
+    };
     if (n <= o.cgal_max_points)
-      results.push_back(
+      keep(
           time_row("single", "cgal", cgal_runs, [&](Row& r) { r.mesh = triangulate_cgal(p).mesh; }));
     uint64_t gpu_single_peak = 0;
     if (o.gpu) {
       const gpu::Context ctx = gpu::create_context(co);
       const gpu::GpuCdt cdt(ctx);
       try {  // a device too small for the whole input refuses it: the tiled rows still run
-        results.push_back(time_row("single", "gpu", o.runs, [&](Row& r) {
+        keep(time_row("single", "gpu", o.runs, [&](Row& r) {
           gpu::GpuCdtStats gs;
           r.mesh = cdt.triangulate(p, &gs).mesh;
           gpu_single_peak = gs.peak_device_bytes;
@@ -194,7 +205,7 @@ int run_tiles(const BenchOptions& o) {
     const uint64_t cpu_tile =
         o.tile_points ? o.tile_points : auto_cpu_tile_points(p.vertices.size(), threads);
     if (cpu_tile && n <= o.cgal_max_points)
-      results.push_back(time_row("tiled", "cgal", o.runs,
+      keep(time_row("tiled", "cgal", o.runs,
                                  [&](Row& r) { tiled_once(p, cpu_tile, cgal_tile_triangulator(), r); }));
     // GPU tiles on one device, then on 2, 4, ... of --devices: two tiles in flight a device, as cdtgpu
     // triangulate runs them; without --tile-points, tiles of a quarter of the input a device (or what the
@@ -209,36 +220,39 @@ int run_tiles(const BenchOptions& o) {
                                               : std::min(devices.max_tile_points(), p.vertices.size() / (4 * users.size()) + 1);
       gpu::GpuCdtStats sum;
       const gpu::GpuTiles tri = gpu::gpu_tiles(users, &sum);
-      const std::string backend = users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size());
-      const double memory_before = gpu::memory_ms();
-      results.push_back(time_row("tiled", backend, o.runs, [&](Row& r) {
-        sum = gpu::GpuCdtStats{};
-        tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(o.tiles_in_flight * users.size()), tri.finalize,
-                   tri.reserve);
-      }));
-      std::string parts;
-      for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
-      std::string gpu_parts;
-      for (const auto& [name, ms] : sum.gpu_ms) gpu_parts += " " + name + " " + fmt(ms);
-      std::printf(
-          "%9s last tiled %s run, the tiles' calls summed: GPU %s ms:%s; wall %s ms:%s; peak device %s MB; device "
-          "buffers allocated and freed in %s ms (all runs, all threads)\n", "",
-          backend.c_str(), fmt(sum.gpu_total_ms).c_str(), gpu_parts.c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
-          fmt(double(sum.peak_device_bytes) / 1e6).c_str(), fmt(gpu::memory_ms() - memory_before).c_str());
+      // One row a ramp of --tile-ramps (TileOptions::ramp; 0: triangulate's), each named by it.
+      for (unsigned ramp : o.tile_ramps.empty() ? std::vector<unsigned>{0} : o.tile_ramps) {
+        if (ramp == 0) ramp = tri.ramp;
+        const std::string backend = (users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size())) +
+                                    (o.tile_ramps.empty() ? "" : " ramp " + std::to_string(ramp));
+        const double memory_before = gpu::memory_ms();
+        keep(time_row("tiled", backend, o.runs, [&](Row& r) {
+          sum = gpu::GpuCdtStats{};
+          tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(o.tiles_in_flight * users.size()), tri.finalize,
+                     tri.reserve, ramp);
+        }));
+        std::string parts;
+        for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);
+        std::string gpu_parts;
+        for (const auto& [name, ms] : sum.gpu_ms) gpu_parts += " " + name + " " + fmt(ms);
+        std::printf(
+            "%9s last tiled %s run, the tiles' calls summed: GPU %s ms:%s; wall %s ms:%s; peak device %s MB; device "
+            "buffers allocated and freed in %s ms (all runs, all threads)\n", "",
+            backend.c_str(), fmt(sum.gpu_total_ms).c_str(), gpu_parts.c_str(), fmt(sum.wall_total_ms).c_str(), parts.c_str(),
+            fmt(double(sum.peak_device_bytes) / 1e6).c_str(), fmt(gpu::memory_ms() - memory_before).c_str());
+      }
     }
     if (results.empty()) continue;
-    const Mesh& reference = results.front().mesh;
     std::map<std::string, double> single_ms;
     for (Row& r : results) {
       const bool is_reference = &r == &results.front();
-      const bool same = r.mesh.vertices == reference.vertices && r.mesh.triangles == reference.triangles;
+      const bool same = r.same;
       if (!same) ++failures;
       const double total = median(r.total_ms);
       if (r.mode == "single") single_ms[r.backend] = total;
       const bool tiled = r.mode == "tiled";
       const double final_share =
-          tiled && !r.mesh.triangles.empty()
-              ? 100.0 * double(r.tiles.final_triangles) / double(r.mesh.triangles.size())
+          tiled && r.triangles ? 100.0 * double(r.tiles.final_triangles) / double(r.triangles)
               : std::nan("");
       const double vs = tiled && single_ms.count(r.backend) ? single_ms[r.backend] / total : std::nan("");
       const double rss = peak_rss_gb();
@@ -271,7 +285,7 @@ int run_tiles(const BenchOptions& o) {
                       {"tiles", r.tiles.tiles},
                       {"levels", r.tiles.levels},
                       {"final_triangles", r.tiles.final_triangles},
-                      {"triangles", r.mesh.triangles.size()},
+                      {"triangles", r.triangles},
                       {"merge_vertices", r.tiles.merge_vertices},
                       {"merge_segments", r.tiles.merge_segments},
                       {"total_ms", r.total_ms},
