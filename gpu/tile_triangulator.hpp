@@ -29,8 +29,9 @@ struct GpuTiles {
   // `warm_up_from` points also warms each device up (GpuCdt::warm_up_tiles) unless a tile has begun.
   std::function<void(uint64_t vertices)> reserve;
   std::function<size_t()> warm_ups;  // devices warmed up so far
-  // TileOptions::ramp: a small slab to start and to end on for each device, at least 2 (one device's first
-  // tile waits for its gather and staging, its last one's copies for the merge).
+  // TileOptions::ramp: the first and the last slab cut in two, so the devices start on smaller tiles (a
+  // device's first waits for the plan and the gathers before it) and end on them (the last tile's copies come
+  // before the merge). One a device (four on four) grew the merge more than it saved (docs/tiles.md).
   unsigned ramp = 2;
 };
 // Tiles from which a warm-up pays on these devices: 100M points on hardware GPUs. At 1B points (tiles of 134M)
