@@ -222,7 +222,7 @@ int run_tiles(const BenchOptions& o) {
       const gpu::GpuTiles tri = gpu::gpu_tiles(users, &sum);
       // One row a ramp of --tile-ramps (TileOptions::ramp; 0: triangulate's), each named by it.
       for (unsigned ramp : o.tile_ramps.empty() ? std::vector<unsigned>{0} : o.tile_ramps) {
-        if (ramp == 0) ramp = tri.ramp;
+        if (ramp == 0) ramp = tri.ramp_for(gpu_tile);
         const std::string backend = (users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size())) +
                                     (o.tile_ramps.empty() ? "" : " ramp " + std::to_string(ramp));
         const double memory_before = gpu::memory_ms();

@@ -347,7 +347,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
             const TileOptions opt =
                 tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve,
-                             tiles.ramp);
+                             tiles.ramp_for(tile_here));
             TileStats ts;
             std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
@@ -367,7 +367,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           }
           CdtResult r = triangulate_in_tiles(job, std::move(input()), tile_here, tiles.triangulate,
                                              unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
-                                             std::move(tiles.reserve), tiles.ramp);
+                                             std::move(tiles.reserve), tiles.ramp_for(tile_here));
           stats.counts["gpu_tile_retries"] = retries;
           return r;
         } catch (const gpu::DeviceError& e) {

@@ -108,7 +108,7 @@ struct TileOptions {
   // core/tile_plan.hpp; `automatic` is squares without a finalizer (the CPU's tiles); tests force slabs.
   TileShape shape = TileShape::automatic;
   // Slabs only: the first and the last slab cut into this many thinner ones (core/tile_plan.hpp); a device's
-  // tiles take 2 (gpu::GpuTiles::ramp).
+  // tiles take 2 where the devices are warmed up for them (gpu::GpuTiles::ramp_for).
   unsigned ramp = 0;
   // The input is not resolved, and the finalizer checks each first-level tile for what the resolve would split
   // (TileJob::unresolved; the GPU's constraint insertion meets every such case): a tile that has some throws

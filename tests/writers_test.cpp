@@ -279,7 +279,9 @@ TEST_F(WritersTest, AWriterThatThrowsMidwayLeavesNoFileAndKeepsTheOldOne) {
   // The bad index is in the last triangle: megabytes have reached the temporary file when the writer throws.
   Mesh bad = random_mesh(60000, 3);
   bad.triangles.back()[2] = uint32_t(bad.vertices.size());
-  Crs crs = choose_crs(InputSet{{}, {{150.31, -33.71, 0}}, {}, {}, {}}, parse_crs("auto"));
+  InputSet one_point;
+  one_point.points = {{150.31, -33.71, 0}};
+  Crs crs = choose_crs(one_point, parse_crs("auto"));
   ASSERT_FALSE(crs.wkt.empty());
   for (const Case& c : all_formats()) {
     EXPECT_THROW(write_mesh_file(bad, crs, c.options, path(c.file)), std::runtime_error) << c.file;
@@ -331,7 +333,9 @@ TEST_F(WritersTest, ReplacedFilesAreReleased) {
   for (int wait = 0; wait < 500 && descriptors() > before; ++wait)  // without /bin/true: a thread closes it
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   EXPECT_EQ(descriptors(), before);
-  if (fs::exists("/bin/true")) EXPECT_LE(children(), 2u);
+  if (fs::exists("/bin/true")) {
+    EXPECT_LE(children(), 2u);
+  }
   EXPECT_EQ(slurp(path("a.ply")), first);
   EXPECT_EQ(entries(), std::vector<std::string>{"a.ply"});
 }
