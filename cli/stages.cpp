@@ -75,9 +75,8 @@ std::string gpu_refused(const gpu::DeviceError& e) {
 // in_flight: tiles worked on at once (0: as many as the cores take; a device's: 2, core/tiles.hpp).
 // finalize: the tiles' own (the GPU's, core/tiles.hpp); empty: the host's test.
 TileOptions tile_options(const Job& job, uint64_t tile_points, unsigned in_flight, TileFinalizer finalize,
-                         std::function<void(uint64_t)> reserve, unsigned ramp = 0) {
+                         std::function<void(uint64_t)> reserve) {
   TileOptions opt;
-  opt.ramp = ramp;
   opt.finalize = std::move(finalize);
   opt.reserve = std::move(reserve);
   opt.max_tile_points = tile_points;
@@ -90,10 +89,8 @@ void record_tiles(Job& job, const TileStats& ts, uint64_t tile_points);
 
 CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
                                const TileTriangulator& triangulate, unsigned in_flight = 0,
-                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {},
-                               unsigned ramp = 0) {
-  const TileOptions opt =
-      tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve), ramp);
+                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {}) {
+  const TileOptions opt = tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve));
   TileStats ts;
   CdtResult r = timed(job, "triangulate: tiles and merge", [&] {
     return triangulate_tiled(std::move(in), opt, triangulate, &ts);
@@ -346,8 +343,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
           if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
             const TileOptions opt =
-                tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve,
-                             tiles.ramp_for(tile_here));
+                tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
             TileStats ts;
             std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
@@ -367,7 +363,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           }
           CdtResult r = triangulate_in_tiles(job, std::move(input()), tile_here, tiles.triangulate,
                                              unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
-                                             std::move(tiles.reserve), tiles.ramp_for(tile_here));
+                                             std::move(tiles.reserve));
           stats.counts["gpu_tile_retries"] = retries;
           return r;
         } catch (const gpu::DeviceError& e) {

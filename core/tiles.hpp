@@ -107,8 +107,10 @@ struct TileOptions {
   const TileSharing* sharing = nullptr;  // null: every tile here
   // core/tile_plan.hpp; `automatic` is squares without a finalizer (the CPU's tiles); tests force slabs.
   TileShape shape = TileShape::automatic;
-  // Slabs only: the first and the last slab cut into this many thinner ones (core/tile_plan.hpp); a device's
-  // tiles take 2 where the devices are warmed up for them (gpu::GpuTiles::ramp_for).
+  // Slabs only: the first and the last slab cut into this many thinner ones (core/tile_plan.hpp), so that the
+  // devices start and end on smaller tiles. Off in cdtgpu triangulate: its devices' buffers are sized by their
+  // first tile, and a thin one makes them all regrow at the next (`bench --table tiles --tile-ramps` tries it
+  // on warm devices; docs/tiles.md).
   unsigned ramp = 0;
   // The input is not resolved, and the finalizer checks each first-level tile for what the resolve would split
   // (TileJob::unresolved; the GPU's constraint insertion meets every such case): a tile that has some throws

@@ -253,7 +253,6 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
 
 GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from) {
   GpuTiles g;
-  g.warm_up_from = warm_up_from;
   auto on = std::make_shared<OnDevice>(std::move(cdts), sum, warm_up_from);
   // A tile is a resolved graph already: no resolve stage, no copies.
   g.triangulate = [on](const Points& vertices, const std::vector<Edge>& segments, std::string_view what) {

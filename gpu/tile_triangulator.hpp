@@ -29,14 +29,6 @@ struct GpuTiles {
   // `warm_up_from` points also warms each device up (GpuCdt::warm_up_tiles) unless a tile has begun.
   std::function<void(uint64_t vertices)> reserve;
   std::function<size_t()> warm_ups;  // devices warmed up so far
-  // TileOptions::ramp for tiles of at most `tile_points`: 2 (the first and the last slab cut in two, so the
-  // devices start on smaller tiles, a device's first waiting for the plan and the gathers before it, and end on
-  // them, the last tile's copies coming before the merge) where the warm-up sizes every device's buffers for
-  // the largest tile; else 1, none: a device's thin first tile would leave its buffers too small for the next,
-  // and a regrowth reallocates all of a tile's. A thin slab a device (four on four) grew the merge more than it
-  // saved (docs/tiles.md).
-  unsigned ramp_for(uint64_t tile_points) const { return tile_points >= warm_up_from ? 2 : 1; }
-  uint64_t warm_up_from = UINT64_MAX;  // gpu_tiles'
 };
 // Tiles from which a warm-up pays on these devices: 100M points on hardware GPUs. At 1B points (tiles of 134M)
 // the resolve and plan take 6-14 s, the warm-up 1-2 s; at 256M (tiles of 64M) they take ~0.6 s, less than

@@ -46,7 +46,7 @@ TEST(GpuTiles, TwoDevicesGiveTheSingleRunsBytes) {
       gpu::GpuCdtStats sum;
       gpu::GpuTiles tiles = gpu::gpu_tiles({&a, &b}, &sum);
       if (on_device) opt.finalize = tiles.finalize, opt.reserve = tiles.reserve;
-      if (in_flight == 4) opt.shape = TileShape::slabs, opt.ramp = 2;  // as cdtgpu triangulate's large tiles
+      if (in_flight == 4) opt.shape = TileShape::slabs, opt.ramp = 2;  // as bench --tile-ramps 2
       const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate, &ts);
       const std::string what = std::to_string(in_flight) + " in flight, final test on the " +
                                (on_device ? "device" : "host") + (in_flight == 4 ? ", ramped slabs" : "");
