@@ -246,8 +246,7 @@ int run_tiles(const BenchOptions& o) {
     std::map<std::string, double> single_ms;
     for (Row& r : results) {
       const bool is_reference = &r == &results.front();
-      const bool same = r.same;
-      if (!same) ++failures;
+      if (!r.same) ++failures;
       const double total = median(r.total_ms);
       if (r.mode == "single") single_ms[r.backend] = total;
       const bool tiled = r.mode == "tiled";
@@ -265,7 +264,7 @@ int run_tiles(const BenchOptions& o) {
                   fmt(median(r.resolve_ms)).c_str(), fmt(median(r.tiles_ms)).c_str(),
                   fmt(median(r.merge_ms)).c_str(), fmt(total).c_str(), fmt(vs, 2).c_str(), rss,
                   is_reference ? "(ref)"
-                  : same       ? "yes"
+                  : r.same     ? "yes"
                                : "NO");
       if (tiled)
         std::printf(
@@ -294,7 +293,7 @@ int run_tiles(const BenchOptions& o) {
                       {"merge_ms", r.merge_ms},
                       {"peak_rss_gb_after", rss},
                       {"reference", is_reference},
-                      {"same", same},
+                      {"same", r.same},
                       {"last_run_parts_ms",
                        {{"plan", r.tiles.plan_ms},
                         {"tile_cdt_thread_sum", r.tiles.tile_cdt_thread_ms},

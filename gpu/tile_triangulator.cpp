@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <condition_variable>
 #include <future>
 #include <memory>
 #include <mutex>
@@ -252,8 +251,8 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
 }
 
 GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from) {
-  GpuTiles g;
   auto on = std::make_shared<OnDevice>(std::move(cdts), sum, warm_up_from);
+  GpuTiles g;
   // A tile is a resolved graph already: no resolve stage, no copies.
   g.triangulate = [on](const Points& vertices, const std::vector<Edge>& segments, std::string_view what) {
     return (*on)(what, vertices.size(), segments.size(), [&](const GpuCdt& cdt, GpuCdtStats& one) {
