@@ -21,6 +21,7 @@
 #include <future>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <stdexcept>
 #include <span>
@@ -463,9 +464,26 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   std::vector<size_t> mine;
   for (size_t t = 0; t < tiles; ++t)
     if (!sharing || int(t % size_t(sharing->ranks)) == sharing->rank) mine.push_back(t);
+  // A tile that throws stops the tiles not yet begun, and the others in flight finish whole. Thrown through TBB,
+  // the error cancelled those tiles' own parallel loops halfway: at 1B points a tile then ran its GPU call on
+  // half-written input for 4.7 s before it failed too.
+  std::exception_ptr failed;
+  std::mutex failed_mutex;
+  std::atomic<bool> stop{false};
+  auto caught = [&](auto&& work) {
+    if (stop.load()) return;
+    try {
+      work();
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(failed_mutex);
+      if (!failed) failed = std::current_exception();
+      stop = true;
+    }
+  };
   auto run_mine = [&] {
     if (options.tiles_in_flight == 0 || options.tiles_in_flight >= mine.size()) {
-      tbb::parallel_for(size_t(0), mine.size(), size_t(1), [&](size_t k) { finish(mine[k], gather(mine[k])); });
+      tbb::parallel_for(size_t(0), mine.size(), size_t(1),
+                        [&](size_t k) { caught([&] { finish(mine[k], gather(mine[k])); }); });
     } else {
       // tiles_in_flight tiles on the devices, one more gathered: tiles are gathered one at a time, in order, on
       // every core, so the next tile is ready when a device is free (gathered beside the tiles' own finishing,
@@ -476,17 +494,19 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
           options.tiles_in_flight + 1,
           tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
                                          [&](tbb::flow_control& fc) -> size_t {
-                                           if (next == mine.size()) fc.stop();
+                                           if (next == mine.size() || stop.load()) fc.stop();
                                            return next < mine.size() ? mine[next++] : 0;
                                          }) &
               tbb::make_filter<size_t, size_t>(tbb::filter_mode::serial_in_order,
                                                [&](size_t t) {
-                                                 gathered[t] = gather(t);
+                                                 caught([&] { gathered[t] = gather(t); });
                                                  return t;
                                                }) &
-              tbb::make_filter<size_t, void>(tbb::filter_mode::parallel,
-                                             [&](size_t t) { finish(t, std::move(gathered[t])); }));
+              tbb::make_filter<size_t, void>(tbb::filter_mode::parallel, [&](size_t t) {
+                caught([&] { finish(t, std::move(gathered[t])); });
+              }));
     }
+    if (failed) std::rethrow_exception(failed);
   };
   if (sharing && options.unresolved) {
     // Ranks whose tiles check themselves all give up together, before their exchange: a rank that gave up alone

@@ -5,11 +5,15 @@
 
 #include <CGAL/Exact_rational.h>
 #include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <thread>
 
 #include "core/cdt_cgal.hpp"
 #include "core/prepare.hpp"
@@ -145,6 +149,42 @@ TEST(Tiles, SameTrianglesWhateverTheTilesInFlight) {
     const CdtResult a = triangulate_tiled(resolve_constraints(p), some, cgal_tile_triangulator());
     EXPECT_TRUE(a.mesh.triangles == b.mesh.triangles) << in_flight << " in flight";
   }
+}
+
+// A tile that fails stops the others, but a tile already in flight runs whole: its own parallel loops are not
+// cancelled halfway (through TBB's cancellation a GPU tile then ran its device call on half-written input).
+TEST(Tiles, AFailingTileLeavesTheTilesInFlightWhole) {
+  InputSet in = random_points(2000, 13);
+  TileOptions opt;
+  opt.max_tile_points = 100;
+  opt.tiles_in_flight = 2;
+  std::atomic<bool> started{false}, thrown{false};
+  std::atomic<int> loops{0}, partial{0};
+  auto wait_for = [](const std::atomic<bool>& flag) {
+    for (int i = 0; i < 400 && !flag.load(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  };
+  opt.finalize = [&](const TileJob& job) {
+    if (job.what.starts_with("tile 1 of")) {
+      wait_for(started);
+      thrown = true;
+      throw std::runtime_error("tile 1 fails");
+    }
+    started = true;
+    wait_for(thrown);
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // the error reaches the tiles' loop
+    std::atomic<int> done{0};
+    tbb::parallel_for(0, 10000, 1, [&](int) { ++done; });
+    ++loops;
+    if (done != 10000) ++partial;
+    return TileFinal{};
+  };
+  try {
+    triangulate_tiled(resolve_constraints(prepare(in)), opt, cgal_tile_triangulator());
+    ADD_FAILURE() << "the failing tile's error was lost";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "tile 1 fails");
+  }
+  EXPECT_EQ(partial.load(), 0) << "of " << loops.load() << " tiles in flight";
 }
 
 // The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at
