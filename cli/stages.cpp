@@ -547,7 +547,7 @@ void prepare_job(Job& job) {
     free_storage(job.in.points);
     if (!rings) free_storage(job.in.lines);
   };
-  job.prepared = timed(job, "prepare", [&] { return prepare(job.in, merge_points, drop_input); });
+  job.prepared = timed(job, "prepare", [&] { return prepare(job.in, {}, drop_input); });
   spdlog::info("CRS: {}", job.crs.name);
 
   const Repairs& r = job.in.repairs;

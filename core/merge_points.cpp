@@ -1,4 +1,5 @@
-// merge_points on the CPU: a bucket sort by x on all cores, then the duplicates numbered on all cores.
+// merge_points and merge_input on the CPU: a bucket sort by x on all cores, then the duplicates numbered on all
+// cores.
 // Why not one std::sort(par) of every point: it took ~150 ms for 2.5M points on the H100 machine's 16 cores
 // and 230 ms on 2; a bucket pass plus small sorts that stay in cache take 31-44 ms and 77 ms
 // (docs/performance.md). Inside a bucket the order is the comparator's, so the result is the same whatever the
@@ -11,11 +12,17 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <execution>
 #include <limits>
+#include <functional>
 #include <memory>
+#include <string>
 #include <utility>
 
 namespace cdtgpu {
@@ -26,7 +33,16 @@ struct Occurrence {
   uint32_t occ;  // index of the point in the input
 };
 
-bool xy_less(const Occurrence& a, const Occurrence& b) {
+// prepare's own merge carries z along: the merged vertices and their z conflicts then come out of the sorted
+// array in order, where gathering them by index was two random reads a point (6.3 s of prepare's 27.6 at 1B
+// points on 16 threads).
+struct OccurrenceZ {
+  double x, y, z;
+  uint32_t occ;
+};
+
+template <class Occ>
+bool xy_less(const Occ& a, const Occ& b) {
   if (a.x != b.x) return a.x < b.x;
   if (a.y != b.y) return a.y < b.y;
   return a.occ < b.occ;  // the first occurrence leads its group
@@ -47,13 +63,17 @@ struct Buckets {
   }
 };
 
-Buckets buckets_for(std::span<const double> xy, size_t n) {
+// `each(begin, end, f)` calls f(i, x, y, z) for the points i in [begin, end), in order.
+template <class Each>
+Buckets buckets_for(const Each& each, size_t n) {
   using Range = std::pair<double, double>;
   const double inf = std::numeric_limits<double>::infinity();
   const Range r = tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, n, kBlock), Range{inf, -inf},
       [&](const tbb::blocked_range<size_t>& b, Range m) {
-        for (size_t i = b.begin(); i < b.end(); ++i) m = {std::min(m.first, xy[2 * i]), std::max(m.second, xy[2 * i])};
+        each(b.begin(), b.end(), [&](size_t, double x, double, double) {
+          m = {std::min(m.first, x), std::max(m.second, x)};
+        });
         return m;
       },
       [](Range a, Range b) { return Range{std::min(a.first, b.first), std::max(a.second, b.second)}; });
@@ -70,21 +90,26 @@ Buckets buckets_for(std::span<const double> xy, size_t n) {
   return k;
 }
 
-// Sorts [first, last) by xy_less; a crowded range (all x equal, say) on all cores.
-void sort_range(Occurrence* first, Occurrence* last, size_t n) {
-  if (size_t(last - first) > std::max<size_t>(n / 64, kBlock))
-    std::sort(std::execution::par, first, last, xy_less);
-  else
-    std::sort(first, last, xy_less);
+template <class Occ>
+bool is_head(const RawVector<Occ>& occ, size_t i) {
+  return i == 0 || occ[i].x != occ[i - 1].x || occ[i].y != occ[i - 1].y;
 }
 
-}  // namespace
+// Sorts [first, last) by xy_less; a crowded range (all x equal, say) on all cores.
+template <class Occ>
+void sort_range(Occ* first, Occ* last, size_t n) {
+  if (size_t(last - first) > std::max<size_t>(n / 64, kBlock))
+    std::sort(std::execution::par, first, last, xy_less<Occ>);
+  else
+    std::sort(first, last, xy_less<Occ>);
+}
 
-PointMerge merge_points(std::span<const double> xy) {
-  const size_t n = xy.size() / 2;
-  PointMerge m;
-  if (n == 0) return m;
-  const Buckets bk = buckets_for(xy, n);
+// Every point's occurrence sorted by (x, y, occ) into `occ`: a bucket sort by x on all cores. `make(x, y, z, i)`
+// makes an occurrence; `scattered`, if given, is called once `each` is read no more.
+template <class Occ, class Each, class Make>
+void sort_occurrences(const Each& each, size_t n, const Make& make, RawVector<Occ>& occ,
+                      const std::function<void()>& scattered = {}) {
+  const Buckets bk = buckets_for(each, n);
 
   // Pass 1, per block of points: a histogram of coarse buckets. Pass 2: each block writes its points to their
   // places (bucket-major, blocks in order): no atomics, and each block's stores go to `coarse` streams. Blocks
@@ -94,7 +119,7 @@ PointMerge merge_points(std::span<const double> xy) {
   std::vector<uint32_t> place(blocks * bk.coarse, 0);
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     uint32_t* h = &place[b * bk.coarse];
-    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) ++h[bk.of(xy[2 * i]) >> bk.shift];
+    each(b * block, std::min(n, (b + 1) * block), [&](size_t, double x, double, double) { ++h[bk.of(x) >> bk.shift]; });
   });
   // Bucket starts from the column totals, then each block's places from the running starts: both walk `place`
   // row by row (column by column, 64M points were 8M cache misses).
@@ -108,20 +133,21 @@ PointMerge merge_points(std::span<const double> xy) {
   // The points themselves are scattered, not their indices: a coarse bucket is then read front to back (with
   // indices, each of its points was a random read of xy, ~25 s at 1B points on 16 threads). Unzeroed storage:
   // the scatter touches its pages first, on all cores.
-  RawVector<Occurrence> occ;
   resize_unwritten(occ, n);
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     uint32_t* at = &place[b * bk.coarse];
-    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i)
-      occ[at[bk.of(xy[2 * i]) >> bk.shift]++] = {xy[2 * i], xy[2 * i + 1], uint32_t(i)};
+    each(b * block, std::min(n, (b + 1) * block), [&](size_t i, double x, double y, double z) {
+      occ[at[bk.of(x) >> bk.shift]++] = make(x, y, z, uint32_t(i));
+    });
   });
+  if (scattered) scattered();
   // Per coarse bucket, in cache: a counting sort by fine bucket into a buffer of the thread's, each fine bucket
   // sorted there, and the bucket copied back.
-  tbb::enumerable_thread_specific<std::vector<Occurrence>> buffers;
+  tbb::enumerable_thread_specific<std::vector<Occ>> buffers;
   tbb::parallel_for(uint32_t(0), bk.coarse, [&](uint32_t c) {
     const uint32_t begin = coarse_start[c], end = coarse_start[c + 1];
     const uint32_t mask = (1u << bk.shift) - 1;
-    std::vector<Occurrence>& sorted = buffers.local();
+    std::vector<Occ>& sorted = buffers.local();
     sorted.resize(std::max<size_t>(sorted.size(), end - begin));
     std::vector<uint32_t> fine_start((size_t(1) << bk.shift) + 1, 0);
     for (uint32_t i = begin; i < end; ++i) ++fine_start[(bk.of(occ[i].x) & mask) + 1];
@@ -132,28 +158,135 @@ PointMerge merge_points(std::span<const double> xy) {
       if (fine_start[f + 1] - fine_start[f] > 1) sort_range(&sorted[fine_start[f]], &sorted[fine_start[f + 1]], n);
     std::copy(sorted.begin(), sorted.begin() + (end - begin), occ.begin() + begin);
   });
+}
 
-  // Vertex numbers: a new vertex where (x, y) changes; blocks count their heads, a scan gives each block its
-  // first number.
-  auto head = [&](size_t i) { return i == 0 || occ[i].x != occ[i - 1].x || occ[i].y != occ[i - 1].y; };
-  const size_t runs = (n + kBlock - 1) / kBlock;
+// Vertex numbers: a new vertex where (x, y) changes. Blocks count their heads; heads[k] is then block k's first
+// vertex, heads.back() the count.
+template <class Occ>
+std::vector<uint32_t> count_heads(const RawVector<Occ>& occ) {
+  const size_t n = occ.size(), runs = (n + kBlock - 1) / kBlock;
   std::vector<uint32_t> heads(runs + 1, 0);
   tbb::parallel_for(size_t(0), runs, [&](size_t k) {
     uint32_t c = 0;
-    for (size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) c += head(i);
+    for (size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) c += is_head(occ, i);
     heads[k + 1] = c;
   });
   for (size_t k = 1; k <= runs; ++k) heads[k] += heads[k - 1];
+  return heads;
+}
+
+}  // namespace
+
+PointMerge merge_points(std::span<const double> xy) {
+  const size_t n = xy.size() / 2;
+  PointMerge m;
+  if (n == 0) return m;
+  auto each = [&](size_t begin, size_t end, const auto& f) {
+    for (size_t i = begin; i < end; ++i) f(i, xy[2 * i], xy[2 * i + 1], 0.0);
+  };
+  RawVector<Occurrence> occ;
+  sort_occurrences(each, n, [](double x, double y, double, uint32_t i) { return Occurrence{x, y, i}; }, occ);
+  const std::vector<uint32_t> heads = count_heads(occ);
+  const size_t runs = heads.size() - 1;
   resize_unwritten(m.vertex_of, n);  // every element written below, on all cores
   resize_unwritten(m.first, heads[runs]);
   tbb::parallel_for(size_t(0), runs, [&](size_t k) {
     uint32_t v = heads[k];
     for (size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) {
-      if (head(i)) m.first[v++] = occ[i].occ;
+      if (is_head(occ, i)) m.first[v++] = occ[i].occ;
       m.vertex_of[occ[i].occ] = v - 1;
     }
   });
   return m;
+}
+
+MergedInput merge_input(const InputSet& in, const std::function<void()>& scattered) {
+  using Clock = std::chrono::steady_clock;
+  // The occurrences in prepare's order, as runs of points: the loose points, then each line's.
+  std::vector<const Point3*> part;
+  std::vector<uint64_t> starts;
+  uint64_t n = 0;
+  auto add = [&](const Points& p) {
+    if (p.empty()) return;
+    part.push_back(p.data());
+    starts.push_back(n);
+    n += p.size();
+  };
+  add(in.points);
+  for (const Polyline& l : in.lines) add(l.points);
+  starts.push_back(n);
+  std::atomic<bool> bad{false};
+  auto each = [&](size_t begin, size_t end, const auto& f) {
+    size_t k = size_t(std::upper_bound(starts.begin(), starts.end(), begin) - starts.begin()) - 1;
+    bool finite = true;
+    for (size_t i = begin; i < end; ++k) {
+      const Point3* p = part[k];
+      const size_t from = starts[k], stop = std::min<uint64_t>(end, starts[k + 1]);
+      for (; i < stop; ++i) {
+        const Point3& q = p[i - from];
+        finite &= std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z);
+        f(i, q.x, q.y, q.z);
+      }
+    }
+    if (!finite) bad.store(true, std::memory_order_relaxed);
+  };
+  MergedInput out;
+  if (n == 0) return out;
+  RawVector<OccurrenceZ> occ;
+  const auto make = [](double x, double y, double z, uint32_t i) { return OccurrenceZ{x, y, z, i}; };
+  auto t = Clock::now();
+  double scatter_ms = 0;
+  sort_occurrences(each, n, make, occ, [&] {
+    // NaN would break the sort's strict weak order; readers reject it, this guards direct callers.
+    if (bad)
+      for (uint64_t i = 0; i < n; ++i)
+        each(i, i + 1, [&](size_t, double x, double y, double z) {
+          if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
+            throw std::invalid_argument("prepare: vertex " + std::to_string(i) + " is not finite");
+        });
+    scatter_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+    t = Clock::now();
+    if (scattered) scattered();
+  });
+  const double sort_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+  t = Clock::now();
+
+  // The vertices in order: each group's head is its first occurrence (xy_less), whose coordinates and z it
+  // keeps; a later z that differs is a conflict of that vertex.
+  const std::vector<uint32_t> heads = count_heads(occ);
+  const size_t runs = heads.size() - 1;
+  resize_unwritten(out.vertex_of, n);
+  resize_unwritten(out.vertices, heads[runs]);
+  std::vector<double> largest(runs, 0);
+  std::vector<std::vector<uint32_t>> conflicted(runs);
+  tbb::parallel_for(size_t(0), runs, [&](size_t k) {
+    const size_t first = k * kBlock, last = std::min<size_t>(n, first + kBlock);
+    size_t h = first;
+    while (!is_head(occ, h)) --h;  // a group begun in the block before
+    double hz = occ[h].z;
+    uint32_t v = heads[k];
+    for (size_t i = first; i < last; ++i) {
+      const OccurrenceZ& o = occ[i];
+      if (is_head(occ, i)) {
+        out.vertices[v++] = {o.x, o.y, o.z};
+        hz = o.z;
+      } else if (const double dz = std::abs(o.z - hz); dz != 0) {
+        largest[k] = std::max(largest[k], dz);
+        if (conflicted[k].empty() || conflicted[k].back() != v - 1) conflicted[k].push_back(v - 1);
+      }
+      out.vertex_of[o.occ] = v - 1;
+    }
+  });
+  // Vertices ascend within a block and from block to block; one group may end a block and begin the next.
+  int64_t last_conflict = -1;
+  for (size_t k = 0; k < runs; ++k) {
+    out.max_z_conflict = std::max(out.max_z_conflict, largest[k]);
+    for (uint32_t v : conflicted[k])
+      if (int64_t(v) != last_conflict) ++out.z_conflicts, last_conflict = v;
+  }
+  spdlog::debug("prepare: merge: scatter {:.1f} ms, sort {:.1f} ms, vertices {:.1f} ms", scatter_ms, sort_ms,
+                std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+  return out;
 }
 
 }  // namespace cdtgpu

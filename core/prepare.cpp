@@ -34,29 +34,16 @@ struct SegmentKey {
   uint32_t line;  // polyline index, so that a shared segment keeps its first line
 };
 
-}  // namespace
-
-PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::function<void()>& gathered) {
-  using Clock = std::chrono::steady_clock;
-  auto t = Clock::now();
-  auto phase = [&](const char* name) {
-    spdlog::debug("prepare: {} {:.1f} ms", name, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
-    t = Clock::now();
-  };
-  PreparedInput out;
-  uint64_t total = in.points.size();
-  for (const Polyline& l : in.lines) total += l.points.size();
-  if (total >= std::numeric_limits<uint32_t>::max())
-    throw std::length_error("prepare: " + std::to_string(total) +
-                            " input vertices exceed the 32-bit index range");
-  out.input_points = total;
-
-  // Every occurrence's coordinates in reading order, gathered on all cores (lines start at known offsets).
+// prepare with a merger of coordinates (the GPU's): every occurrence's coordinates gathered in reading order on
+// all cores (lines start at known offsets), merged, then the vertices and their z conflicts gathered by index.
+template <class Phase>
+RawVector<uint32_t> gather_and_merge(const InputSet& in, const std::vector<uint64_t>& line_at,
+                                     const PointMerger& merge, const std::function<void()>& gathered,
+                                     PreparedInput& out, const Phase& phase) {
+  const uint64_t total = line_at.back();
   RawVector<double> xy, z;
   resize_unwritten(xy, 2 * total);
   resize_unwritten(z, total);
-  std::vector<uint64_t> line_at(in.lines.size() + 1, in.points.size());
-  for (size_t i = 0; i < in.lines.size(); ++i) line_at[i + 1] = line_at[i] + in.lines[i].points.size();
   std::atomic<bool> bad{false};
   auto put = [&](uint64_t i, const Point3& p) {
     // NaN would break the sort's strict weak order; readers reject it, this guards direct callers.
@@ -76,19 +63,10 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
     for (size_t i = 0; i < total; ++i)
       if (!std::isfinite(xy[2 * i]) || !std::isfinite(xy[2 * i + 1]) || !std::isfinite(z[i]))
         throw std::invalid_argument("prepare: vertex " + std::to_string(i) + " is not finite");
-
-  // Only the lines' sizes and closed flags are read from here on (line_at, seg_at).
-  auto segments_of = [&](const Polyline& l) -> uint64_t {
-    const uint64_t n = l.points.size();
-    return n < 2 ? 0 : (l.closed && n >= 3 ? n : n - 1);
-  };
-  std::vector<uint64_t> seg_at(in.lines.size() + 1, 0);
-  for (size_t li = 0; li < in.lines.size(); ++li) seg_at[li + 1] = seg_at[li] + segments_of(in.lines[li]);
-  const size_t lines = in.lines.size();
   if (gathered) gathered();
   phase("gather");
   // The merged vertices: coordinates and z of their first occurrence; conflicts where a later z differs.
-  const PointMerge m = merge(xy);
+  PointMerge m = merge(xy);
   phase("merge");
   if (m.vertex_of.size() != total || m.first.size() > total)
     throw std::logic_error("prepare: the point merge returned " + std::to_string(m.vertex_of.size()) +
@@ -118,10 +96,54 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
       },
       [](double a, double b) { return std::max(a, b); });
   out.z_conflicts = count_if(conflict.size(), [&](size_t v) { return conflict[v] != 0; });
-  out.merged_duplicates = total - out.vertices.size();
   free_storage(xy);
   free_storage(z);
   phase("vertices");
+  return std::move(m.vertex_of);
+}
+
+}  // namespace
+
+PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::function<void()>& gathered) {
+  using Clock = std::chrono::steady_clock;
+  auto t = Clock::now();
+  auto phase = [&](const char* name) {
+    spdlog::debug("prepare: {} {:.1f} ms", name, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+    t = Clock::now();
+  };
+  PreparedInput out;
+  uint64_t total = in.points.size();
+  for (const Polyline& l : in.lines) total += l.points.size();
+  if (total >= std::numeric_limits<uint32_t>::max())
+    throw std::length_error("prepare: " + std::to_string(total) +
+                            " input vertices exceed the 32-bit index range");
+  out.input_points = total;
+
+  std::vector<uint64_t> line_at(in.lines.size() + 1, in.points.size());
+  for (size_t i = 0; i < in.lines.size(); ++i) line_at[i + 1] = line_at[i] + in.lines[i].points.size();
+  // Only the lines' sizes and closed flags are read once the points are gathered (line_at, seg_at).
+  auto segments_of = [&](const Polyline& l) -> uint64_t {
+    const uint64_t n = l.points.size();
+    return n < 2 ? 0 : (l.closed && n >= 3 ? n : n - 1);
+  };
+  std::vector<uint64_t> seg_at(in.lines.size() + 1, 0);
+  for (size_t li = 0; li < in.lines.size(); ++li) seg_at[li + 1] = seg_at[li] + segments_of(in.lines[li]);
+  const size_t lines = in.lines.size();
+  RawVector<uint32_t> vertex_of;
+  if (merge) {
+    vertex_of = gather_and_merge(in, line_at, merge, gathered, out, phase);
+  } else {
+    MergedInput m = merge_input(in, gathered);
+    phase("merge");
+    vertex_of = std::move(m.vertex_of);
+    out.vertices = std::move(m.vertices);
+    out.z_conflicts = m.z_conflicts;
+    out.max_z_conflict = m.max_z_conflict;
+  }
+  if (vertex_of.size() != total || out.vertices.size() > total)
+    throw std::logic_error("prepare: the point merge returned " + std::to_string(vertex_of.size()) + " of " +
+                           std::to_string(total) + " points");
+  out.merged_duplicates = total - out.vertices.size();
 
   // Segments of every polyline, the closing edge of every ring included (counted per line above), written on
   // all cores (one thread took 7 s for 250M segments).

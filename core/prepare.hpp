@@ -38,11 +38,23 @@ using PointMerger = std::function<PointMerge(std::span<const double> xy)>;
 // On the CPU (core/merge_points.cpp): a bucket sort on all cores. gpu::merge_points (gpu/dedupe.hpp) gives the same on the GPU.
 PointMerge merge_points(std::span<const double> xy);
 
-// `merge` does the duplicate merging; everything else (z of merged vertices, conflicts, segments) is here.
-// `gathered`, if given, is called once every coordinate has been copied out of `in`: from then on only the
-// number of lines and their sizes (taken before) are used, so the caller may free the points there, which
-// keeps the input out of the merge's peak (24 of ~80 bytes a point).
-PreparedInput prepare(const InputSet& in, const PointMerger& merge = merge_points,
+// prepare's own merge (core/merge_points.cpp): merge_points of every occurrence in `in` (its points, then its
+// lines' points), read where they are, with the merged vertices (the first occurrence's x, y and z) and the z
+// conflicts made from the sorted occurrences. `scattered` is called once `in`'s points are read no more.
+struct MergedInput {
+  RawVector<uint32_t> vertex_of;
+  Points vertices;
+  uint64_t z_conflicts = 0;
+  double max_z_conflict = 0;
+};
+MergedInput merge_input(const InputSet& in, const std::function<void()>& scattered = {});
+
+// `merge` does the duplicate merging, everything else (z of merged vertices, conflicts, segments) is then here;
+// without one, merge_input does it all on the CPU, reading the input where it is. `gathered`, if given, is
+// called once every coordinate has been read out of `in`: from then on only the number of lines and their
+// sizes (taken before) are used, so the caller may free the points there, which keeps the input out of the
+// merge's peak (24 of ~80 bytes a point).
+PreparedInput prepare(const InputSet& in, const PointMerger& merge = {},
                       const std::function<void()>& gathered = {});
 
 }  // namespace cdtgpu

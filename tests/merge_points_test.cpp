@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "core/prepare.hpp"
@@ -47,5 +49,75 @@ TEST(MergePoints, EqualsAStableSort) {
     expect_reference(one_x, "one x");
     expect_reference(huge, "near the double limit");
     expect_reference(crowd, "a crowd on one x");
+  }
+}
+
+namespace {
+
+// Every field of prepare's own merge (merge_input, reading the input where it is) against the coordinates'
+// merge (merge_points after the gather, the GPU merger's path), vertices bit for bit.
+void expect_both_paths_equal(const InputSet& in, const char* what) {
+  const PreparedInput a = prepare(in), b = prepare(in, merge_points);
+  ASSERT_EQ(a.vertices.size(), b.vertices.size()) << what;
+  for (size_t v = 0; v < a.vertices.size(); ++v)
+    ASSERT_EQ(0, std::memcmp(&a.vertices[v], &b.vertices[v], sizeof(Point3))) << what << ", vertex " << v;
+  EXPECT_EQ(a.constraints, b.constraints) << what;
+  EXPECT_EQ(a.constraint_line, b.constraint_line) << what;
+  EXPECT_EQ(a.input_points, b.input_points) << what;
+  EXPECT_EQ(a.merged_duplicates, b.merged_duplicates) << what;
+  EXPECT_EQ(a.z_conflicts, b.z_conflicts) << what;
+  EXPECT_EQ(a.max_z_conflict, b.max_z_conflict) << what;
+  EXPECT_EQ(a.input_segments, b.input_segments) << what;
+  EXPECT_EQ(a.duplicate_segments, b.duplicate_segments) << what;
+  EXPECT_EQ(a.zero_length_segments, b.zero_length_segments) << what;
+}
+
+}  // namespace
+
+// Duplicates with and without z conflicts (groups that straddle the merge's blocks of 32K), signed zeros, lines
+// sharing points with the loose points and each other, empty lines, no loose points at all.
+TEST(MergeInput, SameAsTheGatheredMerge) {
+  std::mt19937_64 rng(11);
+  for (size_t n : {0, 1, 5, 100, 70000, 300000}) {
+    InputSet in;
+    for (size_t i = 0; i < n; ++i) {
+      const double x = double(rng() % 400), y = double(rng() % 400);  // many duplicates
+      const double z = rng() % 3 == 0 ? double(rng() % 4) : 1.0;      // some of them conflicting
+      in.points.push_back({i % 7 == 0 && x == 0 ? -0.0 : x, y, z});
+    }
+    for (int l = 0; l < 300; ++l) {
+      Polyline line;
+      line.closed = l % 4 == 0;
+      for (int k = 0; k < l % 9; ++k)
+        line.points.push_back({double(rng() % 400), double(rng() % 400) - (k % 2 ? 0.0 : -0.0), double(l % 5)});
+      in.lines.push_back(line);
+    }
+    expect_both_paths_equal(in, "points and lines");
+    in.points.clear();
+    expect_both_paths_equal(in, "lines only");
+  }
+}
+
+// One non-finite coordinate: the same message (the first such occurrence's index) on both paths.
+TEST(MergeInput, NonFiniteCoordinateNamesTheSameVertex) {
+  for (const double bad : {std::nan(""), std::numeric_limits<double>::infinity()}) {
+    InputSet in;
+    for (int i = 0; i < 50000; ++i) in.points.push_back({double(i % 300), double(i / 300), 0});
+    Polyline line;
+    line.points = {{1, 1, 0}, {2, 2, bad}, {3, bad, 0}};
+    in.lines.push_back(line);
+    std::string a, b;
+    try {
+      prepare(in);
+    } catch (const std::invalid_argument& e) {
+      a = e.what();
+    }
+    try {
+      prepare(in, merge_points);
+    } catch (const std::invalid_argument& e) {
+      b = e.what();
+    }
+    EXPECT_EQ(a, "prepare: vertex 50001 is not finite");
+    EXPECT_EQ(a, b);
   }
 }
