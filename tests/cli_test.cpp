@@ -561,6 +561,31 @@ TEST_F(Cli, AGridTooFineOrABadCellIsAUsageErrorAndWritesNothing) {
 
 }  // namespace
 
+// GPU tiles check their own constraints and begin before any resolve; here they find lines through grid vertices
+// and two lines that cross, so the input is resolved (taken from the prepared input: nothing reads it later)
+// and tiled again. The same bytes as the CPU's single run.
+TEST_F(Cli, GpuTilesOfAnInputToSplitGiveTheSingleRunsBytes) {
+  std::ostringstream dem;
+  dem << "x,y,z\n";
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) dem << 500000 + i << ',' << 6000000 + j << ',' << 100 + (i * 7 + j * 3) % 11 << '\n';
+  write("dem.csv", dem.str());
+  write("lines.wkt",
+        "LINESTRING Z (500000 6000000 100, 500030 6000030 130)\n"          // through 29 grid vertices
+        "LINESTRING Z (500000.5 6000010.5 100, 500030.5 6000020.5 101)\n"  // these two cross
+        "LINESTRING Z (500000.5 6000020.5 102, 500030.5 6000010.5 103)\n");
+  const std::string in = path("dem.csv") + " " + path("lines.wkt");
+  Result r = run("triangulate " + in + " --backend cgal --max-tile-points 0 -q -o " + path("single.ply"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = run("-v triangulate " + in + " --backend gpu --max-tile-points 200 -o " + path("tiled.ply") + " --stats " +
+          path("tiled.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("resolved, then tiled again"), std::string::npos) << r.err;
+  EXPECT_TRUE(slurp(path("tiled.ply")) == slurp(path("single.ply")));
+  const auto stats = nlohmann::json::parse(slurp(path("tiled.json")));
+  EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
+}
+
 // --max-tile-points: tiny tiles give the untiled run's bytes on both backends, with roles, draping, --max-edge,
 // the grid, contours and preview; --stats has the same counts plus the tiles'.
 TEST_F(Cli, TiledRunsWriteTheUntiledBytes) {
