@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <spdlog/spdlog.h>
+
 #include "gpu/buffers.hpp"
 #include "core/error.hpp"
 #include "io/geotiff.hpp"
@@ -103,7 +105,28 @@ GpuStart::~GpuStart() {
   if (closing_.joinable()) closing_.join();  // it joins closing_later_ first
   if (closing_later_.joinable()) closing_later_.join();
   if (pending_.valid()) pending_.wait();
+  drop_ahead();
   if (ready_) ready_->cdt.reset();  // its passes before the context
+}
+
+void GpuStart::begin_ahead(std::function<std::shared_ptr<void>(gpu::GpuCdt&)> work) {
+  settle();
+  if (!ready_ || ahead_.valid()) return;
+  ahead_ = std::async(std::launch::async, [work = std::move(work), &cdt = *ready_->cdt] { return work(cdt); });
+}
+
+std::shared_ptr<void> GpuStart::take_ahead() {
+  if (!ahead_.valid()) return nullptr;
+  try {
+    return ahead_.get();
+  } catch (const std::exception& e) {
+    spdlog::debug("gpu start: the work begun ahead failed ({}): done again now", e.what());
+    return nullptr;
+  }
+}
+
+void GpuStart::drop_ahead() {
+  if (ahead_.valid()) take_ahead().reset();
 }
 
 // The start's outcome, once: the device ready, or its failure kept for cdt() to rethrow.
@@ -120,6 +143,7 @@ void GpuStart::close_in_background() {
   if (closing_.joinable()) return;
   closing_ = std::thread([this] {
     if (closing_later_.joinable()) closing_later_.join();  // it may free staging on this device
+    drop_ahead();
     settle();  // a start that failed has nothing to close
     if (!ready_) return;
     ready_->cdt.reset();  // its passes before the context
@@ -138,6 +162,7 @@ void GpuStart::leave_for_exit() {
     return;
   }
   if (closing_later_.joinable()) closing_later_.join();
+  drop_ahead();
   settle();  // a start that failed has nothing to leave
   if (!ready_) return;
   gpu::store_pipeline_cache(ready_->ctx);

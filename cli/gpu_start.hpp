@@ -57,6 +57,12 @@ class GpuStart {
   // points their buffers took ~1.2 s a device and 0.2 s a 3 GB staging slot to free, one after another, before
   // the writing began. One at a time: a second waits for the first.
   void close_later(std::function<void()> close);
+  // Work on the started device begun while the input is prepared (a tiled run's devices and their staging:
+  // cli/stages.cpp, open_tiles_early): waits for the start here, then runs `work` on a thread of its own. Nothing
+  // if the start failed. take_ahead waits for its result (null if none, or if it failed: logged); a result not
+  // taken is destroyed before the device closes.
+  void begin_ahead(std::function<std::shared_ptr<void>(gpu::GpuCdt&)> work);
+  std::shared_ptr<void> take_ahead();
   // Host milliseconds of the start's parts: instance and device, queueing every pipeline, staging memory.
   double context_ms = 0, pipelines_ms = 0, staging_ms = 0;
 
@@ -66,8 +72,10 @@ class GpuStart {
     std::unique_ptr<gpu::GpuCdt> cdt;
   };
   void settle();
+  void drop_ahead();
   std::future<std::unique_ptr<Ready>> pending_;
   std::unique_ptr<Ready> ready_;
+  std::future<std::shared_ptr<void>> ahead_;
   std::exception_ptr failed_;
   std::thread closing_;
   std::thread closing_later_;  // close_later's

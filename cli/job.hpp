@@ -75,6 +75,7 @@ struct Job {
   bool want_gpu = false;
   std::string backend_reason;
   GpuStart* start = nullptr;  // the GPU's start, once asked for
+  bool tiles_ahead = false;   // open_tiles_early began the tiles' devices and staging on it
 
   // triangulate_job (gpu: the device ran it; the raster and contour passes then run there too)
   CdtResult result;

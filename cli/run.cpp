@@ -21,6 +21,7 @@ int run_triangulate(const TriangulateOptions& options) {
   start_gpu_early(job, gpus);
   read_job(job);
   choose_backend(job, gpus);
+  open_tiles_early(job);
   prepare_job(job);
   triangulate_job(job);
   // Under MPI the other ranks have handed their tiles to rank 0, which finishes and writes; they write only

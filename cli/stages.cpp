@@ -247,26 +247,41 @@ uint64_t gpu_tile_points(const gpu::Context& ctx, uint64_t vertices, int64_t max
 
 // The devices a tiled GPU run spreads over (issue 29): those of --devices (default: every hardware GPU of the
 // host; the started device alone when it is lavapipe), the started device's context and pipelines reused.
-gpu::TileDevices tile_devices(Job& job, GpuStart& start) {
-  const gpu::Context& started = start.context();
+gpu::TileDevices tile_devices(const std::string& devices, const gpu::Context& started, const gpu::GpuCdt& cdt) {
   const bool hardware = started.info.type == "discrete" || started.info.type == "integrated";
   std::vector<size_t> picked = {started.info.index};
-  if (!job.options.devices.empty() || hardware)
-    picked = gpu::select_devices(gpu::list_devices(), job.options.devices.empty() ? "all" : job.options.devices);
+  if (!devices.empty() || hardware)
+    picked = gpu::select_devices(gpu::list_devices(), devices.empty() ? "all" : devices);
   gpu::TileDevices d;
-  const bool reuse = std::find(picked.begin(), picked.end(), size_t(started.info.index)) != picked.end();
-  if (reuse) {
-    d.borrow(start.cdt());
-    picked.erase(std::find(picked.begin(), picked.end(), size_t(started.info.index)));
+  const auto started_one = std::find(picked.begin(), picked.end(), size_t(started.info.index));
+  if (started_one != picked.end()) {
+    d.borrow(cdt);
+    picked.erase(started_one);
   }
   d.open(picked, gpu::ContextOptions{});
+  return d;
+}
+
+void record_tile_devices(Job& job, const gpu::TileDevices& d) {
   job.stats.counts["tile_devices"] = d.cdts().size();
-  if (d.cdts().size() > 1 || !reuse) {
+  if (d.cdts().size() > 1 || d.cdts().front() != &job.start->cdt()) {
     job.stats.device = d.names();
     spdlog::info("tiles on {} device(s): {}", d.cdts().size(), d.names());
   }
-  return d;
 }
+
+// The GPU run's settings of the started device (its Delaunay build's start, whether its buffers stay).
+void configure_cdt(const Job& job, gpu::GpuCdt& cdt) {
+  cdt.keep_buffers = job.keep_device_buffers;
+  cdt.delaunay().initial_dt = job.options.initial_dt == "voronoi" ? gpu::DelaunayBuilder::Start::voronoi
+                                                                  : gpu::DelaunayBuilder::Start::insertion;
+}
+
+// A tiled run's devices and staging, made ahead (open_tiles_early).
+struct TilesAhead {
+  std::shared_ptr<gpu::TileDevices> devices;
+  std::shared_ptr<gpu::GpuTiles> tiles;
+};
 
 // The GPU backend on a started device, the CPU's resolve stage running on other threads meanwhile.
 // `ahead`: tiles of the prepared input that check themselves; the resolve (resolve_if_needed's, deferred) only if
@@ -277,9 +292,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
   RunStats& stats = job.stats;
   GpuStart& start = *job.start;
   gpu::GpuCdt& cdt = start.cdt();
-  cdt.keep_buffers = job.keep_device_buffers;
-  cdt.delaunay().initial_dt = job.options.initial_dt == "voronoi" ? gpu::DelaunayBuilder::Start::voronoi
-                                                                  : gpu::DelaunayBuilder::Start::insertion;
+  if (!job.tiles_ahead) configure_cdt(job, cdt);  // else set before the tiles' warm-up began
   stats.stage_ms.emplace_back("gpu start: context (own thread)", start.context_ms);
   stats.stage_ms.emplace_back("gpu start: pipelines queued (own thread)", start.pipelines_ms);
   stats.stage_ms.emplace_back("gpu start: staging memory (own thread)", start.staging_ms);
@@ -332,13 +345,19 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       }
     } close_later{start, opened, staged};
     try {
-      opened = std::make_shared<gpu::TileDevices>(
-          timed(job, "gpu start: tile devices", [&] { return tile_devices(job, start); }));
+      std::shared_ptr<TilesAhead> ahead = timed(job, "gpu start: tile devices", [&] {
+        auto made = std::static_pointer_cast<TilesAhead>(start.take_ahead());
+        opened = made ? made->devices
+                      : std::make_shared<gpu::TileDevices>(tile_devices(options.devices, start.context(), cdt));
+        return made;
+      });
+      record_tile_devices(job, *opened);
       const gpu::TileDevices& devices = *opened;
       if (options.max_tile_points < 0) tile_here = std::min(tile_here, devices.max_tile_points());
       for (;; ++retries) {
         try {
-          staged = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts()));
+          staged = ahead && ahead->tiles ? std::move(ahead->tiles)
+                                         : std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts()));
           gpu::GpuTiles& tiles = *staged;
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
           if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
@@ -534,6 +553,31 @@ void choose_backend(Job& job, GpuStarts& gpus) {
     else if (!job.start)
       job.start = &gpus.start(options.device, hardware_only(options), n);
   }
+}
+
+// A GPU run whose input is more than a device takes (or than --max-tile-points) opens its tile devices and
+// reserves their staging while prepare runs, each device warming up with a tile of the expected size (on
+// hardware GPUs): at 1B points the first tile waited ~2 s for its staging, and each device's first tile made
+// its buffers. The input's point count stands for its vertices (prepare only merges them); a run that is not
+// tiled after all closes them with the device. Not in a batch, whose next job is read beside the device's work.
+void open_tiles_early(Job& job) {
+  if (!job.want_gpu || !job.start) return;
+  const uint64_t n = point_count(job.in);
+  const int64_t m = job.options.max_tile_points;
+  if (!(m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device())) return;
+  job.tiles_ahead = true;
+  job.start->begin_ahead([&job, devices = job.options.devices, m, n](gpu::GpuCdt& cdt) {
+    configure_cdt(job, cdt);
+    auto ahead = std::make_shared<TilesAhead>();
+    ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(devices, cdt.context(), cdt));
+    uint64_t tile = gpu_tile_points(cdt.context(), n, m);
+    if (m < 0) tile = std::min(tile, ahead->devices->max_tile_points());
+    ahead->tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts()));
+    ahead->tiles->reserve(tile_staging_points(n, tile));
+    spdlog::debug("gpu start: {} tile device(s) opened before prepare, their staging begun for tiles of {} points",
+                  ahead->devices->cdts().size(), tile);
+    return std::shared_ptr<void>(ahead);
+  });
 }
 
 // The merge stays on the CPU even when the device is ready: on all 16 cores of the H100 machine it took 31-44 ms

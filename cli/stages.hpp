@@ -35,6 +35,8 @@ void read_job(Job& job);
 // The host memory the job may hold at its peak, from the files' sizes (cli/memory.hpp's bytes a point).
 uint64_t estimated_peak_bytes(Job& job);
 void choose_backend(Job& job, GpuStarts& gpus);
+// A large GPU run's tile devices and their staging, begun before prepare (not in a batch).
+void open_tiles_early(Job& job);
 void prepare_job(Job& job);
 void triangulate_job(Job& job);
 void apply_job_regions(Job& job);

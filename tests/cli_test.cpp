@@ -563,7 +563,8 @@ TEST_F(Cli, AGridTooFineOrABadCellIsAUsageErrorAndWritesNothing) {
 
 // GPU tiles check their own constraints and begin before any resolve; here they find lines through grid vertices
 // and two lines that cross, so the input is resolved (taken from the prepared input: nothing reads it later)
-// and tiled again. The same bytes as the CPU's single run.
+// and tiled again; the tile device and its staging were opened before prepare. The same bytes as the CPU's single
+// run.
 TEST_F(Cli, GpuTilesOfAnInputToSplitGiveTheSingleRunsBytes) {
   std::ostringstream dem;
   dem << "x,y,z\n";
@@ -581,6 +582,7 @@ TEST_F(Cli, GpuTilesOfAnInputToSplitGiveTheSingleRunsBytes) {
           path("tiled.json"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_NE(r.err.find("resolved, then tiled again"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("opened before prepare"), std::string::npos) << r.err;  // open_tiles_early
   EXPECT_TRUE(slurp(path("tiled.ply")) == slurp(path("single.ply")));
   const auto stats = nlohmann::json::parse(slurp(path("tiled.json")));
   EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
