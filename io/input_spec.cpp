@@ -1,8 +1,11 @@
 // parse_input_spec and read_inputs: the per-input suffix of the command line and reading with it.
 #include "io/input_spec.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <cctype>
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <string_view>
@@ -193,6 +196,7 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
     InputPart part;
     part.points_begin = in.points.size();
     part.lines_begin = in.lines.size();
+    const auto t0 = std::chrono::steady_clock::now();
     auto read = [&](const ReadOptions& options, InputSet& to) {
       if (ext == ".las")
         read_las(spec.path, spec.las.value_or(LasFilter{}), to, options.share);
@@ -212,6 +216,9 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
     }
     part.points_end = in.points.size();
     part.lines_end = in.lines.size();
+    spdlog::debug("read: {}: {} points, {} lines in {:.1f} ms", spec.path, part.points_end - part.points_begin,
+                  part.lines_end - part.lines_begin,
+                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     if (is_region_role(spec.role) && part.lines_end == part.lines_begin)
       throw UsageError(spec.path + ": role=" + (spec.role == Role::boundary ? "boundary" : "hole") +
                        " needs polygons (rings), and this input has only points");

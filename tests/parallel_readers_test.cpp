@@ -244,6 +244,41 @@ TEST(ParallelReaders, ShapefileOfManyRangesGivesEveryPointInOrderAndNamesTheBadR
   std::filesystem::remove_all(dir);
 }
 
+// A file of few long records (contours of many vertices) is split by bytes, not by records: each of 12 lines of
+// 20000 vertices comes back whole and in order (chunks of 4096 records read such a file on one core).
+TEST(ParallelReaders, ShapefileOfFewLongLinesGivesEveryLineInOrder) {
+  const auto dir = std::filesystem::temp_directory_path() / "cdtgpu_parallel_shp_lines";
+  std::filesystem::create_directories(dir);
+  const std::string base = (dir / "lines").string();
+  SHPHandle shp = SHPCreate(base.c_str(), SHPT_ARCZ);
+  DBFHandle dbf = DBFCreate(base.c_str());
+  DBFAddField(dbf, "ID", FTInteger, 10, 0);
+  constexpr int kLines = 12, kVertices = 20000;
+  auto vertex = [](int l, int k) { return Point3{500000 + k * 0.25, 6000000 + l * 10 + (k % 7) * 0.125, l + k * 0.001}; };
+  for (int l = 0; l < kLines; ++l) {
+    std::vector<double> x, y, z;
+    for (int k = 0; k < kVertices; ++k) {
+      const Point3 p = vertex(l, k);
+      x.push_back(p.x), y.push_back(p.y), z.push_back(p.z);
+    }
+    SHPObject* o = SHPCreateSimpleObject(SHPT_ARCZ, kVertices, x.data(), y.data(), z.data());
+    SHPWriteObject(shp, -1, o);
+    SHPDestroyObject(o);
+    DBFWriteIntegerAttribute(dbf, l, 0, l);
+  }
+  SHPClose(shp);
+  DBFClose(dbf);
+  InputSet in;
+  read_shapefile(base + ".shp", {}, in);
+  ASSERT_EQ(in.lines.size(), size_t(kLines));
+  for (int l = 0; l < kLines; ++l) {
+    ASSERT_EQ(in.lines[l].record, uint64_t(l) + 1);
+    ASSERT_EQ(in.lines[l].points.size(), size_t(kVertices)) << l;
+    for (int k = 0; k < kVertices; ++k) ASSERT_EQ(in.lines[l].points[size_t(k)], vertex(l, k)) << l << " " << k;
+  }
+  std::filesystem::remove_all(dir);
+}
+
 namespace {
 
 // A 300 x 400 grid (about 1 MB of text: several chunks), NODATA here and there, one row a line unless
