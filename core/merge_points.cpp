@@ -202,6 +202,8 @@ PointMerge merge_points(std::span<const double> xy) {
 
 MergedInput merge_input(const InputSet& in, const std::function<void()>& scattered) {
   using Clock = std::chrono::steady_clock;
+  // Loose points' vertices are not kept (only lines make segments). Taken now: `scattered` may free them.
+  const uint64_t loose = in.points.size();
   // The occurrences in prepare's order, as runs of points: the loose points, then each line's.
   std::vector<const Point3*> part;
   std::vector<uint64_t> starts;
@@ -255,7 +257,7 @@ MergedInput merge_input(const InputSet& in, const std::function<void()>& scatter
   // keeps; a later z that differs is a conflict of that vertex.
   const std::vector<uint32_t> heads = count_heads(occ);
   const size_t runs = heads.size() - 1;
-  resize_unwritten(out.vertex_of, n);
+  resize_unwritten(out.line_vertex_of, n - loose);
   resize_unwritten(out.vertices, heads[runs]);
   std::vector<double> largest(runs, 0);
   std::vector<std::vector<uint32_t>> conflicted(runs);
@@ -274,7 +276,7 @@ MergedInput merge_input(const InputSet& in, const std::function<void()>& scatter
         largest[k] = std::max(largest[k], dz);
         if (conflicted[k].empty() || conflicted[k].back() != v - 1) conflicted[k].push_back(v - 1);
       }
-      out.vertex_of[o.occ] = v - 1;
+      if (o.occ >= loose) out.line_vertex_of[o.occ - loose] = v - 1;
     }
   });
   // Vertices ascend within a block and from block to block; one group may end a block and begin the next.

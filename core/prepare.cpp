@@ -129,18 +129,22 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
   std::vector<uint64_t> seg_at(in.lines.size() + 1, 0);
   for (size_t li = 0; li < in.lines.size(); ++li) seg_at[li + 1] = seg_at[li] + segments_of(in.lines[li]);
   const size_t lines = in.lines.size();
+  // The vertex of every line point: line point i is occurrence line_at[0] + i.
   RawVector<uint32_t> vertex_of;
+  const uint32_t* line_vertex_of = nullptr;
   if (merge) {
     vertex_of = gather_and_merge(in, line_at, merge, gathered, out, phase);
+    line_vertex_of = vertex_of.data() + line_at[0];
   } else {
     MergedInput m = merge_input(in, gathered);
     phase("merge");
-    vertex_of = std::move(m.vertex_of);
+    vertex_of = std::move(m.line_vertex_of);
+    line_vertex_of = vertex_of.data();
     out.vertices = std::move(m.vertices);
     out.z_conflicts = m.z_conflicts;
     out.max_z_conflict = m.max_z_conflict;
   }
-  if (vertex_of.size() != total || out.vertices.size() > total)
+  if (vertex_of.size() != (merge ? total : total - line_at[0]) || out.vertices.size() > total)
     throw std::logic_error("prepare: the point merge returned " + std::to_string(vertex_of.size()) + " of " +
                            std::to_string(total) + " points");
   out.merged_duplicates = total - out.vertices.size();
@@ -154,9 +158,10 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
   tbb::parallel_for(tbb::blocked_range<size_t>(0, lines), [&](const tbb::blocked_range<size_t>& r) {
     uint64_t zero = 0;
     for (size_t li = r.begin(); li < r.end(); ++li) {
-      const uint64_t base = line_at[li], n = line_at[li + 1] - base, count = seg_at[li + 1] - seg_at[li];
+      const uint64_t base = line_at[li] - line_at[0], n = line_at[li + 1] - line_at[li];
+      const uint64_t count = seg_at[li + 1] - seg_at[li];
       for (uint64_t k = 0; k < count; ++k) {
-        uint32_t a = vertex_of[base + k], b = vertex_of[base + (k + 1) % n];
+        uint32_t a = line_vertex_of[base + k], b = line_vertex_of[base + (k + 1) % n];
         if (a > b) std::swap(a, b);
         zero += a == b;
         segs[seg_at[li] + k] = {uint64_t(a) << 32 | b, uint32_t(li)};  // a == b: dropped after the sort

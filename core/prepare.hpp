@@ -40,9 +40,11 @@ PointMerge merge_points(std::span<const double> xy);
 
 // prepare's own merge (core/merge_points.cpp): merge_points of every occurrence in `in` (its points, then its
 // lines' points), read where they are, with the merged vertices (the first occurrence's x, y and z) and the z
-// conflicts made from the sorted occurrences. `scattered` is called once `in`'s points are read no more.
+// conflicts made from the sorted occurrences. The vertex of each line point only (line_vertex_of[i]: of
+// occurrence in.points.size() + i): loose points make no segments, and writing theirs was a random store each
+// (1B at 1B points). `scattered` is called once `in`'s points are read no more.
 struct MergedInput {
-  RawVector<uint32_t> vertex_of;
+  RawVector<uint32_t> line_vertex_of;
   Points vertices;
   uint64_t z_conflicts = 0;
   double max_z_conflict = 0;

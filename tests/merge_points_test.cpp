@@ -54,10 +54,12 @@ TEST(MergePoints, EqualsAStableSort) {
 
 namespace {
 
-// Every field of prepare's own merge (merge_input, reading the input where it is) against the coordinates'
-// merge (merge_points after the gather, the GPU merger's path), vertices bit for bit.
+// Every field of prepare's own merge (merge_input, reading the input where it is; the points freed once read)
+// against the coordinates' merge (merge_points after the gather, the GPU merger's path), vertices bit for bit.
 void expect_both_paths_equal(const InputSet& in, const char* what) {
-  const PreparedInput a = prepare(in), b = prepare(in, merge_points);
+  // The CLI frees the points once they are read (prepare's `gathered`): the same result.
+  InputSet freed = in;
+  const PreparedInput a = prepare(freed, {}, [&] { free_storage(freed.points); }), b = prepare(in, merge_points);
   ASSERT_EQ(a.vertices.size(), b.vertices.size()) << what;
   for (size_t v = 0; v < a.vertices.size(); ++v)
     ASSERT_EQ(0, std::memcmp(&a.vertices[v], &b.vertices[v], sizeof(Point3))) << what << ", vertex " << v;
