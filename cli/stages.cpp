@@ -1,5 +1,7 @@
 #include "cli/stages.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <future>
@@ -17,6 +19,7 @@
 #include "core/hillshade.hpp"
 #include "core/regions.hpp"
 #include "core/resolve.hpp"
+#include "core/touched.hpp"
 #include "core/tiles.hpp"
 #include "core/tiles_ahead.hpp"
 #include "core/uninit.hpp"
@@ -587,9 +590,13 @@ void prepare_job(Job& job) {
   // goes as soon as prepare has copied it. Kept to the end, it was a quarter of a large run's peak (80M
   // vertices in tiles: 3.0 of 13 GB).
   const bool rings = has_region_inputs(job);
+  // On all cores: freed on one, the 24 GB of points and 8000 lines of 1B + 250M took seconds of prepare's
+  // critical path, between its scatter and its sort.
   auto drop_input = [&] {
-    free_storage(job.in.points);
-    if (!rings) free_storage(job.in.lines);
+    free_storage_on_all_cores(job.in.points);
+    if (rings) return;
+    tbb::parallel_for(size_t(0), job.in.lines.size(), [&](size_t l) { free_storage(job.in.lines[l].points); });
+    free_storage(job.in.lines);
   };
   job.prepared = timed(job, "prepare", [&] { return prepare(job.in, {}, drop_input); });
   spdlog::info("CRS: {}", job.crs.name);
