@@ -123,3 +123,49 @@ TEST(MergeInput, NonFiniteCoordinateNamesTheSameVertex) {
     EXPECT_EQ(a, b);
   }
 }
+
+// prepare's segments against an independent count: each line point's vertex found by search among the prepared
+// vertices, the segments sorted plainly. 1.2M segments of 2000 lines on a small grid, so many are shared,
+// repeated or zero-length.
+TEST(PrepareSegments, SameAsAPlainSortOfTheSegments) {
+  std::mt19937_64 rng(5);
+  InputSet in;
+  for (int l = 0; l < 2000; ++l) {
+    Polyline line;
+    line.closed = l % 5 == 0;
+    for (int k = 0; k < 601; ++k) line.points.push_back({double(rng() % 700), double(rng() % 700), 0.0});
+    in.lines.push_back(line);
+  }
+  const PreparedInput p = prepare(in);
+  auto vertex = [&](const Point3& q) {
+    const auto it = std::lower_bound(p.vertices.begin(), p.vertices.end(), q, [](const Point3& a, const Point3& b) {
+      return a.x != b.x ? a.x < b.x : a.y < b.y;
+    });
+    return uint32_t(it - p.vertices.begin());
+  };
+  struct Key {
+    uint32_t a, b, line;
+  };
+  std::vector<Key> keys;
+  for (uint32_t l = 0; l < in.lines.size(); ++l) {
+    const Points& q = in.lines[l].points;
+    const size_t segments = in.lines[l].closed ? q.size() : q.size() - 1;
+    for (size_t k = 0; k < segments; ++k) {
+      const uint32_t u = vertex(q[k]), w = vertex(q[(k + 1) % q.size()]);
+      if (u != w) keys.push_back({std::min(u, w), std::max(u, w), l});
+    }
+  }
+  ASSERT_GT(keys.size(), size_t(1) << 20);
+  std::sort(keys.begin(), keys.end(), [](const Key& s, const Key& t) {
+    return s.a != t.a ? s.a < t.a : s.b != t.b ? s.b < t.b : s.line < t.line;
+  });
+  std::vector<Edge> want;
+  std::vector<uint32_t> want_line;
+  for (size_t i = 0; i < keys.size(); ++i)
+    if (i == 0 || keys[i].a != keys[i - 1].a || keys[i].b != keys[i - 1].b) {
+      want.push_back({keys[i].a, keys[i].b});
+      want_line.push_back(keys[i].line);
+    }
+  EXPECT_EQ(p.constraints, want);
+  EXPECT_EQ(p.constraint_line, want_line);
+}
