@@ -109,10 +109,11 @@ GpuStart::~GpuStart() {
   if (ready_) ready_->cdt.reset();  // its passes before the context
 }
 
-void GpuStart::begin_ahead(std::function<std::shared_ptr<void>(gpu::GpuCdt&)> work) {
+bool GpuStart::begin_ahead(std::function<std::shared_ptr<void>(gpu::GpuCdt&)> work) {
   settle();
-  if (!ready_ || ahead_.valid()) return;
+  if (!ready_ || ahead_.valid()) return false;
   ahead_ = std::async(std::launch::async, [work = std::move(work), &cdt = *ready_->cdt] { return work(cdt); });
+  return true;
 }
 
 std::shared_ptr<void> GpuStart::take_ahead() {

@@ -58,10 +58,10 @@ class GpuStart {
   // the writing began. One at a time: a second waits for the first.
   void close_later(std::function<void()> close);
   // Work on the started device begun while the input is prepared (a tiled run's devices and their staging:
-  // cli/stages.cpp, open_tiles_early): waits for the start here, then runs `work` on a thread of its own. Nothing
-  // if the start failed. take_ahead waits for its result (null if none, or if it failed: logged); a result not
-  // taken is destroyed before the device closes.
-  void begin_ahead(std::function<std::shared_ptr<void>(gpu::GpuCdt&)> work);
+  // cli/stages.cpp, open_tiles_early): waits for the start here, then runs `work` on a thread of its own; false
+  // (nothing run) if the start failed or work was begun already. take_ahead waits for its result (null if none,
+  // or if it failed: logged); a result not taken is destroyed before the device closes.
+  bool begin_ahead(std::function<std::shared_ptr<void>(gpu::GpuCdt&)> work);
   std::shared_ptr<void> take_ahead();
   // Host milliseconds of the start's parts: instance and device, queueing every pipeline, staging memory.
   double context_ms = 0, pipelines_ms = 0, staging_ms = 0;

@@ -568,8 +568,7 @@ void open_tiles_early(Job& job) {
   const uint64_t n = point_count(job.in);
   const int64_t m = job.options.max_tile_points;
   if (!(m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device())) return;
-  job.tiles_ahead = true;
-  job.start->begin_ahead([&job, devices = job.options.devices, m, n](gpu::GpuCdt& cdt) {
+  job.tiles_ahead = job.start->begin_ahead([&job, devices = job.options.devices, m, n](gpu::GpuCdt& cdt) {
     configure_cdt(job, cdt);
     auto ahead = std::make_shared<TilesAhead>();
     ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(devices, cdt.context(), cdt));
