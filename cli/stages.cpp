@@ -174,13 +174,13 @@ void drop_prepared(Job& job) {
   free_storage(job.prepared.constraint_line);
 }
 
-// Whether a GPU run is tiled on any device (--max-tile-points below its vertices, or more of them than a device
-// takes): its tiles check their own constraints and begin at once (core/tiles_ahead.hpp, tiled_cdt_unresolved);
-// the resolve runs only if one has something to split, and copies the prepared input only then.
-bool tiled_on_any_device(const Job& job) {
-  const uint64_t n = job.prepared.vertices.size();
-  const int64_t m = job.options.max_tile_points;
-  return m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device();
+// Whether a GPU run of this many vertices is tiled on any device (--max-tile-points below them, or more than a
+// device takes; open_tiles_early asks it of the points read, before prepare): its tiles check their own
+// constraints and begin at once (core/tiles_ahead.hpp, tiled_cdt_unresolved); the resolve runs only if one has
+// something to split, and copies the prepared input only then.
+bool tiled_on_any_device(uint64_t vertices, int64_t max_tile_points) {
+  return max_tile_points >= 0 ? max_tile_points >= 3 && vertices > uint64_t(max_tile_points)
+                              : vertices > gpu::max_tile_points_of_any_device();
 }
 
 // resolve_if_needed's result made whole: an unchanged input is the prepared one, moved where no later stage reads
@@ -567,7 +567,7 @@ void open_tiles_early(Job& job) {
   if (!job.want_gpu || !job.start) return;
   const uint64_t n = point_count(job.in);
   const int64_t m = job.options.max_tile_points;
-  if (!(m >= 0 ? m >= 3 && n > uint64_t(m) : n > gpu::max_tile_points_of_any_device())) return;
+  if (!tiled_on_any_device(n, m)) return;
   job.tiles_ahead = job.start->begin_ahead([&job, devices = job.options.devices, m, n](gpu::GpuCdt& cdt) {
     configure_cdt(job, cdt);
     auto ahead = std::make_shared<TilesAhead>();
@@ -642,7 +642,7 @@ void triangulate_job(Job& job) {
   double resolve_ms = 0;
   ResolveProgress progress;
   const uint64_t vertices = job.prepared.vertices.size();
-  const bool ahead = job.want_gpu && tiled_on_any_device(job);
+  const bool ahead = job.want_gpu && tiled_on_any_device(vertices, job.options.max_tile_points);
   // Declared after what its task reads: a throw before get() waits for the task before those go. Tiles that
   // check themselves: run only if one has something to split (or the device fails them).
   std::future<ResolvedInput> resolving;

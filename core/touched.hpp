@@ -48,6 +48,15 @@ void free_storage_on_all_cores(V& v) {
   free_storage(v);
 }
 
+// Zeroes [p, p + bytes) in 2 MiB pieces on all cores: the first touch of fresh pages is spread over them.
+inline void zero_on_all_cores(void* p, size_t bytes) {
+  constexpr size_t kPiece = size_t(2) << 20;
+  char* base = static_cast<char*>(p);
+  tbb::parallel_for(size_t(0), (bytes + kPiece - 1) / kPiece, [&](size_t b) {
+    std::memset(base + b * kPiece, 0, std::min(kPiece, bytes - b * kPiece));
+  });
+}
+
 // v.resize(n), the new elements zero (value-initialised: Point3, Triangle, integers), those kept kept; the new
 // pages zeroed on all cores, on huge pages. std::vector's own resize then writes the zeros once more on one
 // core (1 s for 6 GB on the H100 machine); a RawVector's does not.
@@ -55,7 +64,7 @@ template <class T, class A>
 void resize_touched(std::vector<T, A>& v, size_t n) {
   static_assert(std::is_trivially_copyable_v<T>);
   constexpr bool raw = is_uninit_allocator<A>;
-  const size_t kept = std::min(n, v.size()), bytes = (n - kept) * sizeof(T), block = size_t(2) << 20;
+  const size_t kept = std::min(n, v.size()), bytes = (n - kept) * sizeof(T);
   if (bytes < (size_t(8) << 20) || (!raw && n <= v.capacity())) {
     v.resize(n);
     if constexpr (raw) std::memset(static_cast<void*>(v.data() + kept), 0, bytes);  // its resize wrote nothing
@@ -65,10 +74,7 @@ void resize_touched(std::vector<T, A>& v, size_t n) {
     v.reserve(n);
     advise_huge_pages(v.data() + kept, bytes);
   }
-  char* base = reinterpret_cast<char*>(v.data() + kept);
-  tbb::parallel_for(size_t(0), (bytes + block - 1) / block, [&](size_t b) {
-    std::memset(base + b * block, 0, std::min(block, bytes - b * block));
-  });
+  zero_on_all_cores(v.data() + kept, bytes);
   v.resize(n);
 }
 
@@ -81,15 +87,10 @@ void assign_on_all_cores(std::vector<T>& v, size_t n, size_t capacity, F&& f) {
   std::vector<T> out;
   out.reserve(std::max(n, capacity));
   advise_huge_pages(out.data(), out.capacity() * sizeof(T));
-  constexpr size_t kBlock = (size_t(2) << 20) / sizeof(T) + 1;
-  const size_t blocks = (n + kBlock - 1) / kBlock;
-  char* base = reinterpret_cast<char*>(out.data());
-  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
-    const size_t first = b * kBlock, last = std::min(n, first + kBlock);
-    std::memset(base + first * sizeof(T), 0, (last - first) * sizeof(T));
-  });
+  zero_on_all_cores(out.data(), n * sizeof(T));
   out.resize(n);
-  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+  constexpr size_t kBlock = (size_t(2) << 20) / sizeof(T) + 1;
+  tbb::parallel_for(size_t(0), (n + kBlock - 1) / kBlock, [&](size_t b) {
     for (size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) out[i] = f(i);
   });
   v.swap(out);

@@ -228,16 +228,12 @@ class RecordIndex {
   RecordIndex& operator=(const RecordIndex&) = delete;
   size_t records() const { return index_.size() / 8; }
   // Record i's bytes in the .shp as the index gives them (header included), unchecked: for splitting work.
-  uint64_t bytes(size_t i) const {
-    const auto* e = reinterpret_cast<const unsigned char*>(index_.data()) + i * 8;
-    return uint64_t(be32(e + 4)) * 2 + 8;
-  }
+  uint64_t bytes(size_t i) const { return length(i) + 8; }
 
   // Reads only: one index serves every thread.
   void check(int i) const {
     const uint64_t record = uint64_t(i) + 1;
-    const auto* e = reinterpret_cast<const unsigned char*>(index_.data()) + size_t(i) * 8;
-    const uint64_t offset = uint64_t(be32(e)) * 2, length = uint64_t(be32(e + 4)) * 2;
+    const uint64_t offset = uint64_t(be32(entry(size_t(i)))) * 2, length = this->length(size_t(i));
     if (offset == 0 && length == 0) return;  // an unused entry, read by shapelib as a NULL shape
     if (offset < 100 || offset + 8 + length > shp_size_)
       throw InputError(shp_path_, record,
@@ -257,6 +253,9 @@ class RecordIndex {
   }
 
  private:
+  const unsigned char* entry(size_t i) const { return reinterpret_cast<const unsigned char*>(index_.data()) + i * 8; }
+  // Record i's content bytes (the index counts 16-bit words).
+  uint64_t length(size_t i) const { return uint64_t(be32(entry(i) + 4)) * 2; }
   std::string shp_path_, shx_path_;
   std::string index_;
   uint64_t shp_size_ = 0;
