@@ -95,6 +95,7 @@ CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_point
                                TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {}) {
   const TileOptions opt = tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve));
   TileStats ts;
+  job.stats.counts["constraint_splits_at_vertices"] = in.split_at_vertices;
   CdtResult r = timed(job, "triangulate: tiles and merge", [&] {
     return triangulate_tiled(std::move(in), opt, triangulate, &ts);
   });
@@ -370,7 +371,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
             std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
             });
-            if (t) {  // no resolve ran: the prepared input is the resolved one
+            if (t) {  // no resolve ran: the prepared vertices are the resolved ones (tiles split segments at them)
               ResolvedInput same;
               same.unchanged = true;
               got.emplace(filled(job, std::move(same)));
@@ -379,6 +380,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
               r.mesh.vertices = std::move(input().vertices);  // unchanged: the prepared vertices
               r.mesh.triangles = std::move(*t);
               record_tiles(job, ts, tile_here);
+              stats.counts["constraint_splits_at_vertices"] = ts.split_at_vertices;
               stats.counts["gpu_tile_retries"] = retries;
               return r;
             }

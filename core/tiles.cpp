@@ -34,6 +34,7 @@
 #include "core/host_memory.hpp"
 #include "core/parallel.hpp"
 #include "core/predicates.hpp"
+#include "core/split_at_vertices.hpp"
 #include "core/tile_merge.hpp"
 #include "core/tile_plan.hpp"
 #include "core/tile_segments.hpp"
@@ -189,6 +190,7 @@ uint64_t staging_room(uint64_t points) { return points + points / 64 + 1024; }
 struct TileResult {
   Triangles final_triangles;
   std::vector<Edge> border;
+  std::vector<std::array<uint32_t, 3>> split;  // TileFinal::split
   double cdt_ms = 0, other_ms = 0;
   double gather_ms = 0, final_ms = 0;  // parts of other_ms: the tile's input, the host's final test and border
 };
@@ -358,6 +360,9 @@ TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const 
   tbb::parallel_for(size_t(0), r.border.size(), [&](size_t i) {
     for (uint32_t& v : r.border[i]) v = ids[v];
   });
+  r.split = std::move(f.split);
+  for (auto& split : r.split)
+    for (uint32_t& v : split) v = ids[v];
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
   in_final_zeroed.get();  // rethrows its error
   tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
@@ -525,7 +530,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   bookkeeping.get();  // its error, if any
   if (sharing) {
     // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
-    // triangles' count and ids, the border's count and ids.
+    // triangles' count and ids, the border's count and ids, the splits' count and ids.
     const uint64_t tile_points = options.max_tile_points;
     std::vector<uint32_t> pack = {uint32_t(tiles), uint32_t(n), uint32_t(tile_points), uint32_t(tile_points >> 32)};
     for (size_t t : mine) {
@@ -535,6 +540,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
       for (const Triangle& tri : r.final_triangles) pack.insert(pack.end(), tri.begin(), tri.end());
       pack.push_back(uint32_t(r.border.size()));
       for (const Edge& e : r.border) pack.insert(pack.end(), e.begin(), e.end());
+      pack.push_back(uint32_t(r.split.size()));
+      for (const auto& split : r.split) pack.insert(pack.end(), split.begin(), split.end());
     }
     std::vector<std::vector<uint32_t>> all = sharing->gather(std::move(pack));
     if (sharing->rank != 0) return {};
@@ -556,6 +563,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
         r.border.resize(from[at++]);
         for (Edge& e : r.border)
           for (uint32_t& id : e) id = from[at++];
+        r.split.resize(from[at++]);
+        for (auto& split : r.split)
+          for (uint32_t& id : split) id = from[at++];
       }
     }
     // The final region's vertices, as run_tile marks them, for the other ranks' tiles too.
@@ -574,8 +584,10 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   free_storage_on_all_cores(tile_segments_of.ids);
   std::vector<Triangles> runs(tiles);
   std::vector<Edge> border;
+  std::vector<std::array<uint32_t, 3>> split;
   uint64_t final_count = 0;
   for (size_t t = 0; t < tiles; ++t) {
+    split.insert(split.end(), results[t].split.begin(), results[t].split.end());
     s.tile_cdt_thread_ms += results[t].cdt_ms;
     s.tile_other_thread_ms += results[t].other_ms;
     s.tile_gather_thread_ms += results[t].gather_ms;
@@ -585,6 +597,18 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     border.insert(border.end(), results[t].border.begin(), results[t].border.end());
   }
   results.clear();
+  // Segments the tiles split at vertices: the merge takes their pieces, as the resolve would have split them.
+  VertexSplits split_segments;
+  if (!split.empty()) {
+    split_segments = split_at_vertices(v, segments, std::move(split));
+    s.split_at_vertices += split_segments.splits;
+    spdlog::debug("tiles, level {}: {} segments split at {} vertices", level, split_segments.split.size(),
+                  split_segments.splits);
+  }
+  const std::vector<Edge>& split_ones = split_segments.split;
+  auto not_split = [&](const Edge& e) {
+    return split_ones.empty() || !std::binary_search(split_ones.begin(), split_ones.end(), e);
+  };
   // The merge's vertices: those not in the final region, and the border's (in_final cleared there, so from here
   // on it marks the vertices that are not in the merge). Read 8 marks at a time: nearly all are 1.
   for (const Edge& e : border) in_final[e[0]] = in_final[e[1]] = 0;
@@ -632,14 +656,16 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
       [&](size_t i) {
         size_t k = 0;
         for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j)
-          k += !in_final[segments[j][1]];
+          k += !in_final[segments[j][1]] && not_split(segments[j]);
         return k;
       },
       [&](size_t i, Edge* at) {
         for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j)
-          if (!in_final[segments[j][1]]) *at++ = {uint32_t(i), local_of[segments[j][1]]};
+          if (!in_final[segments[j][1]] && not_split(segments[j])) *at++ = {uint32_t(i), local_of[segments[j][1]]};
         return at;
       });
+  for (const Edge& e : split_segments.pieces)
+    if (!in_final[e[0]] && !in_final[e[1]]) merge_segments.push_back({local_of[e[0]], local_of[e[1]]});
   free_storage_on_all_cores(in_final);
   std::vector<Edge> local_border(border.size());
   for (size_t i = 0; i < border.size(); ++i) {

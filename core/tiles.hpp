@@ -65,8 +65,8 @@ struct TileJob {
   std::span<const Edge> segments;
   TileRect rect;
   std::string_view what;
-  // The input is not resolved (TileOptions::unresolved): the finalizer throws UnresolvedTile when the tile has
-  // a segment through a vertex or two segments that cross.
+  // The input is not resolved (TileOptions::unresolved): the finalizer splits a segment through a vertex
+  // (TileFinal::split) and throws UnresolvedTile when two segments cross.
   bool unresolved = false;
 };
 // What a tile gives the merge, in local indices: its final triangles (closed circumdisk certainly inside the
@@ -78,6 +78,10 @@ struct TileFinal {
   // The triangles are in the whole's ids already (ids[] applied; still canonical, ids being sorted): a GPU
   // finalizer maps them as it copies them out of its staging, one pass over them fewer.
   bool global_ids = false;
+  // TileJob::unresolved: segments (a, b) the tile split at a vertex v exactly inside them, as (a, b, v) in local
+  // ids (a piece of an earlier split may be split again). Every vertex of the tile inside one of its segments
+  // is such a v.
+  std::vector<std::array<uint32_t, 3>> split;
 };
 // A triangulator that finds a tile's final triangles and border itself (the GPU's, next to its neighbours),
 // instead of handing back the whole tile for the host to test. It may take fewer triangles as final than
@@ -113,10 +117,12 @@ struct TileOptions {
   // on warm devices; docs/tiles.md).
   unsigned ramp = 0;
   // The input is not resolved, and the finalizer checks each first-level tile for what the resolve would split
-  // (TileJob::unresolved; the GPU's constraint insertion meets every such case): a tile that has some throws
-  // UnresolvedTile. The first level's tiles see every case: a segment goes to every tile it meets, so two
-  // crossing segments both go to a tile holding their crossing point, and a segment through a vertex to the
-  // tile that owns the vertex. Needs `finalize`; the merges' inputs are then clean.
+  // (TileJob::unresolved; the GPU's constraint insertion meets every such case). A tile with two segments that
+  // cross throws UnresolvedTile. A segment through vertices is split at them in each tile that has them
+  // (TileFinal::split), and the merge takes the segments split at every such vertex (core/split_at_vertices.hpp):
+  // the resolve's result, for an input without crossings. The first level's tiles see every case: a segment goes
+  // to every tile it meets, so two crossing segments both go to a tile holding their crossing point, and a
+  // segment through a vertex to the tile that owns the vertex. Needs `finalize`.
   bool unresolved = false;
   // Tiles (of every level) through this instead of the triangulator plus the host's final test; the merges
   // still take the triangulator. Empty: the host's test.
@@ -145,6 +151,8 @@ struct TileStats {
   double plan_ms = 0, tile_cdt_thread_ms = 0, tile_other_thread_ms = 0, merge_input_ms = 0, keep_ms = 0;
   double tile_gather_thread_ms = 0, tile_final_thread_ms = 0;  // of tile_other: the input, the final test + border
   double order_ms = 0;  // the tiles' and the merge's sorted runs merged into canonical order (wall)
+  // TileOptions::unresolved: splits at vertices, counted as ResolvedInput::split_at_vertices counts them.
+  uint64_t split_at_vertices = 0;
 };
 
 // The triangles of CDT(vertices, segments) (the graph as TileTriangulator takes it), tiled as `options` say,

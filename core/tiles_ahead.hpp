@@ -2,7 +2,8 @@
 // crossings, no vertex inside one), and at 1B points + 250M segments the resolve took 7-9 s on 32 cores while the
 // devices waited. Nearly every real input (contours, breaklines, footprints) has nothing to split, so each tile
 // checks its own segments on the device instead, and the resolve runs only when one has something. That input is
-// then tiled again from its resolved input: the same bytes.
+// then tiled again from its resolved input: the same bytes. Segments through vertices (contours through LiDAR
+// points, footprints sharing walls) are no such thing: the tiles split them (TileOptions::unresolved).
 //
 //   std::optional<Triangles> t = tiled_cdt_unresolved(prepared, options, triangulate, &stats);
 //   if (!t) t = triangulate_tiled(resolve_constraints(prepared), options, triangulate, &stats).mesh.triangles;
@@ -16,8 +17,9 @@ namespace cdtgpu {
 
 // tiled_cdt of the prepared input with no resolve at all: a finalizer that checks its tiles (the GPU's,
 // TileOptions::unresolved) finds what the resolve would split in the first level's tiles. The triangles
-// (canonical) when no tile has any: the input is its own resolved input, unchanged. nullopt when one has (the
-// tiles in flight finish first, the rest are not begun); the caller resolves and tiles again.
+// (canonical) when no two segments cross: the resolve would only split segments at vertices, and the tiles did
+// (stats->split_at_vertices counts them). nullopt when some cross (the tiles in flight finish first, the rest
+// are not begun); the caller resolves and tiles again.
 std::optional<Triangles> tiled_cdt_unresolved(const PreparedInput& prepared, TileOptions options,
                                               const TileTriangulator& triangulate, TileStats* stats = nullptr);
 

@@ -171,7 +171,7 @@ void GpuCdt::keep(GpuTriangulation& tri) const {
 }
 
 void GpuCdt::constrain(GpuTriangulation& tri, std::span<const Edge> constraints, GpuCdtStats& s,
-                       bool recycle, bool unresolved) const {
+                       bool recycle, bool unresolved, std::vector<std::array<uint32_t, 3>>* split) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
   //    constraints: the Delaunay triangulation is the answer.
@@ -180,6 +180,7 @@ void GpuCdt::constrain(GpuTriangulation& tri, std::span<const Edge> constraints,
     ConstraintOptions options = constraint_options;
     options.unresolved = unresolved;
     ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, options);
+    if (split) *split = std::move(edges.split);
     if (recycle) inserter_.recycle(std::move(edges));  // its flags, for the next tile or run
     add_gpu(s, "cdt ", s.constraints.stage_ms);
     s.peak_device_bytes = std::max(s.peak_device_bytes, s.constraints.peak_device_bytes);
@@ -313,7 +314,7 @@ uint32_t GpuCdt::run_staged(Buffer points, uint32_t n, std::span<const Edge> seg
     }
   }
   GpuTriangulation tri = build(std::move(points), n, s, &kept_);
-  constrain(tri, segments, s, /*recycle=*/true, unresolved);
+  constrain(tri, segments, s, /*recycle=*/true, unresolved, &f.split);
   auto t = Clock::now();
   double ms = 0;
   f.border = finals_.mark(tri, rect, cache_, &ms);

@@ -144,9 +144,10 @@ class GpuCdt {
   void top_up_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const;
   // Stage 3: the constraints inserted.
   // recycle: the inserter's flags stay in the cache for the next tile or run. unresolved:
-  // ConstraintOptions::unresolved.
+  // ConstraintOptions::unresolved, its splits into `split` (ConstrainedEdges::split).
   void constrain(GpuTriangulation& tri, std::span<const Edge> constraints, GpuCdtStats& s,
-                 bool recycle = false, bool unresolved = false) const;
+                 bool recycle = false, bool unresolved = false,
+                 std::vector<std::array<uint32_t, 3>>* split = nullptr) const;
   // The triangulation's buffers into kept_ (and the shared cache) for the next tile or run.
   void keep(GpuTriangulation& tri) const;
   // Stage 4: the triangles downloaded in canonical order into `storage`.

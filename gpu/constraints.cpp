@@ -5,14 +5,21 @@
 #include "gpu/constraints.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
+#include <execution>
 #include <stdexcept>
 #include <unordered_map>
 
+#include <spdlog/spdlog.h>
+
 #include "core/predicates.hpp"
+#include "core/timing.hpp"
+#include "core/touched.hpp"
 #include "core/tiles.hpp"
 
 #include "gpu/check.hpp"
@@ -92,6 +99,12 @@ Buffer make_readback(const Context& ctx, VkDeviceSize bytes, void** mapped) {
   VK_CHECK(vkMapMemory(ctx.device, b.memory, 0, bytes, 0, mapped));
   return b;
 }
+
+// insert_once's answer when the first walks found constraints through vertices (split_through): up to
+// CDT_THROUGH_CAP (constraint, vertex) pairs, in no order.
+struct ThroughVertices {
+  std::vector<std::array<uint32_t, 2>> pairs;
+};
 
 std::string describe_error(uint32_t code, uint32_t c, std::span<const Edge> cons) {
   std::string which = "constraint " + std::to_string(c);
@@ -261,11 +274,67 @@ void ConstraintInserter::release() const { scratch_.reset(); }
 
 ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<const Edge> constraints,
                                             ConstraintStats* stats, const ConstraintOptions& options) const {
-  if (options.unresolved) {
-    ConstraintOptions checked = options;
-    checked.unresolved = false;
+  if (!options.unresolved) return insert_once(tri, constraints, stats, options, false);
+  // A constraint through vertices is split at them and the whole is inserted again: the walks that find them
+  // are the first submission's, before anything flips, so the triangulation is still the one given. One pass
+  // finds them all unless there are more than CDT_THROUGH_CAP; after kPasses the resolve splits them instead.
+  constexpr int kPasses = 16;
+  ConstraintOptions checked = options;
+  checked.unresolved = false;
+  RawVector<Edge> pieces;
+  std::span<const Edge> list = constraints;
+  std::vector<std::array<uint32_t, 3>> split;
+  for (int pass = 0;; ++pass) {
+    const auto t_pass = std::chrono::steady_clock::now();
     try {
-      return insert(tri, constraints, stats, checked);
+      ConstrainedEdges r = insert_once(tri, list, stats, checked, pass < kPasses);
+      r.split = std::move(split);
+      return r;
+    } catch (ThroughVertices& t) {
+      const double walked_ms = ms_since(t_pass);
+      const auto t_split = std::chrono::steady_clock::now();
+      // Per constraint, its vertices in (x, y) order, which is their order along it from a (a < b). The list is
+      // copied on all cores and a split constraint's first piece takes its place: a sort of the whole list (31M
+      // constraints in a tile at 1B points) took ~0.7 s of the device's time, and order does not matter here.
+      std::sort(t.pairs.begin(), t.pairs.end());
+      RawVector<Edge> next;  // unwritten: zeroing 250 MB on one core took longer than the copy
+      next.reserve(list.size() + 2 * t.pairs.size());
+      resize_unwritten(next, list.size());
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, list.size(), 1 << 18), [&](const tbb::blocked_range<size_t>& r) {
+        std::copy(list.begin() + r.begin(), list.begin() + r.end(), next.begin() + r.begin());
+      });
+      std::vector<Edge> made;
+      for (size_t i = 0; i < t.pairs.size();) {
+        const uint32_t c = t.pairs[i][0];
+        const auto [a, b] = list[c];
+        uint32_t from = a;
+        for (; i < t.pairs.size() && t.pairs[i][0] == c; ++i) {
+          const uint32_t v = t.pairs[i][1];
+          split.push_back({from, b, v});
+          made.push_back({from, v});
+          if (from == a)
+            next[c] = made.back();
+          else
+            next.push_back(made.back());
+          from = v;
+        }
+        made.push_back({from, b});
+        next.push_back(made.back());
+      }
+      // Equal pieces (collinear overlaps) merge, and only then is the whole list sorted.
+      std::sort(made.begin(), made.end());
+      bool equal = std::adjacent_find(made.begin(), made.end()) != made.end() ||
+                   !std::is_sorted(std::execution::par, list.begin(), list.end());
+      for (size_t k = 0; k < made.size() && !equal; ++k) equal = std::binary_search(list.begin(), list.end(), made[k]);
+      if (equal) {
+        tbb::parallel_sort(next.begin(), next.end());
+        next.erase(std::unique(next.begin(), next.end()), next.end());
+      }
+      pieces = std::move(next);
+      list = pieces;
+      spdlog::debug("constraints: pass {}: {} constraints through {} vertices split in {:.0f} ms, after {:.0f} ms{}",
+                    pass + 1, made.size() - t.pairs.size(), t.pairs.size(), ms_since(t_split), walked_ms,
+                    equal ? " (equal pieces merged)" : "");
     } catch (const TooLarge&) {
       throw;
     } catch (const VulkanError&) {
@@ -274,6 +343,11 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
       throw UnresolvedTile(e.what());
     }
   }
+}
+
+ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::span<const Edge> constraints,
+                                                 ConstraintStats* stats, const ConstraintOptions& options,
+                                                 bool split_through) const {
   const uint32_t m = static_cast<uint32_t>(constraints.size());
   const uint32_t slots = tri.num_slots;
   const bool fixed_slots = options.layout == ConstraintOptions::Layout::FixedSlots;
@@ -298,7 +372,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
 
   if (!scratch_) scratch_ = std::make_unique<Scratch>();
   Scratch& sc = *scratch_;
-  const size_t readback_words = CDT_CTL_WORDS + 2 * kMaxBatch;
+  const size_t readback_words = std::max<size_t>(CDT_CTL_WORDS + 2 * kMaxBatch, 1 + 2 * CDT_THROUGH_CAP);
   if (!sc.readback.buffer) sc.readback = make_readback(ctx_, readback_words * 4, &sc.mapped);
   const uint32_t* rb = static_cast<const uint32_t*>(sc.mapped);
   uint64_t needed = 0, table_bytes = 0;  // what this call uses (the cache may hold more from earlier calls)
@@ -335,7 +409,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   const Buffer& remap = get(kSlots12[0], uint64_t(slots) * 12, "cdt edge remap");
   const Buffer& qstamp = get(kSlots4[2], uint64_t(slots) * 4, "cdt queue stamps");
   const Buffer& flips = get("cdt flip list", (uint64_t(slots) / 2 + 1) * 8);
-  const Buffer& ctl = get("cdt control", CDT_CTL_WORDS * 4);
+  const Buffer& ctl = get("cdt control", (split_through ? CDT_CTL_ALL_WORDS : CDT_CTL_WORDS) * 4);
   const Buffer& stat = get("cdt round stats", uint64_t(kMaxBatch) * 8);
   const Buffer& cand = get(kSlots12[1], uint64_t(slots) * 12, "cdt legalise candidates");
   const Buffer* queue[2] = {&get(kSlots4[3], uint64_t(slots) * 4, "cdt queue 0"),
@@ -371,7 +445,8 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     // Bound but unused before they exist.
     const Buffer& rows = table ? *table : result.flags;
     const Buffer& cached = row_cache ? *row_cache : result.flags;
-    CdtWalkPush push{m, mode, r, capacity, max_steps, stride, row_cache && use_cache ? 1u : 0u, domain};
+    CdtWalkPush push{m,      mode, r, capacity, max_steps, stride, row_cache && use_cache ? 1u : 0u,
+                     domain, split_through ? 1u : 0u};
     rec.dispatch_groups(walk_, {tri.points, tri.verts, tri.nbrs, cons, start, counts, offsets, rows, owner,
                                 result.flags, vmap, partner, ctl, cached, cache_base, cache_cap},
                         push, groups(m));
@@ -414,6 +489,17 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
     copy_back(rec, 0);
     rec.submit();
     clock.add(prof);
+    if (split_through && rb[CDT_CTL_ERROR] == CDT_ERR_VERTEX_ON_CONSTRAINT) {
+      // Only walks met trouble, and they flip nothing: the pairs they found, for insert() to split.
+      Recorder pairs(ctx_);
+      pairs.copy(ctl, sc.readback, (1 + 2 * CDT_THROUGH_CAP) * 4, CDT_CTL_THROUGH * 4, 0);
+      pairs.submit();
+      ThroughVertices t;
+      const uint32_t found = std::min(rb[0], CDT_THROUGH_CAP);
+      for (uint32_t i = 0; i < found; ++i) t.pairs.push_back({rb[1 + 2 * i], rb[2 + 2 * i]});
+      recycle(std::move(result));  // for the next pass: freeing and making 1 GB of flags took ~0.1 s a tile
+      throw t;
+    }
     std::vector<uint32_t> c = read_ctl();
     crossed = c[CDT_CTL_CROSSED];
     stride = c[CDT_CTL_MAXK];
@@ -472,7 +558,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
         CdtRoundPush push{r, one_per_constraint, domain};
         if (cavities)  // the legalisation candidates are free until then: they hold the cavity fix list
           timed(prof, rec, "k:cavity", [&] {
-            CdtWalkPush cp{m, 0, r, cap, max_steps, 0, 0, domain};
+            CdtWalkPush cp{m, 0, r, cap, max_steps, 0, 0, domain, 0};
             rec.dispatch_groups(cavity_, {tri.points, tri.verts, tri.nbrs, cons, start, counts, offsets, *table, owner,
                                           result.flags, remap, stamp, partner, vmap, cand, ctl},
                                 cp, groups(m));

@@ -73,10 +73,11 @@ struct ConstraintOptions {
   // Timestamps around every kernel ("k:..." stages, summed over rounds) and every round ("r<N> insert",
   // "r<N> legalise"), in ConstraintStats::stage_ms. Their barriers add cost; for finding where time goes.
   bool profile_kernels = false;
-  // The constraints are not resolved (a tile of an unresolved input, TileOptions::unresolved): what the resolve
-  // would split makes one of the insertion's checks fail (a walk meets a vertex on its open segment, a flip or
-  // cavity would remove a constrained edge, marking after the safety net finds a constraint gone) or a round
-  // stall; any such failure is thrown as UnresolvedTile (core/tiles.hpp). TooLarge and Vulkan errors stay.
+  // The constraints are not resolved (a tile of an unresolved input, TileOptions::unresolved). A constraint
+  // through vertices is split at them (ConstrainedEdges::split), as the resolve would. Anything else the resolve
+  // would split makes one of the insertion's checks fail (a flip or cavity would remove a constrained edge,
+  // marking after the safety net finds a constraint gone) or a round stall; any such failure is thrown as
+  // UnresolvedTile (core/tiles.hpp). TooLarge and Vulkan errors stay.
   bool unresolved = false;
 };
 
@@ -101,6 +102,9 @@ struct ConstraintStats {
 struct ConstrainedEdges {
   Buffer flags;
   uint32_t num_slots = 0;
+  // ConstraintOptions::unresolved: each constraint (a, b) split at a vertex v exactly inside it, as (a, b, v), in
+  // the order split (a piece of an earlier split may be split again). The edges inserted are the pieces.
+  std::vector<std::array<uint32_t, 3>> split;
 };
 
 // Holds the pipelines, and the scratch buffers between calls (grown as needed; release() frees them). One call
@@ -113,7 +117,8 @@ class ConstraintInserter {
   ConstraintInserter& operator=(const ConstraintInserter&) = delete;
 
   // Makes every constraint an edge of `tri`, then restores the constrained Delaunay property. Throws
-  // DeviceError when a constraint breaks the input requirements (crossing, through a vertex, outside the hull).
+  // DeviceError when a constraint breaks the input requirements (crossing, through a vertex, outside the hull),
+  // except as ConstraintOptions::unresolved says.
   ConstrainedEdges insert(GpuTriangulation& tri, std::span<const Edge> constraints, ConstraintStats* stats = nullptr,
                           const ConstraintOptions& options = {}) const;
   // Frees the scratch buffers kept since the last call.
@@ -128,6 +133,10 @@ class ConstraintInserter {
 
  private:
   struct Scratch;
+  // insert() of resolved constraints. split_through: walks that meet vertices on their constraints hand the
+  // pairs back (as ThroughVertices, gpu/constraints.cpp) instead of an error.
+  ConstrainedEdges insert_once(GpuTriangulation& tri, std::span<const Edge> constraints, ConstraintStats* stats,
+                               const ConstraintOptions& options, bool split_through) const;
   const Context& ctx_;
   const Primitives& prims_;
   mutable std::unique_ptr<Scratch> scratch_;

@@ -52,6 +52,17 @@ void report(uint code, uint what) {
   if (atomicCompSwap(ctl[CDT_CTL_ERROR], 0u, code) == 0u) ctl[CDT_CTL_ERROR_CONS] = what;
 }
 
+// Vertex v lies on c's open segment: the error, and the pair for a caller that splits c there.
+void through(uint c, uint v) {
+  report(CDT_ERR_VERTEX_ON_CONSTRAINT, c);
+  if (p.through == 0u) return;
+  uint i = atomicAdd(ctl[CDT_CTL_THROUGH], 1u);
+  if (i < CDT_THROUGH_CAP) {
+    ctl[CDT_CTL_THROUGH + 1u + 2u * i] = c;
+    ctl[CDT_CTL_THROUGH + 2u + 2u * i] = v;
+  }
+}
+
 uint corner_of(uint t, uint v) {
   if (verts(3u * t) == v) return 0u;
   if (verts(3u * t + 1u) == v) return 1u;
@@ -148,6 +159,9 @@ void main() {
   uint64_t okey = cdt_owner_key(p.round, c);
   uint found = FOUND_NONE;
   uint edge_t = 0u, edge_k = 0u;
+  // COUNT with p.through: the segment passed through a vertex, and the walk goes on from there to find the others
+  // on it (a caller splitting constraints gets them all from one walk); the count is then an error.
+  bool broken = false;
   for (uint step = 0u; found == FOUND_NONE; ++step) {
     if (step > p.max_steps) {
       report(CDT_ERR_LOST, c);
@@ -155,7 +169,7 @@ void main() {
       break;
     }
     dvec2 q, r;
-    uint ask;
+    uint ask, asked;  // asked: the vertex at q (rotating) or r (walking)
     if (!walking) {
       uint v1 = verts(3u * t + cdt_next(k)), v2 = verts(3u * t + cdt_prev(k));
       if (v1 == b || v2 == b) {
@@ -186,7 +200,8 @@ void main() {
         continue;
       }
       ask = o1 == 2 ? ASK_V1 : ASK_V2;
-      q = pts[ask == ASK_V1 ? v1 : v2];
+      asked = ask == ASK_V1 ? v1 : v2;
+      q = pts[asked];
       r = pb;
     } else {
       uint code = nbrs(3u * t + ke);
@@ -213,15 +228,26 @@ void main() {
         break;
       }
       ask = ASK_APEX;
+      asked = w;
       q = pb;
       r = pts[w];
     }
     int s = pred_orient2d(pa, q, r);
     if (ask != ASK_APEX && s == 0 && on_b_side(pa, q, pb)) {
       // A neighbour of a on the open segment (turning around a would never find b's corner).
-      report(CDT_ERR_VERTEX_ON_CONSTRAINT, c);
-      found = FOUND_ERROR;
-      break;
+      through(c, asked);
+      if (p.mode != CDT_WALK_COUNT || p.through == 0u) {
+        found = FOUND_ERROR;
+        break;
+      }
+      broken = true;  // on from that vertex, a corner of t
+      a = asked;
+      pa = pts[a];
+      k = corner_of(t, a);
+      o1 = 2;
+      o2 = 2;
+      rows = 0u;
+      continue;
     }
     if (ask == ASK_V1) {
       o1 = s;
@@ -229,9 +255,21 @@ void main() {
       o2 = s;
     } else {
       if (s == 0) {  // a vertex on the open segment: the caller must split the constraint there
-        report(CDT_ERR_VERTEX_ON_CONSTRAINT, c);
-        found = FOUND_ERROR;
-        break;
+        through(c, asked);
+        if (p.mode != CDT_WALK_COUNT || p.through == 0u) {
+          found = FOUND_ERROR;
+          break;
+        }
+        broken = true;  // on from that vertex, the apex of u
+        a = asked;
+        pa = pts[a];
+        t = u;
+        k = ku;
+        walking = false;
+        o1 = 2;
+        o2 = 2;
+        rows = 0u;
+        continue;
       }
       ++rows;
       uint info = (s > 0 ? CDT_SIDE_LEFT : CDT_SIDE_RIGHT) | (rows == 1u ? CDT_FIRST : 0u);
@@ -246,6 +284,7 @@ void main() {
     }
   }
 
+  if (broken) found = FOUND_ERROR;
   if (p.mode == CDT_WALK_COUNT) {
     uint crossed = found == FOUND_CROSSED ? rows : 0u;
     counts[c] = crossed;

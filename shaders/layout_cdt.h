@@ -42,7 +42,13 @@ struct CdtCross {
 #define CDT_CTL_ARGS_FLIPS 16u // dispatch over the flip list
 #define CDT_CTL_ARGS_QUEUE 20u // dispatch over 3 x the queue (one invocation per slot edge)
 #define CDT_CTL_ARGS_FIXES 24u // dispatch over the cavity fix list
-#define CDT_CTL_WORDS 28u
+#define CDT_CTL_WORDS 28u      // the words read back after each submission
+// After them, with CdtWalkPush::through: the walks' (constraint, vertex) pairs of CDT_ERR_VERTEX_ON_CONSTRAINT, a
+// count and then up to CDT_THROUGH_CAP pairs, so that a tile of an unresolved input can split those constraints
+// (gpu/constraints.cpp; a count walk goes on past such a vertex and finds every one on its constraint).
+#define CDT_CTL_THROUGH 28u
+#define CDT_THROUGH_CAP 4096u
+#define CDT_CTL_ALL_WORDS (CDT_CTL_THROUGH + 1u + 2u * CDT_THROUGH_CAP)
 // Cavity insertion (cdt_cavity.comp): constraints crossing at most this many edges, owning them all.
 #define CDT_CAVITY_MAX 8u
 
@@ -73,6 +79,7 @@ struct CdtWalkPush {
   uint cache;      // 1: COUNT keeps each constraint's rows (edge, info) in the row cache, and WRITE copies them
                    // instead of walking again when all of them fit (prefix-sum layout)
   uint domain;     // 1: claim T_0 .. T_K in owner[] (the influence-domain index); 0: ablation without it
+  uint through;    // 1: a COUNT walk that meets vertices on its segment records them (CDT_CTL_THROUGH) and goes on
 };
 
 // Row cache: constraint c owns rows [cache_base[c] + CDT_CACHE_SLACK * c, + cache_cap[c] + CDT_CACHE_SLACK), laid

@@ -588,6 +588,34 @@ TEST_F(Cli, GpuTilesOfAnInputToSplitGiveTheSingleRunsBytes) {
   EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
 }
 
+// Segments through vertices and none crossing (a contour through DEM points, footprints sharing a wall): GPU tiles
+// split them themselves, no resolve runs, and the bytes and the count of splits are the untiled run's.
+TEST_F(Cli, GpuTilesSplitSegmentsThroughVerticesThemselves) {
+  std::ostringstream dem;
+  dem << "x,y,z\n";
+  for (int i = 0; i < 40; ++i)
+    for (int j = 0; j < 40; ++j) dem << 500000 + i << ',' << 6000000 + j << ',' << 100 + (i * 7 + j * 3) % 11 << '\n';
+  write("dem.csv", dem.str());
+  write("lines.wkt",
+        "LINESTRING Z (500000 6000000 100, 500030 6000030 130)\n"  // through 29 grid vertices
+        "POLYGON Z ((500002 6000032 1, 500020 6000032 1, 500020 6000038 1, 500002 6000038 1, 500002 6000032 1))\n"
+        "POLYGON Z ((500010 6000038 2, 500036 6000038 2, 500036 6000039 2, 500010 6000039 2, 500010 6000038 2))\n");
+  const std::string in = path("dem.csv") + " " + path("lines.wkt");
+  Result r = run("triangulate " + in + " --backend gpu --max-tile-points 0 -q -o " + path("single.ply") + " --stats " +
+                 path("single.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  r = run("-v triangulate " + in + " --backend gpu --max-tile-points 200 -o " + path("tiled.ply") + " --stats " +
+          path("tiled.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err.find("resolved, then tiled again"), std::string::npos) << r.err;
+  EXPECT_TRUE(slurp(path("tiled.ply")) == slurp(path("single.ply")));
+  const auto single = nlohmann::json::parse(slurp(path("single.json")));
+  const auto tiled = nlohmann::json::parse(slurp(path("tiled.json")));
+  EXPECT_GE(tiled["counts"]["tiles"].get<int>(), 2);
+  EXPECT_GT(single["counts"]["constraint_splits_at_vertices"].get<int>(), 29);
+  EXPECT_EQ(tiled["counts"]["constraint_splits_at_vertices"], single["counts"]["constraint_splits_at_vertices"]);
+}
+
 // --max-tile-points: tiny tiles give the untiled run's bytes on both backends, with roles, draping, --max-edge,
 // the grid, contours and preview; --stats has the same counts plus the tiles'.
 TEST_F(Cli, TiledRunsWriteTheUntiledBytes) {

@@ -24,6 +24,7 @@
 #include <fstream>
 #include <iostream>
 #include <random>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -445,13 +446,32 @@ TEST(GpuCdt, ReportsBrokenRequirements) {
       EXPECT_NE(std::string(e.what()).find("passes through a vertex"), std::string::npos) << e.what();
     }
   }
-  // A tile of an unresolved input: each is UnresolvedTile, not a device error.
-  for (const std::vector<Edge>& broken : {std::vector<Edge>{{index(1, 2), index(4, 3)}, {index(2, 1), index(3, 4)}},
-                                          std::vector<Edge>{{index(1, 1), index(4, 1)}}}) {
+  // A tile of an unresolved input: crossing constraints are UnresolvedTile, not a device error.
+  {
     gpu::GpuTriangulation tri = gpu::upload_triangulation(ctx(), host);
     gpu::ConstraintOptions o;
     o.unresolved = true;
-    EXPECT_THROW(inserter().insert(tri, broken, nullptr, o), UnresolvedTile);
+    const std::vector<Edge> crossing = {{index(1, 2), index(4, 3)}, {index(2, 1), index(3, 4)}};
+    EXPECT_THROW(inserter().insert(tri, crossing, nullptr, o), UnresolvedTile);
+  }
+  // And constraints through vertices are split there, a pass a vertex along each: (1, 1)-(4, 1) at (2, 1), then
+  // its piece at (3, 1); (1, 1)-(5, 3) at (3, 2). Every piece is then an edge.
+  {
+    gpu::GpuTriangulation tri = gpu::upload_triangulation(ctx(), host);
+    gpu::ConstraintOptions o;
+    o.unresolved = true;
+    const std::vector<Edge> through = {{index(1, 1), index(4, 1)}, {index(1, 1), index(5, 3)}};
+    const gpu::ConstrainedEdges r = inserter().insert(tri, through, nullptr, o);
+    std::set<std::array<uint32_t, 3>> split(r.split.begin(), r.split.end());
+    const std::set<std::array<uint32_t, 3>> expected = {{index(1, 1), index(4, 1), index(2, 1)},
+                                                        {index(2, 1), index(4, 1), index(3, 1)},
+                                                        {index(1, 1), index(5, 3), index(3, 2)}};
+    EXPECT_EQ(split, expected);
+    std::vector<Edge> pieces = {{index(1, 1), index(2, 1)}, {index(2, 1), index(3, 1)}, {index(3, 1), index(4, 1)},
+                                {index(1, 1), index(3, 2)}, {index(3, 2), index(5, 3)}};
+    std::sort(pieces.begin(), pieces.end());
+    EXPECT_EQ(gpu::download_constrained_edges(ctx(), tri, r), pieces);
+    EXPECT_EQ(gpu::check_triangulation(gpu::download_host(ctx(), tri)), "");
   }
   no_validation_messages();
 }

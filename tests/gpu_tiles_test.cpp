@@ -162,38 +162,62 @@ TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
 }
 
 // Tiles of the prepared input that check themselves (core/tiles_ahead, tiled_cdt_unresolved): every hard layout
-// whose resolve splits nothing gives the single run's mesh, and every one whose resolve splits something (crossing
-// constraints, a constraint through grid vertices) gives up, in tiles, slabs and one piece alike.
+// whose resolve makes no Steiner vertex gives the single run's mesh, the segments through vertices split by the
+// tiles as the resolve splits them (the same count), and every one with crossings gives up, in tiles, slabs and
+// one piece alike (one piece always gives up: nothing would check it).
 TEST(GpuTiles, TilesOfAnUnresolvedInputCheckThemselves) {
   const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
   const gpu::GpuCdt cdt(ctx);
   const gpu::GpuTiles tiles = gpu::gpu_tiles({&cdt});
   std::vector<std::pair<std::string, InputSet>> layouts = tile_layouts::all();
-  InputSet along_a_row = tile_layouts::dem_grid();  // through the grid's vertices, each a neighbour of the last
-  along_a_row.lines.push_back(tile_layouts::line({{0, 20, 0}, {39, 20, 0}}));
-  layouts.emplace_back("a constraint along a grid row", std::move(along_a_row));
-  int clean = 0, split = 0;
+  auto on_grid = [](std::vector<Polyline> lines) {
+    InputSet in = tile_layouts::dem_grid();
+    in.lines = std::move(lines);
+    return in;
+  };
+  using tile_layouts::line;
+  // Through the grid's vertices, each a neighbour of the last.
+  layouts.emplace_back("a constraint along a grid row", on_grid({line({{0, 20, 0}, {39, 20, 0}})}));
+  // Chains of vertices on one segment (a pass each in a tile), across every slab and tile.
+  layouts.emplace_back("a column, a diagonal and a knight's line through the grid",
+                       on_grid({line({{30, 0, 0}, {30, 15, 0}}), line({{1, 1, 0}, {38, 38, 0}}),
+                                line({{0, 21, 0}, {36, 39, 0}})}));
+  // Footprints sharing walls, collinear overlaps of different lengths: the equal pieces merge.
+  layouts.emplace_back("footprints sharing walls",
+                       on_grid({line({{2, 2, 0}, {20, 2, 0}, {20, 12, 0}, {2, 12, 0}}, true),
+                                line({{10, 12, 0}, {30, 12, 0}, {30, 25, 0}, {10, 25, 0}}, true),
+                                line({{20, 2, 0}, {36, 2, 0}, {36, 12, 0}, {25, 12, 0}}, true)}));
+  int clean = 0, through = 0, crossing = 0;
   for (const auto& [name, in] : layouts) {
     const PreparedInput p = prepare(in);
     const ResolvedInput resolved = resolve_constraints(p);
-    const bool changes = resolved.steiner_points + resolved.split_at_vertices > 0;
-    (changes ? split : clean) += 1;
+    const bool crosses = resolved.steiner_points > 0;
+    (crosses ? crossing : resolved.split_at_vertices > 0 ? through : clean) += 1;
     const CdtResult single = triangulate_cgal(p);
     for (uint64_t tp : {16, 100, 500, 100000}) {
-      const std::optional<Triangles> t = tiled_cdt_unresolved(p, device_tiles(tp, tiles), tiles.triangulate);
+      TileStats ts;
+      const std::optional<Triangles> t = tiled_cdt_unresolved(p, device_tiles(tp, tiles), tiles.triangulate, &ts);
       const bool one_piece = p.vertices.size() <= tp;
-      EXPECT_EQ(t.has_value(), !changes && !one_piece) << name << ", tiles of " << tp;
+      EXPECT_EQ(t.has_value(), !crosses && !one_piece) << name << ", tiles of " << tp;
       if (t) {
         EXPECT_TRUE(*t == single.mesh.triangles) << name << ", tiles of " << tp;
+        EXPECT_EQ(ts.split_at_vertices, resolved.split_at_vertices) << name << ", tiles of " << tp;
       }
     }
   }
   EXPECT_GE(clean, 5);
-  EXPECT_GE(split, 3);
+  EXPECT_GE(through, 4);  // the duplicates' line too
+  EXPECT_GE(crossing, 1);
+  // Two segments crossing exactly at a grid vertex: the resolve splits each there (no Steiner vertex), but a tile
+  // that holds both and not that vertex sees them cross, and the caller resolves.
+  const PreparedInput x = prepare(on_grid({line({{10, 10, 0}, {30, 30, 0}}), line({{10, 30, 0}, {30, 10, 0}})}));
+  ASSERT_EQ(resolve_constraints(x).steiner_points, 0u);
+  for (uint64_t tp : {16, 100, 500})
+    EXPECT_FALSE(tiled_cdt_unresolved(x, device_tiles(tp, tiles), tiles.triangulate).has_value()) << tp;
 }
 
 // A segment along a slab's cut line, through vertices that only one of the two slabs owns: that slab must get it,
-// or no tile reports the vertices on it (and the merge refuses it). A 40 x 40 grid in slabs of 100 points: the
+// or no tile splits it at the vertices (and the merge refuses it). A 40 x 40 grid in slabs of 100 points: the
 // cut at x = 2 splits that grid column, rows 0-19 left, 20-39 right. Segments found by x-range (de30fc5) failed
 // this with either bound made strict.
 TEST(GpuTiles, UnresolvedSlabsSeeASegmentAlongTheirCut) {
@@ -204,8 +228,11 @@ TEST(GpuTiles, UnresolvedSlabsSeeASegmentAlongTheirCut) {
     InputSet in = tile_layouts::dem_grid();
     in.lines.push_back(tile_layouts::line({{2, y0, 0}, {2, y1, 0}}));
     const PreparedInput p = prepare(in);
-    EXPECT_FALSE(tiled_cdt_unresolved(p, device_tiles(100, tiles), tiles.triangulate).has_value())
-        << "a segment through vertices of the " << owner << " slab only";
+    TileStats ts;
+    const std::optional<Triangles> t = tiled_cdt_unresolved(p, device_tiles(100, tiles), tiles.triangulate, &ts);
+    ASSERT_TRUE(t.has_value()) << "a segment through vertices of the " << owner << " slab only";
+    EXPECT_TRUE(*t == triangulate_cgal(p).mesh.triangles) << owner;
+    EXPECT_EQ(ts.split_at_vertices, 9u) << owner;
   }
 }
 

@@ -80,9 +80,17 @@ TEST_F(Mpi, RanksGiveTheSingleProcessBytes) {
 
 // GPU tiles check their own constraints, no resolve first (core/tiles_ahead.hpp): the inputs' lines cross the
 // boundary ring, so a tile reports it and every rank resolves and tiles again; the DEM with the lake's ring alone
-// has nothing to split and goes through unresolved. The same bytes as one process either way.
+// has nothing to split and goes through unresolved, and so does a grid with a line through its vertices, which
+// the tiles of both ranks split. The same bytes as one process either way.
 TEST_F(Mpi, GpuRanksGiveTheSingleProcessBytes) {
-  for (const std::string& in : {inputs(), path("dem.csv") + " " + path("lake.wkt")}) {
+  std::ostringstream grid;
+  grid << "x,y,z\n";
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j) grid << 500000 + i << ',' << 6000000 + j << ',' << 100 + (i * 7 + j * 3) % 11 << '\n';
+  write("grid.csv", grid.str());
+  write("through.wkt", "LINESTRING (500000 6000001, 500011 6000012)\nLINESTRING (500008 6000000, 500008 6000003)\n");
+  for (const std::string& in :
+       {inputs(), path("dem.csv") + " " + path("lake.wkt"), path("grid.csv") + " " + path("through.wkt")}) {
     const bool crossings = in == inputs();
     ASSERT_EQ(run("triangulate " + in + " --backend cgal -o " + path("one.ply") + " -q").code, 0);
     const Result r = mpirun(2, "triangulate " + in + " --backend gpu --max-tile-points 60 -v -o " + path("gpu.ply"));
