@@ -476,6 +476,36 @@ TEST(GpuCdt, ReportsBrokenRequirements) {
   no_validation_messages();
 }
 
+// More vertices on constraints than one pass records (CDT_THROUGH_CAP pairs): every grid row of a 100 x 100 grid
+// as one constraint, 9800 vertices on them, split over several passes into the grid's 9900 unit edges.
+TEST(GpuCdt, UnresolvedConstraintsSplitOverSeveralPasses) {
+  InputSet in;
+  add_grid(in, 100, 1.0);
+  PreparedInput p = prepare(in);
+  std::vector<double> xy;
+  for (const Point3& q : p.vertices) xy.insert(xy.end(), {q.x, q.y});
+  gpu::HostTriangulation host = start_triangulation("rows through a grid", xy, p.vertices);
+  // prepare sorts by (x, y): the vertex at column i, row j is i * 100 + j.
+  auto index = [](uint32_t i, uint32_t j) { return i * 100 + j; };
+  std::vector<Edge> rows, units;
+  for (uint32_t j = 0; j < 100; ++j) {
+    rows.push_back({index(0, j), index(99, j)});
+    for (uint32_t i = 0; i < 99; ++i) units.push_back({index(i, j), index(i + 1, j)});
+  }
+  std::sort(units.begin(), units.end());
+  gpu::GpuTriangulation tri = gpu::upload_triangulation(ctx(), host);
+  gpu::ConstraintOptions o;
+  o.unresolved = true;
+  const gpu::ConstrainedEdges r = inserter().insert(tri, rows, nullptr, o);
+  EXPECT_EQ(r.split.size(), 9800u);
+  std::set<uint32_t> on;
+  for (const auto& s : r.split) on.insert(s[2]);
+  EXPECT_EQ(on.size(), 9800u);
+  EXPECT_EQ(gpu::download_constrained_edges(ctx(), tri, r), units);
+  EXPECT_EQ(gpu::check_triangulation(gpu::download_host(ctx(), tri)), "");
+  no_validation_messages();
+}
+
 // The peer inputs of artem-ogre/CDT that need no Steiner points (crossings are another stage's job).
 TEST(GpuCdt, PeerInputsWithoutCrossings) {
   CDTGPU_SKIP_WITHOUT_PEER_INPUTS();
