@@ -72,6 +72,16 @@ class BinaryTest : public ::testing::Test {
 
 // 400 DEM points on a 10 m grid, each jittered by up to 1 m (seeded), z = 100 + i + j / 2, in projected metres:
 // a CSV with an "x,y,z" header.
+// A DEM of side x side points on whole metres (MGA-like coordinates): lines through its vertices pass exactly
+// through them.
+inline std::string grid_dem_csv(int side) {
+  std::ostringstream xyz;
+  xyz << "x,y,z\n";
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j) xyz << 500000 + i << ',' << 6000000 + j << ',' << 100 + (i * 7 + j * 3) % 11 << '\n';
+  return xyz.str();
+}
+
 inline std::string jittered_dem_csv(uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);

@@ -566,11 +566,7 @@ TEST_F(Cli, AGridTooFineOrABadCellIsAUsageErrorAndWritesNothing) {
 // and tiled again; the tile device and its staging were opened before prepare. The same bytes as the CPU's single
 // run.
 TEST_F(Cli, GpuTilesOfAnInputToSplitGiveTheSingleRunsBytes) {
-  std::ostringstream dem;
-  dem << "x,y,z\n";
-  for (int i = 0; i < 40; ++i)
-    for (int j = 0; j < 40; ++j) dem << 500000 + i << ',' << 6000000 + j << ',' << 100 + (i * 7 + j * 3) % 11 << '\n';
-  write("dem.csv", dem.str());
+  write("dem.csv", cdtgpu::test::grid_dem_csv(40));
   write("lines.wkt",
         "LINESTRING Z (500000 6000000 100, 500030 6000030 130)\n"          // through 29 grid vertices
         "LINESTRING Z (500000.5 6000010.5 100, 500030.5 6000020.5 101)\n"  // these two cross
@@ -591,11 +587,7 @@ TEST_F(Cli, GpuTilesOfAnInputToSplitGiveTheSingleRunsBytes) {
 // Segments through vertices and none crossing (a contour through DEM points, footprints sharing a wall): GPU tiles
 // split them themselves, no resolve runs, and the bytes and the count of splits are the untiled run's.
 TEST_F(Cli, GpuTilesSplitSegmentsThroughVerticesThemselves) {
-  std::ostringstream dem;
-  dem << "x,y,z\n";
-  for (int i = 0; i < 40; ++i)
-    for (int j = 0; j < 40; ++j) dem << 500000 + i << ',' << 6000000 + j << ',' << 100 + (i * 7 + j * 3) % 11 << '\n';
-  write("dem.csv", dem.str());
+  write("dem.csv", cdtgpu::test::grid_dem_csv(40));
   write("lines.wkt",
         "LINESTRING Z (500000 6000000 100, 500030 6000030 130)\n"  // through 29 grid vertices
         "POLYGON Z ((500002 6000032 1, 500020 6000032 1, 500020 6000038 1, 500002 6000038 1, 500002 6000032 1))\n"

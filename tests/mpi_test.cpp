@@ -83,11 +83,7 @@ TEST_F(Mpi, RanksGiveTheSingleProcessBytes) {
 // has nothing to split and goes through unresolved, and so does a grid with a line through its vertices, which
 // the tiles of both ranks split. The same bytes as one process either way.
 TEST_F(Mpi, GpuRanksGiveTheSingleProcessBytes) {
-  std::ostringstream grid;
-  grid << "x,y,z\n";
-  for (int i = 0; i < 12; ++i)
-    for (int j = 0; j < 12; ++j) grid << 500000 + i << ',' << 6000000 + j << ',' << 100 + (i * 7 + j * 3) % 11 << '\n';
-  write("grid.csv", grid.str());
+  write("grid.csv", cdtgpu::test::grid_dem_csv(12));
   write("through.wkt", "LINESTRING (500000 6000001, 500011 6000012)\nLINESTRING (500008 6000000, 500008 6000003)\n");
   for (const std::string& in :
        {inputs(), path("dem.csv") + " " + path("lake.wkt"), path("grid.csv") + " " + path("through.wkt")}) {
