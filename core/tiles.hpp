@@ -95,8 +95,8 @@ using TileFinalizer = std::function<TileFinal(const TileJob&)>;
 struct TileSharing {
   int rank = 0, ranks = 1;
   std::function<std::vector<std::vector<uint32_t>>(std::vector<uint32_t> mine)> gather;
-  // Whether any rank passes true, on every rank (TileOptions::unresolved: whether some rank's tile has
-  // constraints to split).
+  // Whether any rank passes true, on every rank (TileOptions::unresolved: whether some rank's tile has segments
+  // that cross).
   std::function<bool(bool mine)> any;
 };
 
@@ -132,7 +132,8 @@ struct TileOptions {
   std::function<void(uint64_t vertices)> reserve;
 };
 
-// A finalizer's throw when a tile of an unresolved input (TileOptions::unresolved) has something to split.
+// A finalizer's throw when a tile of an unresolved input (TileOptions::unresolved) has segments that cross (or
+// more vertices on its segments than the GPU's passes split: gpu/constraints.cpp).
 struct UnresolvedTile : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
