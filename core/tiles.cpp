@@ -385,6 +385,143 @@ TileTriangulator cgal_tile_triangulator() {
 
 namespace {
 
+// The first level's tiles of every rank at rank 0 (TileSharing): each rank sends its own tiles' results, rank 0
+// takes them into `results` and marks their final region in `in_final`. False on the other ranks, which are done.
+bool share_tiles(const TileSharing& sharing, std::vector<TileResult>& results, const std::vector<size_t>& mine,
+                 uint64_t n, uint64_t tile_points, std::vector<uint8_t>& in_final) {
+  // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
+  // triangles' count and ids, the border's count and ids, the splits' count and ids.
+  std::vector<uint32_t> pack = {uint32_t(results.size()), uint32_t(n), uint32_t(tile_points),
+                                uint32_t(tile_points >> 32)};
+  for (size_t t : mine) {
+    const TileResult& r = results[t];
+    pack.push_back(uint32_t(t));
+    pack.push_back(uint32_t(r.final_triangles.size()));
+    for (const Triangle& tri : r.final_triangles) pack.insert(pack.end(), tri.begin(), tri.end());
+    pack.push_back(uint32_t(r.border.size()));
+    for (const Edge& e : r.border) pack.insert(pack.end(), e.begin(), e.end());
+    pack.push_back(uint32_t(r.split.size()));
+    for (const auto& split : r.split) pack.insert(pack.end(), split.begin(), split.end());
+  }
+  std::vector<std::vector<uint32_t>> all = sharing.gather(std::move(pack));
+  if (sharing.rank != 0) return false;
+  for (size_t rank = 0; rank < all.size(); ++rank) {
+    const std::vector<uint32_t>& from = all[rank];
+    if (from.size() < 4 || !std::equal(from.begin(), from.begin() + 4, all[0].begin()))
+      throw std::runtime_error(
+          "rank " + std::to_string(rank) + " planned other tiles than rank 0 (" +
+          (from.size() < 4 ? std::string("none")
+                           : std::to_string(from[0]) + " tiles of at most " +
+                                 std::to_string(uint64_t(from[3]) << 32 | from[2]) + " points") +
+          " against " + std::to_string(results.size()) + " of at most " + std::to_string(tile_points) +
+          "): give every rank the same input and --max-tile-points");
+    for (size_t at = 4; at < from.size();) {
+      TileResult& r = results[from[at++]];
+      r.final_triangles.resize(from[at++]);
+      for (Triangle& tri : r.final_triangles)
+        for (uint32_t& id : tri) id = from[at++];
+      r.border.resize(from[at++]);
+      for (Edge& e : r.border)
+        for (uint32_t& id : e) id = from[at++];
+      r.split.resize(from[at++]);
+      for (auto& split : r.split)
+        for (uint32_t& id : split) id = from[at++];
+    }
+  }
+  // The final region's vertices, as run_tile marks them, for the other ranks' tiles too.
+  for (const TileResult& r : results)
+    tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
+      for (uint32_t id : r.final_triangles[i])
+        std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
+    });
+  return true;
+}
+
+// What the merge triangulates (tiling.md): the vertices not inside the final region with the border's, the
+// segments between them (a segment with an end inside the final region lies inside it; split ones as their
+// pieces) and the border edges, in the merge's own ids. `in_final` is read, then freed.
+struct MergeJob {
+  std::vector<uint32_t> ids;  // the merge's vertex i is the level's ids[i]
+  Points vertices;
+  std::vector<Edge> segments, border;  // border: directed as the tiles gave it
+};
+
+MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std::vector<Edge>& border,
+                   const VertexSplits& split_segments, std::vector<uint8_t>& in_final) {
+  const size_t n = v.size();
+  const std::vector<Edge>& split_ones = split_segments.split;
+  auto not_split = [&](const Edge& e) {
+    return split_ones.empty() || !std::binary_search(split_ones.begin(), split_ones.end(), e);
+  };
+  // The merge's vertices: those not in the final region, and the border's (in_final cleared there, so from here
+  // on it marks the vertices that are not in the merge). Read 8 marks at a time: nearly all are 1.
+  for (const Edge& e : border) in_final[e[0]] = in_final[e[1]] = 0;
+  constexpr uint64_t kOnes = 0x0101010101010101;
+  auto word_at = [&](size_t w) {
+    uint64_t word;
+    std::memcpy(&word, in_final.data() + 8 * w, 8);
+    return ~word & kOnes;  // a 1 in the low bit of each vertex's byte that is in the merge
+  };
+  const size_t words = n / 8;
+  std::vector<uint32_t> ids = compact<uint32_t>(
+      words, [&](size_t w) { return std::popcount(word_at(w)); },
+      [&](size_t w, uint32_t* at) {
+        for (uint64_t m = word_at(w); m; m &= m - 1) *at++ = uint32_t(8 * w + std::countr_zero(m) / 8);
+        return at;
+      });
+  for (size_t i = 8 * words; i < n; ++i)
+    if (!in_final[i]) ids.push_back(uint32_t(i));
+  RawVector<uint32_t> local_of(n);  // only written, and read, at the merge's vertices
+  Points merge_vertices(ids.size());
+  tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) {
+    local_of[ids[i]] = uint32_t(i);
+    merge_vertices[i] = v[ids[i]];
+  });
+  // The segments between them: such a segment's first end is a merge vertex, and segments are sorted by it
+  // (tile_segments checks), so each merge vertex's are found from the last one's by a galloping search, not by a
+  // pass over every segment (250M at 1B points).
+  constexpr size_t kIdBlock = 1 << 12;
+  std::vector<uint32_t> segments_from(ids.size() + 1);  // merge vertex i's segments: from [i] up to [i + 1]
+  tbb::parallel_for(size_t(0), (ids.size() + kIdBlock - 1) / kIdBlock, [&](size_t blk) {
+    const size_t end = std::min(ids.size(), (blk + 1) * kIdBlock);
+    auto first_end_below = [&](uint32_t id) { return [id](const Edge& e) { return e[0] < id; }; };
+    const auto from = segments.begin();
+    size_t at = size_t(std::partition_point(from, segments.end(), first_end_below(ids[blk * kIdBlock])) - from);
+    for (size_t i = blk * kIdBlock; i < end; ++i) {
+      size_t step = 1, hi = at;
+      while (hi < segments.size() && segments[hi][0] < ids[i]) hi = std::min(segments.size(), at + (step *= 2));
+      at = size_t(std::partition_point(from + at, from + hi, first_end_below(ids[i])) - from);
+      segments_from[i] = uint32_t(at);
+    }
+  });
+  segments_from[ids.size()] = uint32_t(segments.size());
+  std::vector<Edge> merge_segments = compact<Edge>(
+      ids.size(),
+      [&](size_t i) {
+        size_t k = 0;
+        for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j)
+          k += !in_final[segments[j][1]] && not_split(segments[j]);
+        return k;
+      },
+      [&](size_t i, Edge* at) {
+        for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j)
+          if (!in_final[segments[j][1]] && not_split(segments[j])) *at++ = {uint32_t(i), local_of[segments[j][1]]};
+        return at;
+      });
+  for (const Edge& e : split_segments.pieces)
+    if (!in_final[e[0]] && !in_final[e[1]]) merge_segments.push_back({local_of[e[0]], local_of[e[1]]});
+  free_storage_on_all_cores(in_final);
+  std::vector<Edge> local_border(border.size());
+  for (size_t i = 0; i < border.size(); ++i) {
+    local_border[i] = {local_of[border[i][0]], local_of[border[i][1]]};
+    merge_segments.push_back(
+        {std::min(local_border[i][0], local_border[i][1]), std::max(local_border[i][0], local_border[i][1])});
+  }
+  tbb::parallel_sort(merge_segments.begin(), merge_segments.end());
+  merge_segments.erase(std::unique(merge_segments.begin(), merge_segments.end()), merge_segments.end());
+  return MergeJob{std::move(ids), std::move(merge_vertices), std::move(merge_segments), std::move(local_border)};
+}
+
 // tiled_cdt's triangles in canonical order: each tile's final ones and the merge's, merged by RunMerge
 // (core/tile_merge).
 Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
@@ -528,57 +665,11 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     run_mine();
   }
   bookkeeping.get();  // its error, if any
-  if (sharing) {
-    // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
-    // triangles' count and ids, the border's count and ids, the splits' count and ids.
-    const uint64_t tile_points = options.max_tile_points;
-    std::vector<uint32_t> pack = {uint32_t(tiles), uint32_t(n), uint32_t(tile_points), uint32_t(tile_points >> 32)};
-    for (size_t t : mine) {
-      const TileResult& r = results[t];
-      pack.push_back(uint32_t(t));
-      pack.push_back(uint32_t(r.final_triangles.size()));
-      for (const Triangle& tri : r.final_triangles) pack.insert(pack.end(), tri.begin(), tri.end());
-      pack.push_back(uint32_t(r.border.size()));
-      for (const Edge& e : r.border) pack.insert(pack.end(), e.begin(), e.end());
-      pack.push_back(uint32_t(r.split.size()));
-      for (const auto& split : r.split) pack.insert(pack.end(), split.begin(), split.end());
-    }
-    std::vector<std::vector<uint32_t>> all = sharing->gather(std::move(pack));
-    if (sharing->rank != 0) return {};
-    for (size_t rank = 0; rank < all.size(); ++rank) {
-      const std::vector<uint32_t>& from = all[rank];
-      if (from.size() < 4 || !std::equal(from.begin(), from.begin() + 4, all[0].begin()))
-        throw std::runtime_error(
-            "rank " + std::to_string(rank) + " planned other tiles than rank 0 (" +
-            (from.size() < 4 ? std::string("none")
-                             : std::to_string(from[0]) + " tiles of at most " +
-                                   std::to_string(uint64_t(from[3]) << 32 | from[2]) + " points") +
-            " against " + std::to_string(tiles) + " of at most " + std::to_string(tile_points) +
-            "): give every rank the same input and --max-tile-points");
-      for (size_t at = 4; at < from.size();) {
-        TileResult& r = results[from[at++]];
-        r.final_triangles.resize(from[at++]);
-        for (Triangle& tri : r.final_triangles)
-          for (uint32_t& id : tri) id = from[at++];
-        r.border.resize(from[at++]);
-        for (Edge& e : r.border)
-          for (uint32_t& id : e) id = from[at++];
-        r.split.resize(from[at++]);
-        for (auto& split : r.split)
-          for (uint32_t& id : split) id = from[at++];
-      }
-    }
-    // The final region's vertices, as run_tile marks them, for the other ranks' tiles too.
-    for (const TileResult& r : results)
-      tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
-        for (uint32_t id : r.final_triangles[i]) std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
-      });
-  }
+  if (sharing && !share_tiles(*sharing, results, mine, n, options.max_tile_points, in_final)) return {};
 
   const double tiles_wall_ms = ms_since(t_tiles);
-  // The merge: the vertices not inside the final region, the segments between them (a segment with an end
-  // inside the final region lies inside it) and the final region's border. What only the tiles read goes
-  // first (at 1B points + 250M segments: 6 GB of the canonical order's peak).
+  // The merge's input (merge_job). What only the tiles read goes first (at 1B points + 250M segments: 6 GB of the
+  // canonical order's peak).
   const auto t_merge_input = Clock::now();
   free_storage_on_all_cores(plan.order);
   free_storage_on_all_cores(tile_segments_of.ids);
@@ -605,76 +696,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     spdlog::debug("tiles, level {}: {} segments split at {} vertices", level, split_segments.split.size(),
                   split_segments.splits);
   }
-  const std::vector<Edge>& split_ones = split_segments.split;
-  auto not_split = [&](const Edge& e) {
-    return split_ones.empty() || !std::binary_search(split_ones.begin(), split_ones.end(), e);
-  };
-  // The merge's vertices: those not in the final region, and the border's (in_final cleared there, so from here
-  // on it marks the vertices that are not in the merge). Read 8 marks at a time: nearly all are 1.
-  for (const Edge& e : border) in_final[e[0]] = in_final[e[1]] = 0;
-  constexpr uint64_t kOnes = 0x0101010101010101;
-  auto word_at = [&](size_t w) {
-    uint64_t word;
-    std::memcpy(&word, in_final.data() + 8 * w, 8);
-    return ~word & kOnes;  // a 1 in the low bit of each vertex's byte that is in the merge
-  };
-  const size_t words = n / 8;
-  std::vector<uint32_t> ids = compact<uint32_t>(
-      words, [&](size_t w) { return std::popcount(word_at(w)); },
-      [&](size_t w, uint32_t* at) {
-        for (uint64_t m = word_at(w); m; m &= m - 1) *at++ = uint32_t(8 * w + std::countr_zero(m) / 8);
-        return at;
-      });
-  for (size_t i = 8 * words; i < n; ++i)
-    if (!in_final[i]) ids.push_back(uint32_t(i));
-  RawVector<uint32_t> local_of(n);  // only written, and read, at the merge's vertices
-  Points merge_vertices(ids.size());
-  tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) {
-    local_of[ids[i]] = uint32_t(i);
-    merge_vertices[i] = v[ids[i]];
-  });
-  // The segments between them: such a segment's first end is a merge vertex, and segments are sorted by it
-  // (tile_segments checks), so each merge vertex's are found from the last one's by a galloping search, not by a
-  // pass over every segment (250M at 1B points).
-  constexpr size_t kIdBlock = 1 << 12;
-  std::vector<uint32_t> segments_from(ids.size() + 1);  // merge vertex i's segments: from [i] up to [i + 1]
-  tbb::parallel_for(size_t(0), (ids.size() + kIdBlock - 1) / kIdBlock, [&](size_t blk) {
-    const size_t end = std::min(ids.size(), (blk + 1) * kIdBlock);
-    auto first_end_below = [&](uint32_t id) { return [id](const Edge& e) { return e[0] < id; }; };
-    const auto from = segments.begin();
-    size_t at = size_t(std::partition_point(from, segments.end(), first_end_below(ids[blk * kIdBlock])) - from);
-    for (size_t i = blk * kIdBlock; i < end; ++i) {
-      size_t step = 1, hi = at;
-      while (hi < segments.size() && segments[hi][0] < ids[i]) hi = std::min(segments.size(), at + (step *= 2));
-      at = size_t(std::partition_point(from + at, from + hi, first_end_below(ids[i])) - from);
-      segments_from[i] = uint32_t(at);
-    }
-  });
-  segments_from[ids.size()] = uint32_t(segments.size());
-  std::vector<Edge> merge_segments = compact<Edge>(
-      ids.size(),
-      [&](size_t i) {
-        size_t k = 0;
-        for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j)
-          k += !in_final[segments[j][1]] && not_split(segments[j]);
-        return k;
-      },
-      [&](size_t i, Edge* at) {
-        for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j)
-          if (!in_final[segments[j][1]] && not_split(segments[j])) *at++ = {uint32_t(i), local_of[segments[j][1]]};
-        return at;
-      });
-  for (const Edge& e : split_segments.pieces)
-    if (!in_final[e[0]] && !in_final[e[1]]) merge_segments.push_back({local_of[e[0]], local_of[e[1]]});
-  free_storage_on_all_cores(in_final);
-  std::vector<Edge> local_border(border.size());
-  for (size_t i = 0; i < border.size(); ++i) {
-    local_border[i] = {local_of[border[i][0]], local_of[border[i][1]]};
-    merge_segments.push_back(
-        {std::min(local_border[i][0], local_border[i][1]), std::max(local_border[i][0], local_border[i][1])});
-  }
-  tbb::parallel_sort(merge_segments.begin(), merge_segments.end());
-  merge_segments.erase(std::unique(merge_segments.begin(), merge_segments.end()), merge_segments.end());
+  const MergeJob m = merge_job(v, segments, border, split_segments, in_final);
   s.tiles += tiles;
   s.levels += 1;
   if (level == 1) s.final_triangles = final_count;
@@ -682,26 +704,26 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   s.tiles_ms += ms_since(t_tiles);
 
   spdlog::debug("tiles, level {}: tiles done at {:.0f} ms, the merge's input ({} vertices) at {:.0f} ms", level,
-                tiles_wall_ms, ids.size(), ms_since(t_tiles));
+                tiles_wall_ms, m.ids.size(), ms_since(t_tiles));
   // Tiled again while that shrinks it; the last level is one call (its time is merge_ms).
   const bool again =
-      ids.size() > options.max_tile_points && double(ids.size()) <= options.retile_share * double(n);
+      m.ids.size() > options.max_tile_points && double(m.ids.size()) <= options.retile_share * double(n);
   Triangles merged;
   if (again) {
-    merged = tiled_runs(merge_vertices, merge_segments, options, triangulate, s);
+    merged = tiled_runs(m.vertices, m.segments, options, triangulate, s);
   } else {
     const auto t = Clock::now();
-    merged = triangulate(merge_vertices, merge_segments, "merge, level " + std::to_string(level)).triangles;
+    merged = triangulate(m.vertices, m.segments, "merge, level " + std::to_string(level)).triangles;
     canonicalize_triangles(merged);
     s.merge_ms = ms_since(t);
-    s.merge_vertices = ids.size();
-    s.merge_segments = merge_segments.size();
+    s.merge_vertices = m.ids.size();
+    s.merge_segments = m.segments.size();
   }
   const auto t_keep = Clock::now();
-  Triangles kept = outside_final(merged, uint32_t(ids.size()), local_border);  // in order: still a sorted run
+  Triangles kept = outside_final(merged, uint32_t(m.ids.size()), m.border);  // in order: still a sorted run
   if (!again) s.merge_triangles = kept.size();
   tbb::parallel_for(size_t(0), kept.size(), [&](size_t i) {
-    for (uint32_t& id : kept[i]) id = ids[id];
+    for (uint32_t& id : kept[i]) id = m.ids[id];
   });
   runs.push_back(std::move(kept));
   const double keep_ms = ms_since(t_keep);
