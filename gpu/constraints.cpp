@@ -5,7 +5,6 @@
 #include "gpu/constraints.hpp"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
@@ -17,6 +16,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "core/parallel.hpp"
 #include "core/predicates.hpp"
 #include "core/timing.hpp"
 #include "core/touched.hpp"
@@ -301,9 +301,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
       RawVector<Edge> next;  // unwritten: zeroing 250 MB on one core took longer than the copy
       next.reserve(list.size() + 2 * t.pairs.size());
       resize_unwritten(next, list.size());
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, list.size(), 1 << 18), [&](const tbb::blocked_range<size_t>& r) {
-        std::copy(list.begin() + r.begin(), list.begin() + r.end(), next.begin() + r.begin());
-      });
+      copy_on_all_cores(list.data(), list.size(), next.data());
       std::vector<Edge> made;
       for (size_t i = 0; i < t.pairs.size();) {
         const uint32_t c = t.pairs[i][0];
