@@ -5,6 +5,7 @@
 // GPU backend passes gpu::merge_points, which gives the same answer (tests/gpu_dedupe_test.cpp).
 #include "core/prepare.hpp"
 
+#include "core/compact.hpp"
 #include "core/parallel.hpp"
 #include "core/touched.hpp"
 #include "core/uninit.hpp"
@@ -44,10 +45,11 @@ void sort_segments(RawVector<SegmentKey>& segs, uint64_t vertices) {
     return;
   }
   // About 4096 segments a bucket (64 KB), at most 2^16 buckets; blocks of the input count their buckets.
+  const uint64_t last = std::max<uint64_t>(vertices, 1) - 1;  // the largest first vertex
+  const uint64_t most = std::clamp<uint64_t>(n / 4096, 1, uint64_t(1) << 16);
   uint32_t shift = 0;
-  while ((std::max<uint64_t>(vertices, 1) - 1) >> shift >= std::max<uint64_t>(1, std::min<uint64_t>(n / 4096, 1u << 16)))
-    ++shift;
-  const size_t buckets = size_t((std::max<uint64_t>(vertices, 1) - 1) >> shift) + 1;
+  while ((last >> shift) >= most) ++shift;
+  const size_t buckets = size_t(last >> shift) + 1;
   const size_t blocks = 256, block = (n + blocks - 1) / blocks;
   std::vector<uint32_t> place(blocks * buckets, 0);
   auto bucket = [&](const SegmentKey& k) { return size_t(k.ab >> 32 >> shift); };
@@ -223,18 +225,12 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
     return (ab >> 32) != (ab & 0xffffffffu) && (i == 0 || segs[i - 1].ab != ab);
   };
   // Both lists from one count and one pass (two compactions read the 4 GB of keys at 1B points four times).
-  constexpr size_t kBlock = size_t(1) << 16;
-  const size_t blocks = (segs.size() + kBlock - 1) / kBlock;
-  std::vector<size_t> first(blocks + 1, 0);
-  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
-    for (size_t i = b * kBlock; i < std::min(segs.size(), (b + 1) * kBlock); ++i) first[b + 1] += kept(i);
-  });
-  for (size_t b = 0; b < blocks; ++b) first[b + 1] += first[b];
-  resize_touched(out.constraints, first[blocks]);
-  resize_touched(out.constraint_line, first[blocks]);
-  tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
+  const std::vector<size_t> first = compact_starts(segs.size(), kept);
+  resize_touched(out.constraints, first.back());
+  resize_touched(out.constraint_line, first.back());
+  tbb::parallel_for(size_t(0), first.size() - 1, [&](size_t b) {
     size_t at = first[b];
-    for (size_t i = b * kBlock; i < std::min(segs.size(), (b + 1) * kBlock); ++i)
+    for (size_t i = b * kCompactBlock; i < std::min(segs.size(), (b + 1) * kCompactBlock); ++i)
       if (kept(i)) {
         out.constraints[at] = {uint32_t(segs[i].ab >> 32), uint32_t(segs[i].ab & 0xffffffffu)};
         out.constraint_line[at++] = segs[i].line;
