@@ -1,9 +1,7 @@
 #include "core/split_at_vertices.hpp"
 
 #include <algorithm>
-#include <execution>
 
-#include "core/compact.hpp"
 #include "core/predicates.hpp"
 
 namespace cdtgpu {
@@ -36,20 +34,6 @@ VertexSplits split_at_vertices(const Points& vertices, const std::vector<Edge>& 
   std::sort(out.pieces.begin(), out.pieces.end());
   out.pieces.erase(std::unique(out.pieces.begin(), out.pieces.end()), out.pieces.end());
   return out;
-}
-
-std::vector<Edge> with_pieces(const std::vector<Edge>& segments, const VertexSplits& s) {
-  auto is_split = [&](size_t i) { return std::binary_search(s.split.begin(), s.split.end(), segments[i]); };
-  const std::vector<Edge> kept = compact<Edge>(
-      segments.size(), [&](size_t i) { return is_split(i) ? 0 : 1; },
-      [&](size_t i, Edge* at) {
-        if (!is_split(i)) *at++ = segments[i];
-        return at;
-      });
-  std::vector<Edge> all(kept.size() + s.pieces.size());
-  std::merge(std::execution::par, kept.begin(), kept.end(), s.pieces.begin(), s.pieces.end(), all.begin());
-  all.erase(std::unique(all.begin(), all.end()), all.end());
-  return all;
 }
 
 }  // namespace cdtgpu

@@ -3,7 +3,8 @@
 // their own vertices, and the merge needs the whole input's segments split the same way.
 //
 //   VertexSplits s = split_at_vertices(vertices, segments, found);  // found: every tile's (a, b, v)
-//   // with_pieces(segments, s) == resolve_constraints(prepared).constraints for an input without crossings
+//   // segments, the split ones replaced by s.pieces, sorted and unique: the resolve's constraints for an input
+//   // without crossings (tests/split_at_vertices_test)
 #pragma once
 #include <array>
 #include <cstdint>
@@ -27,9 +28,5 @@ struct VertexSplits {
 // segments' (the merge of tiles takes only the few of them it needs).
 VertexSplits split_at_vertices(const Points& vertices, const std::vector<Edge>& segments,
                                std::vector<std::array<uint32_t, 3>> found);
-
-// The segments with the split ones replaced by the pieces, sorted and unique (equal pieces of collinear
-// overlaps merge): the resolve's constraints, for an input without crossings.
-std::vector<Edge> with_pieces(const std::vector<Edge>& segments, const VertexSplits& s);
 
 }  // namespace cdtgpu

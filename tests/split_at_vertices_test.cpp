@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "core/predicates.hpp"
@@ -35,6 +36,18 @@ PreparedInput rows_and_columns(uint64_t seed) {
     if (y0 != y1) add(x, y0, x, y1);
   }
   return prepare(in);
+}
+
+// The segments with the split ones replaced by their pieces, sorted and unique (equal pieces of collinear
+// overlaps merge).
+std::vector<Edge> with_pieces(const std::vector<Edge>& segments, const VertexSplits& s) {
+  std::vector<Edge> all;
+  for (const Edge& e : segments)
+    if (!std::binary_search(s.split.begin(), s.split.end(), e)) all.push_back(e);
+  all.insert(all.end(), s.pieces.begin(), s.pieces.end());
+  std::sort(all.begin(), all.end());
+  all.erase(std::unique(all.begin(), all.end()), all.end());
+  return all;
 }
 
 bool inside(const Points& v, Edge s, uint32_t w) {
