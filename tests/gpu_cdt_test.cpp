@@ -93,6 +93,14 @@ Triangles delaunay(const Points& v) {
   return out;
 }
 
+// The vertices' coordinates, two a vertex, as the triangulation's host copy holds them.
+std::vector<double> xy_of(const Points& vertices) {
+  std::vector<double> xy;
+  xy.reserve(2 * vertices.size());
+  for (const Point3& q : vertices) xy.insert(xy.end(), {q.x, q.y});
+  return xy;
+}
+
 // The Delaunay triangulation the constraints start from: CGAL's, or with CDTGPU_DT_START=voronoi the GPU build
 // from the Voronoi start, checked against CGAL's.
 gpu::HostTriangulation start_triangulation(const std::string& name, const std::vector<double>& xy,
@@ -148,9 +156,7 @@ Outcome check_against_cgal(const std::string& name, const InputSet& in, const Co
   const double cgal_ms = ms_since(t0);
   EXPECT_EQ(ref.steiner_points, 0u) << name << ": inputs of this test must not cross";
   std::vector<Edge> cons = split_at_vertices(p.vertices, p.constraints);
-  std::vector<double> xy;
-  xy.reserve(2 * p.vertices.size());
-  for (const Point3& q : p.vertices) xy.insert(xy.end(), {q.x, q.y});
+  const std::vector<double> xy = xy_of(p.vertices);
   t0 = std::chrono::steady_clock::now();
   gpu::HostTriangulation host = start_triangulation(name, xy, p.vertices);
   const double dt_ms = ms_since(t0);
@@ -350,8 +356,7 @@ TEST(GpuCdt, GarbageInTheSharedScratchChangesNothing) {
   const PreparedInput p = prepare(random_with_dt_edges(20000, 2000, 0.05, 91));
   const CdtResult ref = triangulate_cgal(p);
   const std::vector<Edge> cons = split_at_vertices(p.vertices, p.constraints);
-  std::vector<double> xy;
-  for (const Point3& q : p.vertices) xy.insert(xy.end(), {q.x, q.y});
+  const std::vector<double> xy = xy_of(p.vertices);
   const uint64_t n = p.vertices.size(), slots = 2 * n + 64;  // more than a build uses
   gpu::BufferCache cache;
   auto garbage = [&](uint32_t pattern) {
@@ -405,8 +410,7 @@ TEST(GpuCdt, ReportsBrokenRequirements) {
   InputSet in;
   add_grid(in, 10, 1.0);
   PreparedInput p = prepare(in);
-  std::vector<double> xy;
-  for (const Point3& q : p.vertices) xy.insert(xy.end(), {q.x, q.y});
+  const std::vector<double> xy = xy_of(p.vertices);
   gpu::HostTriangulation host = start_triangulation("broken requirements", xy, p.vertices);
   auto index = [&](double x, double y) {
     return uint32_t(std::find_if(p.vertices.begin(), p.vertices.end(),
@@ -482,8 +486,7 @@ TEST(GpuCdt, UnresolvedConstraintsSplitOverSeveralPasses) {
   InputSet in;
   add_grid(in, 100, 1.0);
   PreparedInput p = prepare(in);
-  std::vector<double> xy;
-  for (const Point3& q : p.vertices) xy.insert(xy.end(), {q.x, q.y});
+  const std::vector<double> xy = xy_of(p.vertices);
   gpu::HostTriangulation host = start_triangulation("rows through a grid", xy, p.vertices);
   // prepare sorts by (x, y): the vertex at column i, row j is i * 100 + j.
   auto index = [](uint32_t i, uint32_t j) { return i * 100 + j; };
