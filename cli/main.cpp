@@ -84,7 +84,8 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
     return code == 0 ? 0 : 2;
   }
   if (verbose) spdlog::set_level(spdlog::level::debug);
-  if (quiet || mpi.rank() != 0) spdlog::set_level(spdlog::level::warn);  // rank 0 tells the story
+  // Rank 0 tells the story; with -v every rank does, each line naming its rank.
+  if (quiet || (mpi.rank() != 0 && !verbose)) spdlog::set_level(spdlog::level::warn);
   if (mpi.ranks() > 1 && !*t) {
     spdlog::error("only `cdtgpu triangulate` runs as several MPI processes");
     return 2;

@@ -114,6 +114,10 @@ void record_tiles(Job& job, const TileStats& ts, uint64_t tile_points) {
   c["merge_vertices"] = ts.merge_vertices;
   c["merge_segments"] = ts.merge_segments;
   c["merge_triangles"] = ts.merge_triangles;
+  if (const TileSharing* sharing = job.options.sharing; sharing && sharing->rank != 0 && ts.levels == 0) {
+    spdlog::info("this rank's tiles of at most {} points handed to rank 0, which merges", tile_points);
+    return;
+  }
   spdlog::info("{} tiles of at most {} points in {} level(s): {} triangles final in their tiles, a merge of {} "
                "vertices and {} segments gave {}", ts.tiles, tile_points, ts.levels, ts.final_triangles,
                ts.merge_vertices, ts.merge_segments, ts.merge_triangles);

@@ -390,24 +390,40 @@ namespace {
 bool share_tiles(const TileSharing& sharing, std::vector<TileResult>& results, const std::vector<size_t>& mine,
                  uint64_t n, uint64_t tile_points, std::vector<uint8_t>& in_final) {
   // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
-  // triangles' count and ids, the border's count and ids, the splits' count and ids.
-  std::vector<uint32_t> pack = {uint32_t(results.size()), uint32_t(n), uint32_t(tile_points),
-                                uint32_t(tile_points >> 32)};
-  for (size_t t : mine) {
-    const TileResult& r = results[t];
-    pack.push_back(uint32_t(t));
-    pack.push_back(uint32_t(r.final_triangles.size()));
-    for (const Triangle& tri : r.final_triangles) pack.insert(pack.end(), tri.begin(), tri.end());
-    pack.push_back(uint32_t(r.border.size()));
-    for (const Edge& e : r.border) pack.insert(pack.end(), e.begin(), e.end());
-    pack.push_back(uint32_t(r.split.size()));
-    for (const auto& split : r.split) pack.insert(pack.end(), split.begin(), split.end());
+  // triangles' count and ids, the border's count and ids, the splits' count and ids. Copied a tile a task: at
+  // 100M points a rank's share is ~1.3 GB. Rank 0's own tiles stay where they are.
+  auto words_of = [](const auto& list) { return 1 + list.size() * (sizeof(list[0]) / sizeof(uint32_t)); };
+  const size_t packed = sharing.rank == 0 ? 0 : mine.size();
+  std::vector<uint64_t> at_tile(packed + 1, 4);
+  for (size_t k = 0; k < packed; ++k) {
+    const TileResult& r = results[mine[k]];
+    at_tile[k + 1] = at_tile[k] + 1 + words_of(r.final_triangles) + words_of(r.border) + words_of(r.split);
   }
-  std::vector<std::vector<uint32_t>> all = sharing.gather(std::move(pack));
+  TilePack pack(at_tile.back());
+  const std::array<uint32_t, 4> head = {uint32_t(results.size()), uint32_t(n), uint32_t(tile_points),
+                                        uint32_t(tile_points >> 32)};
+  std::copy(head.begin(), head.end(), pack.begin());
+  auto put = [](uint32_t* to, const auto& list) {
+    *to++ = uint32_t(list.size());
+    std::memcpy(to, list.data(), list.size() * sizeof(list[0]));
+    return to + list.size() * (sizeof(list[0]) / sizeof(uint32_t));
+  };
+  tbb::parallel_for(size_t(0), packed, [&](size_t k) {
+    const TileResult& r = results[mine[k]];
+    uint32_t* to = pack.data() + at_tile[k];
+    *to++ = uint32_t(mine[k]);
+    put(put(put(to, r.final_triangles), r.border), r.split);
+  });
+  std::vector<TilePack> all = sharing.gather(std::move(pack));
   if (sharing.rank != 0) return false;
+  auto take = [](const uint32_t* from, auto& list) {
+    list.resize(*from++);
+    std::memcpy(list.data(), from, list.size() * sizeof(list[0]));
+    return from + list.size() * (sizeof(list[0]) / sizeof(uint32_t));
+  };
   for (size_t rank = 0; rank < all.size(); ++rank) {
-    const std::vector<uint32_t>& from = all[rank];
-    if (from.size() < 4 || !std::equal(from.begin(), from.begin() + 4, all[0].begin()))
+    const TilePack& from = all[rank];
+    if (from.size() < 4 || !std::equal(head.begin(), head.end(), from.begin()))
       throw std::runtime_error(
           "rank " + std::to_string(rank) + " planned other tiles than rank 0 (" +
           (from.size() < 4 ? std::string("none")
@@ -415,25 +431,30 @@ bool share_tiles(const TileSharing& sharing, std::vector<TileResult>& results, c
                                  std::to_string(uint64_t(from[3]) << 32 | from[2]) + " points") +
           " against " + std::to_string(results.size()) + " of at most " + std::to_string(tile_points) +
           "): give every rank the same input and --max-tile-points");
+    // Where each tile's part begins (its lists' counts lead them), then the parts copied a tile a task.
+    std::vector<size_t> starts;
     for (size_t at = 4; at < from.size();) {
-      TileResult& r = results[from[at++]];
-      r.final_triangles.resize(from[at++]);
-      for (Triangle& tri : r.final_triangles)
-        for (uint32_t& id : tri) id = from[at++];
-      r.border.resize(from[at++]);
-      for (Edge& e : r.border)
-        for (uint32_t& id : e) id = from[at++];
-      r.split.resize(from[at++]);
-      for (auto& split : r.split)
-        for (uint32_t& id : split) id = from[at++];
+      starts.push_back(at);
+      at += 2 + 3 * size_t(from[at + 1]);
+      at += 1 + 2 * size_t(from[at]);
+      at += 1 + 3 * size_t(from[at]);
     }
+    tbb::parallel_for(size_t(0), starts.size(), [&](size_t k) {
+      const uint32_t* at = from.data() + starts[k];
+      TileResult& r = results[*at++];
+      take(take(take(at, r.final_triangles), r.border), r.split);
+    });
+    free_storage(all[rank]);
   }
-  // The final region's vertices, as run_tile marks them, for the other ranks' tiles too.
-  for (const TileResult& r : results)
+  // The final region's vertices, as run_tile marks them, for the other ranks' tiles.
+  for (size_t t = 0; t < results.size(); ++t) {
+    if (std::find(mine.begin(), mine.end(), t) != mine.end()) continue;
+    const TileResult& r = results[t];
     tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
       for (uint32_t id : r.final_triangles[i])
         std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
     });
+  }
   return true;
 }
 

@@ -92,9 +92,10 @@ using TileFinalizer = std::function<TileFinal(const TileJob&)>;
 // tiles t with t % ranks == r and hands their results, packed, to `gather`, which returns every rank's packs
 // (ranks 0, 1, ...) at rank 0 and nothing elsewhere. Rank 0 merges them as if it had made them all; the other
 // ranks' triangulate_tiled returns no triangles. Every rank must hold the same input (the plan is the same).
+using TilePack = RawVector<uint32_t>;  // written whole before it is sent
 struct TileSharing {
   int rank = 0, ranks = 1;
-  std::function<std::vector<std::vector<uint32_t>>(std::vector<uint32_t> mine)> gather;
+  std::function<std::vector<TilePack>(TilePack mine)> gather;
   // Whether any rank passes true, on every rank (TileOptions::unresolved: whether some rank's tile has segments
   // that cross).
   std::function<bool(bool mine)> any;

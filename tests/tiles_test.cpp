@@ -198,14 +198,14 @@ TEST(Tiles, SharedAmongRanksGiveTheSingleRun) {
   const PreparedInput p = prepare(in);
   const CdtResult single = triangulate_cgal(p);
   for (int ranks : {2, 3}) {
-    auto packs = std::vector<std::vector<uint32_t>>(size_t(ranks));
+    auto packs = std::vector<TilePack>(size_t(ranks));
     for (int rank = ranks - 1; rank >= 0; --rank) {
       TileSharing sharing;
       sharing.rank = rank;
       sharing.ranks = ranks;
-      sharing.gather = [&](std::vector<uint32_t> mine) {
+      sharing.gather = [&](TilePack mine) {
         packs[size_t(rank)] = std::move(mine);
-        return rank == 0 ? packs : std::vector<std::vector<uint32_t>>{};
+        return rank == 0 ? packs : std::vector<TilePack>{};
       };
       TileOptions opt;
       opt.max_tile_points = 100;
@@ -228,15 +228,14 @@ TEST(Tiles, SharedAmongRanksGiveTheSingleRun) {
 // rank 0, never merged.
 TEST(Tiles, RanksWithAnotherPlanAreRefused) {
   const PreparedInput p = prepare(random_points(2000, 43));
-  std::vector<uint32_t> from_rank1;
+  TilePack from_rank1;
   for (int rank : {1, 0}) {
     TileSharing sharing;
     sharing.rank = rank;
     sharing.ranks = 2;
-    sharing.gather = [&](std::vector<uint32_t> mine) {
+    sharing.gather = [&](TilePack mine) {
       if (rank == 1) from_rank1 = std::move(mine);
-      return rank == 0 ? std::vector<std::vector<uint32_t>>{std::move(mine), from_rank1}
-                       : std::vector<std::vector<uint32_t>>{};
+      return rank == 0 ? std::vector<TilePack>{std::move(mine), from_rank1} : std::vector<TilePack>{};
     };
     TileOptions opt;
     opt.max_tile_points = rank == 1 ? 300 : 100;
