@@ -31,15 +31,14 @@ int launched_ranks() {
 #ifdef CDTGPU_MPI
 // Bytes point to point, in pieces a 32-bit MPI count takes; the receiver learns the size first.
 constexpr int kTilesTag = 3;
+constexpr uint64_t kPiece = uint64_t(1) << 30;
 void send_bytes(const void* p, uint64_t n, int to, int tag = kTilesTag) {
-  constexpr uint64_t kPiece = uint64_t(1) << 30;
   MPI_Send(&n, 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD);
   for (uint64_t at = 0; at < n; at += kPiece)
     MPI_Send(static_cast<const char*>(p) + at, int(std::min(kPiece, n - at)), MPI_BYTE, to, tag, MPI_COMM_WORLD);
 }
 template <typename Vec>
 void recv_into(Vec& v, int from, int tag = kTilesTag) {
-  constexpr uint64_t kPiece = uint64_t(1) << 30;
   uint64_t n = 0;
   MPI_Recv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
   // Touched first on all cores: MPI's receive faulting fresh pages in ran at ~1.5 GB/s, touched ones ~4.
@@ -52,20 +51,35 @@ void recv_into(Vec& v, int from, int tag = kTilesTag) {
     MPI_Recv(p + at, int(std::min(kPiece, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
 }
 
-// Rank 0 receives every rank's pack of its tiles, in rank order.
-constexpr int kGatherTag = 1;
-std::vector<TilePack> gather_at_rank0(TilePack mine, int rank, int ranks) {
+// A tile's results to rank 0 (TileSharing): the message, then each list's bytes in pieces a 32-bit MPI count
+// takes. The message comes from any rank, its lists from that rank only, on a tag of their own.
+constexpr int kTileMessageTag = 1, kTileListTag = 2;
+void send_tile(const TileMessage& m, const TileLists& lists, int rank) {
   // Fault injection for the tests: this rank dies before handing over its tiles.
   if (const char* kill = std::getenv("CDTGPU_MPI_TEST_KILL_RANK"); kill && std::atoi(kill) == rank)
     std::raise(SIGKILL);
-  if (rank != 0) {
-    send_bytes(mine.data(), mine.size() * sizeof(uint32_t), 0, kGatherTag);
-    return {};
+  MPI_Send(&m, int(sizeof m), MPI_BYTE, 0, kTileMessageTag, MPI_COMM_WORLD);
+  for (const auto& list : lists)
+    for (uint64_t at = 0; at < list.size(); at += kPiece)
+      MPI_Send(list.data() + at, int(std::min(kPiece, list.size() - at)), MPI_BYTE, 0, kTileListTag, MPI_COMM_WORLD);
+}
+void receive_tiles(int ranks, const std::function<TileLists(const TileMessage&)>& where,
+                   const std::function<void(const TileMessage&)>& got) {
+  for (int open = ranks - 1; open > 0;) {
+    TileMessage m;
+    MPI_Status status;
+    MPI_Recv(&m, int(sizeof m), MPI_BYTE, MPI_ANY_SOURCE, kTileMessageTag, MPI_COMM_WORLD, &status);
+    if (m.tile == TileMessage::kDone) {
+      --open;
+      got(m);
+      continue;
+    }
+    for (const auto& list : where(m))
+      for (uint64_t at = 0; at < list.size(); at += kPiece)
+        MPI_Recv(list.data() + at, int(std::min(kPiece, list.size() - at)), MPI_BYTE, status.MPI_SOURCE, kTileListTag,
+                 MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    got(m);
   }
-  auto all = std::vector<TilePack>(size_t(ranks));
-  all[0] = std::move(mine);
-  for (int r = 1; r < ranks; ++r) recv_into(all[size_t(r)], r, kGatherTag);
-  return all;
 }
 
 // --tiles-out's files written by every rank (io/tiles_dir.hpp): rank 0 hands each rank its pieces.
@@ -118,7 +132,6 @@ TilesDirSharing tiles_dir_sharing(int rank, int ranks, const std::string& host, 
 // Every rank's bytes to every rank, in rank order: each rank in turn broadcasts its own, in pieces a 32-bit
 // MPI count takes.
 void all_bytes(const char* mine, char* all, const std::vector<uint64_t>& sizes, int rank) {
-  constexpr uint64_t kPiece = uint64_t(1) << 30;
   char* at = all;
   for (size_t r = 0; r < sizes.size(); ++r) {
     if (int(r) == rank && sizes[r]) std::memcpy(at, mine, sizes[r]);
@@ -168,9 +181,11 @@ MpiSession::MpiSession(int* argc, char*** argv) {
     MPI_Comm_rank(MPI_COMM_WORLD, &sharing_.rank);
     MPI_Comm_size(MPI_COMM_WORLD, &sharing_.ranks);
     const int rank = sharing_.rank, ranks = sharing_.ranks;
-    sharing_.gather = [rank, ranks](TilePack mine) {
-      return gather_at_rank0(std::move(mine), rank, ranks);
-    };
+    sharing_.send = [rank](const TileMessage& m, const TileLists& lists) { send_tile(m, lists, rank); };
+    sharing_.receive = [ranks](const auto& where, const auto& got) { receive_tiles(ranks, where, got); };
+    // Tiles sent as they are done, from the threads that finish them (one at a time), and received beside rank
+    // 0's own: MPI must allow calls from any thread, one at a time.
+    sharing_.from_any_thread = provided >= MPI_THREAD_SERIALIZED;
     sharing_.any = [](bool mine) {
       int in = mine ? 1 : 0, out = 0;
       MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD);

@@ -385,78 +385,63 @@ TileTriangulator cgal_tile_triangulator() {
 
 namespace {
 
-// The first level's tiles of every rank at rank 0 (TileSharing): each rank sends its own tiles' results, rank 0
-// takes them into `results` and marks their final region in `in_final`. False on the other ranks, which are done.
-bool share_tiles(const TileSharing& sharing, std::vector<TileResult>& results, const std::vector<size_t>& mine,
-                 uint64_t n, uint64_t tile_points, std::vector<uint8_t>& in_final) {
-  // Packed: the plan's size (every rank must have made the same plan), then per tile: t, the final
-  // triangles' count and ids, the border's count and ids, the splits' count and ids. Copied a tile a task: at
-  // 100M points a rank's share is ~1.3 GB. Rank 0's own tiles stay where they are.
-  auto words_of = [](const auto& list) { return 1 + list.size() * (sizeof(list[0]) / sizeof(uint32_t)); };
-  const size_t packed = sharing.rank == 0 ? 0 : mine.size();
-  std::vector<uint64_t> at_tile(packed + 1, 4);
-  for (size_t k = 0; k < packed; ++k) {
-    const TileResult& r = results[mine[k]];
-    at_tile[k + 1] = at_tile[k] + 1 + words_of(r.final_triangles) + words_of(r.border) + words_of(r.split);
-  }
-  TilePack pack(at_tile.back());
-  const std::array<uint32_t, 4> head = {uint32_t(results.size()), uint32_t(n), uint32_t(tile_points),
-                                        uint32_t(tile_points >> 32)};
-  std::copy(head.begin(), head.end(), pack.begin());
-  auto put = [](uint32_t* to, const auto& list) {
-    *to++ = uint32_t(list.size());
-    std::memcpy(to, list.data(), list.size() * sizeof(list[0]));
-    return to + list.size() * (sizeof(list[0]) / sizeof(uint32_t));
-  };
-  tbb::parallel_for(size_t(0), packed, [&](size_t k) {
-    const TileResult& r = results[mine[k]];
-    uint32_t* to = pack.data() + at_tile[k];
-    *to++ = uint32_t(mine[k]);
-    put(put(put(to, r.final_triangles), r.border), r.split);
-  });
-  std::vector<TilePack> all = sharing.gather(std::move(pack));
-  if (sharing.rank != 0) return false;
-  auto take = [](const uint32_t* from, auto& list) {
-    list.resize(*from++);
-    std::memcpy(list.data(), from, list.size() * sizeof(list[0]));
-    return from + list.size() * (sizeof(list[0]) / sizeof(uint32_t));
-  };
-  for (size_t rank = 0; rank < all.size(); ++rank) {
-    const TilePack& from = all[rank];
-    if (from.size() < 4 || !std::equal(head.begin(), head.end(), from.begin()))
-      throw std::runtime_error(
-          "rank " + std::to_string(rank) + " planned other tiles than rank 0 (" +
-          (from.size() < 4 ? std::string("none")
-                           : std::to_string(from[0]) + " tiles of at most " +
-                                 std::to_string(uint64_t(from[3]) << 32 | from[2]) + " points") +
-          " against " + std::to_string(results.size()) + " of at most " + std::to_string(tile_points) +
-          "): give every rank the same input and --max-tile-points");
-    // Where each tile's part begins (its lists' counts lead them), then the parts copied a tile a task.
-    std::vector<size_t> starts;
-    for (size_t at = 4; at < from.size();) {
-      starts.push_back(at);
-      at += 2 + 3 * size_t(from[at + 1]);
-      at += 1 + 2 * size_t(from[at]);
-      at += 1 + 3 * size_t(from[at]);
-    }
-    tbb::parallel_for(size_t(0), starts.size(), [&](size_t k) {
-      const uint32_t* at = from.data() + starts[k];
-      TileResult& r = results[*at++];
-      take(take(take(at, r.final_triangles), r.border), r.split);
-    });
-    free_storage(all[rank]);
-  }
-  // The final region's vertices, as run_tile marks them, for the other ranks' tiles.
-  for (size_t t = 0; t < results.size(); ++t) {
-    if (std::find(mine.begin(), mine.end(), t) != mine.end()) continue;
-    const TileResult& r = results[t];
-    tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
-      for (uint32_t id : r.final_triangles[i])
-        std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
-    });
-  }
-  return true;
+// The first level's tiles of every rank at rank 0 (TileSharing): a tile's lists as bytes, and the message that
+// announces them.
+TileLists lists_of(TileResult& r) {
+  auto bytes = [](auto& list) { return std::as_writable_bytes(std::span(list.data(), list.size())); };
+  return {bytes(r.final_triangles), bytes(r.border), bytes(r.split)};
 }
+
+TileMessage message_of(const TileSharing& sharing, uint64_t tiles, uint64_t n, uint64_t tile_points, uint64_t tile,
+                       const TileResult* r) {
+  TileMessage m;
+  m.rank = uint64_t(sharing.rank);
+  m.tiles = tiles, m.points = n, m.tile_points = tile_points, m.tile = tile;
+  if (r) m.lengths[0] = r->final_triangles.size(), m.lengths[1] = r->border.size(), m.lengths[2] = r->split.size();
+  return m;
+}
+
+// Rank 0's side: other ranks' tiles into `results`, their final region marked in `in_final` once `bookkeeping`
+// has sized it. A rank with another plan is drained and named in `refused`.
+struct TileReceiver {
+  std::vector<TileResult>& results;
+  uint64_t n, tile_points;
+  std::vector<uint8_t>& in_final;
+  const std::shared_future<void>& bookkeeping;
+  std::string refused;
+  std::array<std::vector<std::byte>, 3> drained;
+
+  TileLists where(const TileMessage& m) {
+    if (m.tiles != results.size() || m.points != n || m.tile_points != tile_points || m.tile >= results.size()) {
+      if (refused.empty())
+        refused = "rank " + std::to_string(m.rank) + " planned other tiles than rank 0 (" + std::to_string(m.tiles) +
+                  " tiles of at most " + std::to_string(m.tile_points) + " points against " +
+                  std::to_string(results.size()) + " of at most " + std::to_string(tile_points) +
+                  "): give every rank the same input and --max-tile-points";
+      const size_t sizes[3] = {sizeof(Triangle), sizeof(Edge), sizeof(std::array<uint32_t, 3>)};
+      TileLists lists;
+      for (size_t k = 0; k < 3; ++k) {
+        drained[k].resize(m.lengths[k] * sizes[k]);
+        lists[k] = drained[k];
+      }
+      return lists;
+    }
+    TileResult& r = results[m.tile];
+    resize_touched(r.final_triangles, m.lengths[0]);
+    r.border.resize(m.lengths[1]);
+    r.split.resize(m.lengths[2]);
+    return lists_of(r);
+  }
+
+  void got(const TileMessage& m) {
+    if (m.tile == TileMessage::kDone || !refused.empty()) return;
+    bookkeeping.get();  // its error, if any
+    const Triangles& final_triangles = results[m.tile].final_triangles;
+    tbb::parallel_for(size_t(0), final_triangles.size(), [&](size_t i) {
+      for (uint32_t id : final_triangles[i]) std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
+    });
+  }
+};
 
 // What the merge triangulates (tiling.md): the vertices not inside the final region with the border's, the
 // segments between them (a segment with an end inside the final region lies inside it; split ones as their
@@ -603,6 +588,33 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   auto tile_name = [&](size_t t) {
     return "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);
   };
+  // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's). The other
+  // ranks send each tile as it is done (at 1B points on two ranks, rank 1's final triangles are ~6 GB: sent after
+  // the tiles, they would be seconds of serial work), rank 0 receives them beside its own.
+  const TileSharing* sharing = level == 1 && options.sharing && options.sharing->ranks > 1 ? options.sharing : nullptr;
+  std::vector<size_t> mine;
+  for (size_t t = 0; t < tiles; ++t)
+    if (!sharing || int(t % size_t(sharing->ranks)) == sharing->rank) mine.push_back(t);
+  const bool sender = sharing && sharing->rank != 0;
+  std::mutex send_mutex;
+  auto send_tile = [&](size_t t) {
+    sharing->send(message_of(*sharing, tiles, n, options.max_tile_points, t, &results[t]), lists_of(results[t]));
+    results[t] = TileResult{};  // rank 0's now
+  };
+  TileReceiver receiver{results, n, options.max_tile_points, in_final, bookkeeping, {}, {}};
+  auto receive = [&] {
+    sharing->receive([&](const TileMessage& m) { return receiver.where(m); },
+                     [&](const TileMessage& m) { receiver.got(m); });
+  };
+  std::future<void> receiving;
+  if (sharing && !sender && sharing->from_any_thread) receiving = std::async(std::launch::async, receive);
+  // The exchange's end: a sender's tiles not sent yet and its last message; at rank 0, every other rank's tiles.
+  auto end_sharing = [&](bool gave_up) {
+    if (!sender) return receiving.valid() ? receiving.get() : receive();
+    if (!sharing->from_any_thread && !gave_up)
+      for (size_t t : mine) send_tile(t);
+    sharing->send(message_of(*sharing, tiles, n, options.max_tile_points, TileMessage::kDone, nullptr), {});
+  };
   // Isolated: a thread waiting in a tile's own parallel loops takes no other tile (whose GPU call would make it
   // wait for the device as well).
   auto gather = [&](size_t t) {
@@ -621,12 +633,11 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms",
                   name, r.final_triangles.size(), r.gather_ms, r.cdt_ms, r.other_ms - r.gather_ms,
                   ms_since(t_tiles));
+    if (sender && sharing->from_any_thread) {
+      std::lock_guard<std::mutex> lock(send_mutex);
+      send_tile(t);
+    }
   };
-  // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's).
-  const TileSharing* sharing = level == 1 && options.sharing && options.sharing->ranks > 1 ? options.sharing : nullptr;
-  std::vector<size_t> mine;
-  for (size_t t = 0; t < tiles; ++t)
-    if (!sharing || int(t % size_t(sharing->ranks)) == sharing->rank) mine.push_back(t);
   // A tile that throws stops the tiles not yet begun, and the others in flight finish whole. Thrown through TBB,
   // the error cancelled those tiles' own parallel loops halfway: at 1B points a tile then ran its GPU call on
   // half-written input for 4.7 s before it failed too.
@@ -680,13 +691,16 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     } catch (const UnresolvedTile& e) {
       why = e.what();
     }
+    end_sharing(!why.empty());
     if (sharing->any(!why.empty()))
       throw UnresolvedTile(why.empty() ? "another rank's tile has constraints to split" : why);
   } else {
     run_mine();
+    if (sharing) end_sharing(false);
   }
   bookkeeping.get();  // its error, if any
-  if (sharing && !share_tiles(*sharing, results, mine, n, options.max_tile_points, in_final)) return {};
+  if (sender) return {};
+  if (!receiver.refused.empty()) throw std::runtime_error(receiver.refused);
 
   const double tiles_wall_ms = ms_since(t_tiles);
   // The merge's input (merge_job). What only the tiles read goes first (at 1B points + 250M segments: 6 GB of the

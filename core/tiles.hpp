@@ -17,6 +17,8 @@
 //            the final region's border edges as constraints; its triangles on the final side are dropped.
 //            Tiled again while that shrinks it, else one call of the triangulator.
 #pragma once
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -89,13 +91,28 @@ struct TileFinal {
 using TileFinalizer = std::function<TileFinal(const TileJob&)>;
 
 // The first level's tiles shared among processes (issue 29: MPI ranks, cli/mpi.cpp): rank r triangulates the
-// tiles t with t % ranks == r and hands their results, packed, to `gather`, which returns every rank's packs
-// (ranks 0, 1, ...) at rank 0 and nothing elsewhere. Rank 0 merges them as if it had made them all; the other
+// tiles t with t % ranks == r. Every other rank sends each tile's results to rank 0 once the tile is done, then a
+// last message; rank 0 receives them beside its own tiles and merges them all as if it had made them. The other
 // ranks' triangulate_tiled returns no triangles. Every rank must hold the same input (the plan is the same).
-using TilePack = RawVector<uint32_t>;  // written whole before it is sent
+struct TileMessage {
+  static constexpr uint64_t kDone = ~uint64_t(0);
+  uint64_t rank = 0;
+  uint64_t tiles = 0, points = 0, tile_points = 0;  // the sender's plan, checked at rank 0
+  uint64_t tile = kDone;  // kDone: the sender's tiles are over
+  uint64_t lengths[3] = {};  // final triangles, border edges, splits
+};
+using TileLists = std::array<std::span<std::byte>, 3>;  // the lists' bytes, in that order
 struct TileSharing {
   int rank = 0, ranks = 1;
-  std::function<std::vector<TilePack>(TilePack mine)> gather;
+  // Sends a message and its lists' bytes to rank 0. Called on the thread that finished the tile, one call at a
+  // time, when `from_any_thread`; else every call comes from the caller's thread after its tiles.
+  std::function<void(const TileMessage& m, const TileLists& lists)> send;
+  // Rank 0: every other rank's messages until each has sent kDone: `where` gives a tile's buffers before its lists
+  // arrive, `got` is called once they have. On a thread of its own beside rank 0's tiles when `from_any_thread`.
+  std::function<void(const std::function<TileLists(const TileMessage&)>& where,
+                     const std::function<void(const TileMessage&)>& got)>
+      receive;
+  bool from_any_thread = false;
   // Whether any rank passes true, on every rank (TileOptions::unresolved: whether some rank's tile has segments
   // that cross).
   std::function<bool(bool mine)> any;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <random>
 #include <thread>
 
@@ -187,56 +188,84 @@ TEST(Tiles, AFailingTileLeavesTheTilesInFlightWhole) {
   EXPECT_EQ(partial.load(), 0) << "of " << loops.load() << " tiles in flight";
 }
 
-// The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at
-// UTM offsets, against rectangles whose sides sit at the exact circle's extremes and a hair beside them.
+// Ranks run one after another in one process (TileSharing): the other ranks' messages are kept, and rank 0's
+// receive hands them over in the order they were sent.
+struct Mailbox {
+  std::vector<std::pair<TileMessage, std::array<std::vector<std::byte>, 3>>> sent;
+  std::mutex mutex;
+
+  TileSharing sharing(int rank, int ranks, bool from_any_thread) {
+    TileSharing s;
+    s.rank = rank;
+    s.ranks = ranks;
+    s.from_any_thread = from_any_thread;
+    s.send = [this](const TileMessage& m, const TileLists& lists) {
+      std::lock_guard<std::mutex> lock(mutex);
+      auto& [head, bytes] = sent.emplace_back();
+      head = m;
+      for (size_t k = 0; k < 3; ++k) bytes[k].assign(lists[k].begin(), lists[k].end());
+    };
+    s.receive = [this](const std::function<TileLists(const TileMessage&)>& where,
+                       const std::function<void(const TileMessage&)>& got) {
+      for (const auto& [head, bytes] : sent) {
+        if (head.tile != TileMessage::kDone) {
+          const TileLists to = where(head);
+          for (size_t k = 0; k < 3; ++k) {
+            ASSERT_EQ(to[k].size(), bytes[k].size());
+            std::copy(bytes[k].begin(), bytes[k].end(), to[k].begin());
+          }
+        }
+        got(head);
+      }
+    };
+    return s;
+  }
+  size_t done() const {
+    return size_t(std::count_if(sent.begin(), sent.end(),
+                                [](const auto& s) { return s.first.tile == TileMessage::kDone; }));
+  }
+};
+
 // Tiles shared among processes (TileSharing, as MPI ranks run them): ranks 1 and 2 triangulate their tiles and
-// hand them over, rank 0 merges everything; the same triangles as the single run, none on the other ranks.
+// hand them over, rank 0 merges everything; the same triangles as the single run, none on the other ranks. Tiles
+// sent as they are done (MPI calls from any thread) and after the tiles.
 TEST(Tiles, SharedAmongRanksGiveTheSingleRun) {
   InputSet in = random_points(3000, 41);
   in.lines.push_back(line({{-10, 500, 0}, {1010, 480, 0}}));  // crosses every rank's tiles
   in.lines.push_back(line({{500, -10, 0}, {520, 1010, 0}}));
   const PreparedInput p = prepare(in);
   const CdtResult single = triangulate_cgal(p);
-  for (int ranks : {2, 3}) {
-    auto packs = std::vector<TilePack>(size_t(ranks));
-    for (int rank = ranks - 1; rank >= 0; --rank) {
-      TileSharing sharing;
-      sharing.rank = rank;
-      sharing.ranks = ranks;
-      sharing.gather = [&](TilePack mine) {
-        packs[size_t(rank)] = std::move(mine);
-        return rank == 0 ? packs : std::vector<TilePack>{};
-      };
-      TileOptions opt;
-      opt.max_tile_points = 100;
-      opt.sharing = &sharing;
-      TileStats ts;
-      const CdtResult r = triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
-      if (rank != 0) {
-        EXPECT_TRUE(r.mesh.triangles.empty()) << rank << " of " << ranks;
-        EXPECT_FALSE(packs[size_t(rank)].empty()) << rank << " of " << ranks;
-        continue;
+  for (bool from_any_thread : {true, false})
+    for (int ranks : {2, 3}) {
+      Mailbox mail;
+      for (int rank = ranks - 1; rank >= 0; --rank) {
+        const TileSharing sharing = mail.sharing(rank, ranks, from_any_thread);
+        TileOptions opt;
+        opt.max_tile_points = 100;
+        opt.sharing = &sharing;
+        TileStats ts;
+        const CdtResult r = triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
+        if (rank != 0) {
+          EXPECT_TRUE(r.mesh.triangles.empty()) << rank << " of " << ranks;
+          continue;
+        }
+        EXPECT_EQ(mail.done(), size_t(ranks - 1));
+        EXPECT_GE(mail.sent.size(), 16u / size_t(ranks) + 1);
+        EXPECT_GE(ts.tiles, 16u);
+        EXPECT_EQ(r.mesh.vertices, single.mesh.vertices) << ranks << " ranks";
+        EXPECT_TRUE(r.mesh.triangles == single.mesh.triangles)
+            << ranks << " ranks, from any thread " << from_any_thread;
       }
-      EXPECT_GE(ts.tiles, 16u);
-      EXPECT_EQ(r.mesh.vertices, single.mesh.vertices) << ranks << " ranks";
-      EXPECT_TRUE(r.mesh.triangles == single.mesh.triangles) << ranks << " ranks";
     }
-  }
 }
 
 // A rank whose plan differs (another tile size: hosts with other core counts and the auto size) is refused at
 // rank 0, never merged.
 TEST(Tiles, RanksWithAnotherPlanAreRefused) {
   const PreparedInput p = prepare(random_points(2000, 43));
-  TilePack from_rank1;
+  Mailbox mail;
   for (int rank : {1, 0}) {
-    TileSharing sharing;
-    sharing.rank = rank;
-    sharing.ranks = 2;
-    sharing.gather = [&](TilePack mine) {
-      if (rank == 1) from_rank1 = std::move(mine);
-      return rank == 0 ? std::vector<TilePack>{std::move(mine), from_rank1} : std::vector<TilePack>{};
-    };
+    const TileSharing sharing = mail.sharing(rank, 2, true);
     TileOptions opt;
     opt.max_tile_points = rank == 1 ? 300 : 100;
     opt.sharing = &sharing;
@@ -253,6 +282,8 @@ TEST(Tiles, RanksWithAnotherPlanAreRefused) {
   }
 }
 
+// The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at
+// UTM offsets, against rectangles whose sides sit at the exact circle's extremes and a hair beside them.
 TEST(Tiles, CircumdiskTestIsNeverWrongAboutInside) {
   using Q = CGAL::Exact_rational;
   std::mt19937_64 rng(17);
