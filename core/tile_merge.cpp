@@ -19,6 +19,7 @@
 #include <thread>
 #include <utility>
 
+#include "core/big_array.hpp"
 #include "core/compact.hpp"
 #include "core/half_edges.hpp"
 #include "core/parallel.hpp"
@@ -203,8 +204,8 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
   };
   // The parts: triangles joined across edges that are not border edges (union-find linking the larger root
   // under the smaller, so concurrent unions make no cycle; the parts do not depend on the order).
-  std::vector<uint32_t> parent(m.size());
-  std::iota(parent.begin(), parent.end(), 0u);
+  BigArray<uint32_t> parent(m.size());
+  each(m.size(), [&](size_t t) { parent[t] = uint32_t(t); });
   auto root = [&](uint32_t t) {
     for (;;) {
       uint32_t p = std::atomic_ref<uint32_t>(parent[t]).load(std::memory_order_relaxed);
@@ -224,17 +225,26 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
         return;
     }
   };
+  // Each edge looked up once, its side kept for both its half-edges (side[h], border_side's answer): the lookups
+  // are random reads, and the second pass made them again for every half-edge.
   const size_t halves = 3 * m.size();
+  BigArray<uint8_t> side(halves);
   each(halves, [&](size_t h) {
     const uint32_t g = e.twin[h];
-    if (g != kNoHalfEdge && h < g && !border_side(from_of(m, uint32_t(h)), to_of(m, uint32_t(h)))) unite(uint32_t(h / 3), g / 3);
+    if (g != kNoHalfEdge && g < h) return;  // its twin's
+    const uint8_t s = uint8_t(border_side(from_of(m, uint32_t(h)), to_of(m, uint32_t(h))));
+    side[h] = s;
+    if (g == kNoHalfEdge) return;
+    side[g] = s;
+    if (!s) unite(uint32_t(h / 3), g / 3);
   });
   // Each part beside a border edge takes that edge's side: 1 final, 2 outside; a part with both is an error.
   std::vector<uint8_t> mark(m.size(), 0);
   each(halves, [&](size_t h) {
-    const uint32_t a = from_of(m, uint32_t(h)), b = to_of(m, uint32_t(h));
-    if (const int side = border_side(a, b))
-      shared(mark[root(uint32_t(h / 3))]).fetch_or((a < b) == (side == 2) ? 1 : 2, std::memory_order_relaxed);
+    if (const int s = side[h]) {
+      const bool forward = from_of(m, uint32_t(h)) < to_of(m, uint32_t(h));
+      shared(mark[root(uint32_t(h / 3))]).fetch_or(forward == (s == 2) ? 1 : 2, std::memory_order_relaxed);
+    }
   });
   return compact_as<Triangles>(
       m.size(),

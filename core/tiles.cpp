@@ -461,7 +461,9 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   };
   // The merge's vertices: those not in the final region, and the border's (in_final cleared there, so from here
   // on it marks the vertices that are not in the merge). Read 8 marks at a time: nearly all are 1.
-  for (const Edge& e : border) in_final[e[0]] = in_final[e[1]] = 0;
+  tbb::parallel_for(size_t(0), border.size(), [&](size_t i) {
+    for (uint32_t id : border[i]) std::atomic_ref<uint8_t>(in_final[id]).store(0, std::memory_order_relaxed);
+  });
   constexpr uint64_t kOnes = 0x0101010101010101;
   auto word_at = [&](size_t w) {
     uint64_t word;
@@ -501,30 +503,58 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
     }
   });
   segments_from[ids.size()] = uint32_t(segments.size());
+  // The border edges and the split segments' pieces between merge vertices, in local ids, listed under their
+  // smaller end and merged there with that vertex's segments: the merge's segments come out sorted and unique.
+  // Appended and sorted whole, they took ~0.6 s of a 4.5M-vertex merge's input on 2 cores.
+  std::vector<Edge> local_border(border.size());
+  tbb::parallel_for(size_t(0), border.size(), [&](size_t i) {
+    local_border[i] = {local_of[border[i][0]], local_of[border[i][1]]};
+  });
+  // As keys smaller << 32 | larger, sorted (a sort of these alone, not of every merge segment); extra_from[i]
+  // is where vertex i's begin.
+  std::vector<uint64_t> extra;
+  auto key = [](const Edge& e) { return uint64_t(std::min(e[0], e[1])) << 32 | std::max(e[0], e[1]); };
+  for (const Edge& e : split_segments.pieces)
+    if (!in_final[e[0]] && !in_final[e[1]]) extra.push_back(key({local_of[e[0]], local_of[e[1]]}));
+  const size_t pieces = extra.size();
+  extra.resize(pieces + border.size());
+  tbb::parallel_for(size_t(0), border.size(), [&](size_t i) { extra[pieces + i] = key(local_border[i]); });
+  tbb::parallel_sort(extra.begin(), extra.end());
+  extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
+  std::vector<uint32_t> extra_from(ids.size() + 1);
+  each(extra.size() + 1, [&](size_t k) {
+    const uint64_t lo = k == 0 ? 0 : (extra[k - 1] >> 32) + 1, hi = k == extra.size() ? ids.size() : extra[k] >> 32;
+    for (uint64_t i = lo; i <= hi; ++i) extra_from[i] = uint32_t(k);
+  });
+  // Merge vertex i's segments to larger ends, each once, in order: its own (sorted already) and the extra ones.
+  auto each_segment_of = [&](size_t i, auto&& f) {
+    const uint64_t* x = extra.data() + extra_from[i];
+    const uint64_t* const x1 = extra.data() + extra_from[i + 1];
+    uint64_t last = ~uint64_t(0);
+    auto put = [&](uint32_t to) {
+      if (to != last) f(to);
+      last = to;
+    };
+    for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j) {
+      if (in_final[segments[j][1]] || !not_split(segments[j])) continue;
+      const uint32_t to = local_of[segments[j][1]];
+      for (; x != x1 && uint32_t(*x) < to; ++x) put(uint32_t(*x));
+      put(to);
+    }
+    for (; x != x1; ++x) put(uint32_t(*x));
+  };
   std::vector<Edge> merge_segments = compact<Edge>(
       ids.size(),
       [&](size_t i) {
         size_t k = 0;
-        for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j)
-          k += !in_final[segments[j][1]] && not_split(segments[j]);
+        each_segment_of(i, [&](uint32_t) { ++k; });
         return k;
       },
       [&](size_t i, Edge* at) {
-        for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j)
-          if (!in_final[segments[j][1]] && not_split(segments[j])) *at++ = {uint32_t(i), local_of[segments[j][1]]};
+        each_segment_of(i, [&](uint32_t to) { *at++ = {uint32_t(i), to}; });
         return at;
       });
-  for (const Edge& e : split_segments.pieces)
-    if (!in_final[e[0]] && !in_final[e[1]]) merge_segments.push_back({local_of[e[0]], local_of[e[1]]});
   free_storage_on_all_cores(in_final);
-  std::vector<Edge> local_border(border.size());
-  for (size_t i = 0; i < border.size(); ++i) {
-    local_border[i] = {local_of[border[i][0]], local_of[border[i][1]]};
-    merge_segments.push_back(
-        {std::min(local_border[i][0], local_border[i][1]), std::max(local_border[i][0], local_border[i][1])});
-  }
-  tbb::parallel_sort(merge_segments.begin(), merge_segments.end());
-  merge_segments.erase(std::unique(merge_segments.begin(), merge_segments.end()), merge_segments.end());
   return MergeJob{std::move(ids), std::move(merge_vertices), std::move(merge_segments), std::move(local_border)};
 }
 
