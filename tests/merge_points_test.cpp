@@ -52,6 +52,20 @@ TEST(MergePoints, EqualsAStableSort) {
   }
 }
 
+// One crowded coarse bucket over all its fine ones (core/merge_points.cpp): 2.5M points, nine in ten in a band of
+// x one 4096th of the range wide, on a millimetre grid with duplicates.
+TEST(MergePoints, CrowdedCoarseBucketOverItsFineOnes) {
+  std::mt19937_64 rng(11);
+  const size_t n = 2500000;
+  std::vector<double> band(2 * n);
+  for (size_t i = 0; i < n; ++i) {
+    const bool in_band = rng() % 10 != 0;
+    band[2 * i] = double(rng() % (in_band ? 1000 : 4096000)) / 1000;
+    band[2 * i + 1] = double(rng() % 2000) / 1000;
+  }
+  expect_reference(band, "a band of x in one coarse bucket");
+}
+
 namespace {
 
 // Every field of prepare's own merge (merge_input, reading the input where it is; the points freed once read)
