@@ -1,5 +1,6 @@
 #include "cli/mpi.hpp"
 
+#include "core/parallel.hpp"
 #include "core/touched.hpp"
 
 #include <sched.h>
@@ -129,16 +130,25 @@ TilesDirSharing tiles_dir_sharing(int rank, int ranks, const std::string& host, 
   return s;
 }
 
-// Every rank's bytes to every rank, in rank order: each rank in turn broadcasts its own, in pieces a 32-bit
-// MPI count takes.
+// Every rank's bytes to every rank, in rank order: each rank sends its own to every other and receives theirs, all
+// at once (nonblocking, in pieces a 32-bit MPI count takes), copying its own into place meanwhile. Broadcast one
+// rank after another, the transfers did not overlap.
 void all_bytes(const char* mine, char* all, const std::vector<uint64_t>& sizes, int rank) {
-  char* at = all;
-  for (size_t r = 0; r < sizes.size(); ++r) {
-    if (int(r) == rank && sizes[r]) std::memcpy(at, mine, sizes[r]);
-    for (uint64_t done = 0; done < sizes[r]; done += kPiece)
-      MPI_Bcast(at + done, int(std::min(kPiece, sizes[r] - done)), MPI_BYTE, int(r), MPI_COMM_WORLD);
-    at += sizes[r];
+  constexpr int kShareTag = 4;
+  std::vector<uint64_t> at(sizes.size() + 1, 0);
+  for (size_t r = 0; r < sizes.size(); ++r) at[r + 1] = at[r] + sizes[r];
+  std::vector<MPI_Request> requests;
+  for (int r = 0; r < int(sizes.size()); ++r) {
+    if (r == rank) continue;
+    for (uint64_t done = 0; done < sizes[size_t(r)]; done += kPiece)
+      MPI_Irecv(all + at[size_t(r)] + done, int(std::min(kPiece, sizes[size_t(r)] - done)), MPI_BYTE, r, kShareTag,
+                MPI_COMM_WORLD, &requests.emplace_back());
+    for (uint64_t done = 0; done < sizes[size_t(rank)]; done += kPiece)
+      MPI_Isend(mine + done, int(std::min(kPiece, sizes[size_t(rank)] - done)), MPI_BYTE, r, kShareTag,
+                MPI_COMM_WORLD, &requests.emplace_back());
   }
+  copy_on_all_cores(mine, sizes[size_t(rank)], all + at[size_t(rank)]);
+  MPI_Waitall(int(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
 }
 #endif
 
