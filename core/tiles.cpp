@@ -23,6 +23,7 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <span>
 #include <thread>
@@ -385,62 +386,97 @@ TileTriangulator cgal_tile_triangulator() {
 
 namespace {
 
-// The first level's tiles of every rank at rank 0 (TileSharing): a tile's lists as bytes, and the message that
-// announces them.
-TileLists lists_of(TileResult& r) {
-  auto bytes = [](auto& list) { return std::as_writable_bytes(std::span(list.data(), list.size())); };
-  return {bytes(r.final_triangles), bytes(r.border), bytes(r.split)};
-}
+// The first level's tiles of every rank at rank 0 (TileSharing). A rank other than 0 sends each tile as it is
+// done (at 1B points on two ranks, rank 1's final triangles are ~6 GB: sent after its last tile, they were seconds
+// of serial work), then a last message; rank 0 receives them beside its own tiles, into `results`, and marks
+// their final region in `in_final` once `bookkeeping` has sized it. A rank with another plan is drained and named.
+class TileExchange {
+ public:
+  TileExchange(const TileSharing& sharing, std::vector<TileResult>& results, uint64_t n, uint64_t tile_points,
+               std::vector<uint8_t>& in_final, const std::shared_future<void>& bookkeeping)
+      : sharing_(sharing), results_(results), n_(n), tile_points_(tile_points), in_final_(in_final),
+        bookkeeping_(bookkeeping) {
+    if (!sender() && sharing_.from_any_thread) receiving_ = std::async(std::launch::async, [this] { receive(); });
+  }
+  bool sender() const { return sharing_.rank != 0; }
+  // This rank's tile t is done: sent now where MPI takes calls from any thread, one at a time.
+  void done(size_t t) {
+    if (!sender() || !sharing_.from_any_thread) return;
+    std::lock_guard<std::mutex> lock(send_mutex_);
+    send(t);
+  }
+  // After this rank's tiles: a sender's tiles not sent yet (none if it gave up) and its last message; at rank 0,
+  // every other rank's tiles, or the refusal of a rank with another plan.
+  void end(const std::vector<size_t>& mine, bool gave_up) {
+    if (!sender()) {
+      receiving_.valid() ? receiving_.get() : receive();
+      if (!refused_.empty()) throw std::runtime_error(refused_);
+      return;
+    }
+    if (!sharing_.from_any_thread && !gave_up)
+      for (size_t t : mine) send(t);
+    sharing_.send(message(TileMessage::kDone, nullptr), {});
+  }
 
-TileMessage message_of(const TileSharing& sharing, uint64_t tiles, uint64_t n, uint64_t tile_points, uint64_t tile,
-                       const TileResult* r) {
-  TileMessage m;
-  m.rank = uint64_t(sharing.rank);
-  m.tiles = tiles, m.points = n, m.tile_points = tile_points, m.tile = tile;
-  if (r) m.lengths[0] = r->final_triangles.size(), m.lengths[1] = r->border.size(), m.lengths[2] = r->split.size();
-  return m;
-}
-
-// Rank 0's side: other ranks' tiles into `results`, their final region marked in `in_final` once `bookkeeping`
-// has sized it. A rank with another plan is drained and named in `refused`.
-struct TileReceiver {
-  std::vector<TileResult>& results;
-  uint64_t n, tile_points;
-  std::vector<uint8_t>& in_final;
-  const std::shared_future<void>& bookkeeping;
-  std::string refused;
-  std::array<std::vector<std::byte>, 3> drained;
-
+ private:
+  static TileLists lists_of(TileResult& r) {
+    auto bytes = [](auto& list) { return std::as_writable_bytes(std::span(list.data(), list.size())); };
+    return {bytes(r.final_triangles), bytes(r.border), bytes(r.split)};
+  }
+  TileMessage message(uint64_t tile, const TileResult* r) const {
+    TileMessage m;
+    m.rank = uint64_t(sharing_.rank);
+    m.tiles = results_.size(), m.points = n_, m.tile_points = tile_points_, m.tile = tile;
+    if (r) m.lengths[0] = r->final_triangles.size(), m.lengths[1] = r->border.size(), m.lengths[2] = r->split.size();
+    return m;
+  }
+  void send(size_t t) {
+    sharing_.send(message(t, &results_[t]), lists_of(results_[t]));
+    results_[t] = TileResult{};  // rank 0's now
+  }
+  void receive() {
+    sharing_.receive([this](const TileMessage& m) { return where(m); }, [this](const TileMessage& m) { got(m); });
+  }
   TileLists where(const TileMessage& m) {
-    if (m.tiles != results.size() || m.points != n || m.tile_points != tile_points || m.tile >= results.size()) {
-      if (refused.empty())
-        refused = "rank " + std::to_string(m.rank) + " planned other tiles than rank 0 (" + std::to_string(m.tiles) +
-                  " tiles of at most " + std::to_string(m.tile_points) + " points against " +
-                  std::to_string(results.size()) + " of at most " + std::to_string(tile_points) +
-                  "): give every rank the same input and --max-tile-points";
+    if (m.tiles != results_.size() || m.points != n_ || m.tile_points != tile_points_ || m.tile >= results_.size()) {
+      if (refused_.empty())
+        refused_ = "rank " + std::to_string(m.rank) + " planned other tiles than rank 0 (" + std::to_string(m.tiles) +
+                   " tiles of at most " + std::to_string(m.tile_points) + " points against " +
+                   std::to_string(results_.size()) + " of at most " + std::to_string(tile_points_) +
+                   "): give every rank the same input and --max-tile-points";
       const size_t sizes[3] = {sizeof(Triangle), sizeof(Edge), sizeof(std::array<uint32_t, 3>)};
       TileLists lists;
       for (size_t k = 0; k < 3; ++k) {
-        drained[k].resize(m.lengths[k] * sizes[k]);
-        lists[k] = drained[k];
+        drained_[k].resize(m.lengths[k] * sizes[k]);
+        lists[k] = drained_[k];
       }
       return lists;
     }
-    TileResult& r = results[m.tile];
+    TileResult& r = results_[m.tile];
     resize_touched(r.final_triangles, m.lengths[0]);
     r.border.resize(m.lengths[1]);
     r.split.resize(m.lengths[2]);
     return lists_of(r);
   }
-
   void got(const TileMessage& m) {
-    if (m.tile == TileMessage::kDone || !refused.empty()) return;
-    bookkeeping.get();  // its error, if any
-    const Triangles& final_triangles = results[m.tile].final_triangles;
+    if (m.tile == TileMessage::kDone || !refused_.empty()) return;
+    bookkeeping_.get();  // its error, if any
+    const Triangles& final_triangles = results_[m.tile].final_triangles;
     tbb::parallel_for(size_t(0), final_triangles.size(), [&](size_t i) {
-      for (uint32_t id : final_triangles[i]) std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
+      for (uint32_t id : final_triangles[i])
+        std::atomic_ref<uint8_t>(in_final_[id]).store(1, std::memory_order_relaxed);
     });
   }
+
+  const TileSharing& sharing_;
+  std::vector<TileResult>& results_;
+  const uint64_t n_, tile_points_;
+  std::vector<uint8_t>& in_final_;
+  const std::shared_future<void>& bookkeeping_;
+  std::mutex send_mutex_;
+  std::future<void> receiving_;
+  std::string refused_;
+  std::array<std::vector<std::byte>, 3> drained_;
 };
 
 // What the merge triangulates (tiling.md): the vertices not inside the final region with the border's, the
@@ -618,33 +654,13 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   auto tile_name = [&](size_t t) {
     return "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);
   };
-  // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's). The other
-  // ranks send each tile as it is done (at 1B points on two ranks, rank 1's final triangles are ~6 GB: sent after
-  // the tiles, they would be seconds of serial work), rank 0 receives them beside its own.
+  // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's).
   const TileSharing* sharing = level == 1 && options.sharing && options.sharing->ranks > 1 ? options.sharing : nullptr;
   std::vector<size_t> mine;
   for (size_t t = 0; t < tiles; ++t)
     if (!sharing || int(t % size_t(sharing->ranks)) == sharing->rank) mine.push_back(t);
-  const bool sender = sharing && sharing->rank != 0;
-  std::mutex send_mutex;
-  auto send_tile = [&](size_t t) {
-    sharing->send(message_of(*sharing, tiles, n, options.max_tile_points, t, &results[t]), lists_of(results[t]));
-    results[t] = TileResult{};  // rank 0's now
-  };
-  TileReceiver receiver{results, n, options.max_tile_points, in_final, bookkeeping, {}, {}};
-  auto receive = [&] {
-    sharing->receive([&](const TileMessage& m) { return receiver.where(m); },
-                     [&](const TileMessage& m) { receiver.got(m); });
-  };
-  std::future<void> receiving;
-  if (sharing && !sender && sharing->from_any_thread) receiving = std::async(std::launch::async, receive);
-  // The exchange's end: a sender's tiles not sent yet and its last message; at rank 0, every other rank's tiles.
-  auto end_sharing = [&](bool gave_up) {
-    if (!sender) return receiving.valid() ? receiving.get() : receive();
-    if (!sharing->from_any_thread && !gave_up)
-      for (size_t t : mine) send_tile(t);
-    sharing->send(message_of(*sharing, tiles, n, options.max_tile_points, TileMessage::kDone, nullptr), {});
-  };
+  std::optional<TileExchange> exchange;
+  if (sharing) exchange.emplace(*sharing, results, n, options.max_tile_points, in_final, bookkeeping);
   // Isolated: a thread waiting in a tile's own parallel loops takes no other tile (whose GPU call would make it
   // wait for the device as well).
   auto gather = [&](size_t t) {
@@ -663,10 +679,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms",
                   name, r.final_triangles.size(), r.gather_ms, r.cdt_ms, r.other_ms - r.gather_ms,
                   ms_since(t_tiles));
-    if (sender && sharing->from_any_thread) {
-      std::lock_guard<std::mutex> lock(send_mutex);
-      send_tile(t);
-    }
+    if (exchange) exchange->done(t);
   };
   // A tile that throws stops the tiles not yet begun, and the others in flight finish whole. Thrown through TBB,
   // the error cancelled those tiles' own parallel loops halfway: at 1B points a tile then ran its GPU call on
@@ -721,16 +734,15 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     } catch (const UnresolvedTile& e) {
       why = e.what();
     }
-    end_sharing(!why.empty());
+    exchange->end(mine, !why.empty());
     if (sharing->any(!why.empty()))
       throw UnresolvedTile(why.empty() ? "another rank's tile has constraints to split" : why);
   } else {
     run_mine();
-    if (sharing) end_sharing(false);
+    if (exchange) exchange->end(mine, false);
   }
   bookkeeping.get();  // its error, if any
-  if (sender) return {};
-  if (!receiver.refused.empty()) throw std::runtime_error(receiver.refused);
+  if (exchange && exchange->sender()) return {};
 
   const double tiles_wall_ms = ms_since(t_tiles);
   // The merge's input (merge_job). What only the tiles read goes first (at 1B points + 250M segments: 6 GB of the
