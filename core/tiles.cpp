@@ -726,8 +726,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     if (failed) std::rethrow_exception(failed);
   };
   if (sharing && options.unresolved) {
-    // Ranks whose tiles check themselves all give up together, before their exchange: a rank that gave up alone
-    // would leave the others waiting in it.
+    // Ranks whose tiles check themselves all give up together, once their tiles' exchange has ended (a rank that
+    // gave up sends no more tiles): a rank that gave up alone would leave the others waiting in it.
     std::string why;
     try {
       run_mine();
