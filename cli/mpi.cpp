@@ -30,13 +30,22 @@ int launched_ranks() {
 }
 
 #ifdef CDTGPU_MPI
-// Bytes point to point, in pieces a 32-bit MPI count takes; the receiver learns the size first.
+// Bytes point to point, in pieces a 32-bit MPI count takes.
 constexpr int kTilesTag = 3;
 constexpr uint64_t kPiece = uint64_t(1) << 30;
-void send_bytes(const void* p, uint64_t n, int to, int tag = kTilesTag) {
-  MPI_Send(&n, 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD);
+void send_pieces(const void* p, uint64_t n, int to, int tag) {
   for (uint64_t at = 0; at < n; at += kPiece)
     MPI_Send(static_cast<const char*>(p) + at, int(std::min(kPiece, n - at)), MPI_BYTE, to, tag, MPI_COMM_WORLD);
+}
+void recv_pieces(void* p, uint64_t n, int from, int tag) {
+  for (uint64_t at = 0; at < n; at += kPiece)
+    MPI_Recv(static_cast<char*>(p) + at, int(std::min(kPiece, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD,
+             MPI_STATUS_IGNORE);
+}
+// The same, the receiver learning the size first.
+void send_bytes(const void* p, uint64_t n, int to, int tag = kTilesTag) {
+  MPI_Send(&n, 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD);
+  send_pieces(p, n, to, tag);
 }
 template <typename Vec>
 void recv_into(Vec& v, int from, int tag = kTilesTag) {
@@ -47,9 +56,7 @@ void recv_into(Vec& v, int from, int tag = kTilesTag) {
     v.resize(n);
   else
     resize_touched(v, n / sizeof(v[0]));
-  char* p = reinterpret_cast<char*>(v.data());
-  for (uint64_t at = 0; at < n; at += kPiece)
-    MPI_Recv(p + at, int(std::min(kPiece, n - at)), MPI_BYTE, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  recv_pieces(v.data(), n, from, tag);
 }
 
 // A tile's results to rank 0 (TileSharing): the message, then each list's bytes in pieces a 32-bit MPI count
@@ -60,9 +67,7 @@ void send_tile(const TileMessage& m, const TileLists& lists, int rank) {
   if (const char* kill = std::getenv("CDTGPU_MPI_TEST_KILL_RANK"); kill && std::atoi(kill) == rank)
     std::raise(SIGKILL);
   MPI_Send(&m, int(sizeof m), MPI_BYTE, 0, kTileMessageTag, MPI_COMM_WORLD);
-  for (const auto& list : lists)
-    for (uint64_t at = 0; at < list.size(); at += kPiece)
-      MPI_Send(list.data() + at, int(std::min(kPiece, list.size() - at)), MPI_BYTE, 0, kTileListTag, MPI_COMM_WORLD);
+  for (const auto& list : lists) send_pieces(list.data(), list.size(), 0, kTileListTag);
 }
 void receive_tiles(int ranks, const std::function<TileLists(const TileMessage&)>& where,
                    const std::function<void(const TileMessage&)>& got) {
@@ -75,10 +80,7 @@ void receive_tiles(int ranks, const std::function<TileLists(const TileMessage&)>
       got(m);
       continue;
     }
-    for (const auto& list : where(m))
-      for (uint64_t at = 0; at < list.size(); at += kPiece)
-        MPI_Recv(list.data() + at, int(std::min(kPiece, list.size() - at)), MPI_BYTE, status.MPI_SOURCE, kTileListTag,
-                 MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    for (const auto& list : where(m)) recv_pieces(list.data(), list.size(), status.MPI_SOURCE, kTileListTag);
     got(m);
   }
 }

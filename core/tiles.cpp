@@ -341,6 +341,13 @@ GatheredTile gather_tile(const std::vector<Edge>& segments, const Plan& plan, co
   return GatheredTile{std::move(ids), std::move(local_segments), ms_since(t0)};
 }
 
+// The final region's vertices: every vertex of the final triangles, marked 1 (tiles mark theirs concurrently).
+void mark_final(const Triangles& final_triangles, std::vector<uint8_t>& in_final) {
+  tbb::parallel_for(size_t(0), final_triangles.size(), [&](size_t i) {
+    for (uint32_t id : final_triangles[i]) std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
+  });
+}
+
 TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const TileTriangulator& triangulate,
                        const TileFinalizer& finalize, const std::string& name, std::vector<uint8_t>& in_final,
                        const std::shared_future<void>& in_final_zeroed, bool unresolved) {
@@ -366,10 +373,7 @@ TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const 
     for (uint32_t& v : split) v = ids[v];
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
   in_final_zeroed.get();  // rethrows its error
-  tbb::parallel_for(size_t(0), r.final_triangles.size(), [&](size_t i) {
-    for (uint32_t id : r.final_triangles[i])
-      std::atomic_ref<uint8_t>(in_final[id]).store(1, std::memory_order_relaxed);
-  });
+  mark_final(r.final_triangles, in_final);
   r.other_ms = r.gather_ms + ms_since(t0) - r.cdt_ms;
   return r;
 }
@@ -444,15 +448,8 @@ class TileExchange {
                    " tiles of at most " + std::to_string(m.tile_points) + " points against " +
                    std::to_string(results_.size()) + " of at most " + std::to_string(tile_points_) +
                    "): give every rank the same input and --max-tile-points";
-      const size_t sizes[3] = {sizeof(Triangle), sizeof(Edge), sizeof(std::array<uint32_t, 3>)};
-      TileLists lists;
-      for (size_t k = 0; k < 3; ++k) {
-        drained_[k].resize(m.lengths[k] * sizes[k]);
-        lists[k] = drained_[k];
-      }
-      return lists;
     }
-    TileResult& r = results_[m.tile];
+    TileResult& r = refused_.empty() ? results_[m.tile] : drained_;
     resize_touched(r.final_triangles, m.lengths[0]);
     r.border.resize(m.lengths[1]);
     r.split.resize(m.lengths[2]);
@@ -461,11 +458,7 @@ class TileExchange {
   void got(const TileMessage& m) {
     if (m.tile == TileMessage::kDone || !refused_.empty()) return;
     bookkeeping_.get();  // its error, if any
-    const Triangles& final_triangles = results_[m.tile].final_triangles;
-    tbb::parallel_for(size_t(0), final_triangles.size(), [&](size_t i) {
-      for (uint32_t id : final_triangles[i])
-        std::atomic_ref<uint8_t>(in_final_[id]).store(1, std::memory_order_relaxed);
-    });
+    mark_final(results_[m.tile].final_triangles, in_final_);
   }
 
   const TileSharing& sharing_;
@@ -476,7 +469,7 @@ class TileExchange {
   std::mutex send_mutex_;
   std::future<void> receiving_;
   std::string refused_;
-  std::array<std::vector<std::byte>, 3> drained_;
+  TileResult drained_;  // a refused rank's tiles, received and dropped
 };
 
 // What the merge triangulates (tiling.md): the vertices not inside the final region with the border's, the
