@@ -233,17 +233,24 @@ void main() {
       r = pts[w];
     }
     int s = pred_orient2d(pa, q, r);
-    if (ask != ASK_APEX && s == 0 && on_b_side(pa, q, pb)) {
-      // A neighbour of a on the open segment (turning around a would never find b's corner).
+    // A vertex on the open segment: the apex ahead, or a neighbour of a on b's side (turning around a would
+    // never find b's corner). The caller must split the constraint there.
+    if (s == 0 && (ask == ASK_APEX || on_b_side(pa, q, pb))) {
       through(c, asked);
       if (p.mode != CDT_WALK_COUNT || p.through == 0u) {
         found = FOUND_ERROR;
         break;
       }
-      broken = true;  // on from that vertex, a corner of t
+      broken = true;  // on from that vertex: a corner of t, or the apex of u
+      if (ask == ASK_APEX) {
+        t = u;
+        k = ku;
+        walking = false;
+      } else {
+        k = corner_of(t, asked);
+      }
       a = asked;
       pa = pts[a];
-      k = corner_of(t, a);
       o1 = 2;
       o2 = 2;
       rows = 0u;
@@ -254,23 +261,6 @@ void main() {
     } else if (ask == ASK_V2) {
       o2 = s;
     } else {
-      if (s == 0) {  // a vertex on the open segment: the caller must split the constraint there
-        through(c, asked);
-        if (p.mode != CDT_WALK_COUNT || p.through == 0u) {
-          found = FOUND_ERROR;
-          break;
-        }
-        broken = true;  // on from that vertex, the apex of u
-        a = asked;
-        pa = pts[a];
-        t = u;
-        k = ku;
-        walking = false;
-        o1 = 2;
-        o2 = 2;
-        rows = 0u;
-        continue;
-      }
       ++rows;
       uint info = (s > 0 ? CDT_SIDE_LEFT : CDT_SIDE_RIGHT) | (rows == 1u ? CDT_FIRST : 0u);
       if (writing && rows <= limit) {
