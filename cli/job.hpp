@@ -12,6 +12,7 @@
 #include "core/prepare.hpp"
 #include "core/projection.hpp"
 #include "core/raster.hpp"
+#include "core/tile_workers.hpp"
 #include "core/tiles.hpp"
 #include "core/stats.hpp"
 #include "gpu/contours.hpp"
@@ -46,7 +47,7 @@ struct TriangulateOptions {
   int64_t max_tile_points = -1;  // tiles of at most this many points (core/tiles.hpp); 0: never; -1: auto
   std::string tiles_out;         // the mesh as one file per tile plus index.geojson (io/tiles_dir.hpp); empty: none
   std::string devices;           // GPUs for tiled runs (gpu/devices.hpp); empty: all hardware GPUs when tiled
-  const TileSharing* sharing = nullptr;  // tiles shared among MPI ranks (cli/mpi.hpp); null: one process
+  const RankTiles* ranks = nullptr;  // MPI ranks: rank 0 hands tiles to the others (cli/mpi.hpp); null: one process
   const TilesDirSharing* tiles_sharing = nullptr;  // --tiles-out's files written by every rank; null: here
 };
 

@@ -95,7 +95,7 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
     if (*t) {
       TriangulateOptions options = triangulate_options(tri);
       options.device = device;
-      options.sharing = mpi.sharing();
+      options.ranks = mpi.rank_tiles();
       options.input.read.share = mpi.read_share();
       options.tiles_sharing = mpi.tiles_dir();
       // Ranks of one host take a GPU each (their local rank's), unless --device or --devices says otherwise.

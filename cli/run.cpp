@@ -19,17 +19,23 @@ int run_triangulate(const TriangulateOptions& options) {
   GpuStarts gpus;
   check_job(job);
   start_gpu_early(job, gpus);
+  // Under MPI the other ranks read their shares for rank 0 and run the tiles it hands them; rank 0 finishes and
+  // writes. They write only their share of --tiles-out's files, which rank 0 hands them.
+  if (options.ranks && options.ranks->rank != 0) {
+    serve_tiles(job);
+    release_job(job, &gpus);
+    if (options.tiles_sharing && !options.tiles_out.empty()) write_shared_tiles(job.write, *options.tiles_sharing);
+    return 0;
+  }
   read_job(job);
   choose_backend(job, gpus);
   open_tiles_early(job);
   prepare_job(job);
   triangulate_job(job);
-  // Under MPI the other ranks have handed their tiles to rank 0, which finishes and writes; they write only
-  // their share of --tiles-out's files, which rank 0 hands them.
-  if (options.sharing && options.sharing->rank != 0) {
-    release_job(job, &gpus);
-    if (options.tiles_sharing && !options.tiles_out.empty()) write_shared_tiles(job.crs, job.write, *options.tiles_sharing);
-    return 0;
+  if (options.ranks) {
+    const uint64_t elsewhere = options.ranks->end();
+    job.stats.counts["tiles_at_other_ranks"] = elsewhere;
+    if (elsewhere) spdlog::info("{} of the tiles ran at the other {} rank(s)", elsewhere, options.ranks->ranks - 1);
   }
   apply_job_regions(job);
   derive_and_write_outputs(job, [&] { gpus.close_in_background(); });

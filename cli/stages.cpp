@@ -77,6 +77,8 @@ std::string gpu_refused(const gpu::DeviceError& e) {
 // The tiled CDT (core/tiles) of a resolved input, its figures in the stats.
 // in_flight: tiles worked on at once (0: as many as the cores take; a device's: 2, core/tiles.hpp).
 // finalize: the tiles' own (the GPU's, core/tiles.hpp); empty: the host's test.
+// Under MPI the other ranks take tiles too, as devices of this process do (core/tile_workers.hpp): the GPU's
+// tiles (a finalizer given) at ranks with a GPU, the host's at every rank.
 TileOptions tile_options(const Job& job, uint64_t tile_points, unsigned in_flight, TileFinalizer finalize,
                          std::function<void(uint64_t)> reserve) {
   TileOptions opt;
@@ -84,7 +86,20 @@ TileOptions tile_options(const Job& job, uint64_t tile_points, unsigned in_fligh
   opt.reserve = std::move(reserve);
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
-  opt.sharing = job.options.sharing;
+  const RankTiles* ranks = job.options.ranks;
+  if (!ranks || ranks->rank != 0) return opt;
+  const bool gpu = bool(opt.finalize);
+  TileWorkers workers = ranks->workers(gpu);
+  const unsigned remote = workers.total_slots();
+  if (remote == 0) return opt;
+  if (!gpu) {
+    opt.shape = TileShape::squares;  // what the CPU's tiles take without a finalizer
+    opt.finalize = host_finalizer(cgal_tile_triangulator());
+  }
+  const unsigned local = gpu ? in_flight : std::max(1u, std::thread::hardware_concurrency());
+  opt.finalize = with_workers(std::move(opt.finalize), local, std::move(workers));
+  if (in_flight) opt.tiles_in_flight = in_flight + remote;
+  opt.waiting_threads = remote;
   return opt;
 }
 
@@ -114,10 +129,6 @@ void record_tiles(Job& job, const TileStats& ts, uint64_t tile_points) {
   c["merge_vertices"] = ts.merge_vertices;
   c["merge_segments"] = ts.merge_segments;
   c["merge_triangles"] = ts.merge_triangles;
-  if (const TileSharing* sharing = job.options.sharing; sharing && sharing->rank != 0 && ts.levels == 0) {
-    spdlog::info("this rank's tiles of at most {} points handed to rank 0, which merges", tile_points);
-    return;
-  }
   spdlog::info("{} tiles of at most {} points in {} level(s): {} triangles final in their tiles, a merge of {} "
                "vertices and {} segments gave {}", ts.tiles, tile_points, ts.levels, ts.final_triangles,
                ts.merge_vertices, ts.merge_segments, ts.merge_triangles);
@@ -586,6 +597,43 @@ void open_tiles_early(Job& job) {
                   ahead->devices->cdts().size(), tile);
     return std::shared_ptr<void>(ahead);
   });
+}
+
+// An MPI rank other than 0: its share of the inputs read and sent to rank 0 (if it reads one), then the tiles rank
+// 0 hands it, on
+// its GPU (started as rank 0's is, from the files' estimate) or its cores, until rank 0 has no more. Its devices
+// and their staging are made before it says what it takes, as open_tiles_early makes rank 0's.
+void serve_tiles(Job& job) {
+  const TriangulateOptions& options = job.options;
+  if (options.input.read.share)  // the first rank of its host (cli/mpi.hpp)
+    timed(job, "read (this rank's share, sent to rank 0)",
+          [&] { job.parts = read_inputs(input_specs(job), options.input.read, job.in); });
+  std::shared_ptr<gpu::TileDevices> devices;
+  std::shared_ptr<gpu::GpuTiles> tiles;
+  if (job.start) {
+    try {
+      gpu::GpuCdt& cdt = job.start->cdt();
+      configure_cdt(job, cdt);
+      devices = std::make_shared<gpu::TileDevices>(tile_devices(options.devices, cdt.context(), cdt));
+      tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices->cdts()));
+      const uint64_t n = estimated_points(job);
+      uint64_t tile = gpu_tile_points(cdt.context(), n, options.max_tile_points);
+      if (options.max_tile_points < 0) tile = std::min(tile, devices->max_tile_points());
+      if (tiled_on_any_device(n, options.max_tile_points)) tiles->reserve(tile_staging_points(n, tile));
+    } catch (const gpu::DeviceError& e) {
+      spdlog::warn("this rank takes no GPU tiles: {}", e.what());
+      tiles.reset();
+      devices.reset();
+    }
+  }
+  const unsigned gpu_slots = tiles ? unsigned(2 * devices->cdts().size()) : 0;
+  const TileFinalizer on_host = host_finalizer(cgal_tile_triangulator());
+  timed(job, "tiles for rank 0", [&] {
+    options.ranks->serve(gpu_slots, std::max(1u, std::thread::hardware_concurrency()),
+                         [&](bool gpu, const TileJob& tile) { return gpu ? tiles->finalize(tile) : on_host(tile); });
+  });
+  tiles.reset();  // the staging, on the devices' contexts, first
+  devices.reset();
 }
 
 // The merge stays on the CPU even when the device is ready: on all 16 cores of the H100 machine it took 31-44 ms

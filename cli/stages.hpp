@@ -38,6 +38,8 @@ void choose_backend(Job& job, GpuStarts& gpus);
 // A large GPU run's tile devices and their staging, begun before prepare (not in a batch).
 void open_tiles_early(Job& job);
 void prepare_job(Job& job);
+// An MPI rank other than 0 (cli/mpi.hpp): reads its share for rank 0, then runs the tiles rank 0 hands it.
+void serve_tiles(Job& job);
 void triangulate_job(Job& job);
 void apply_job_regions(Job& job);
 void derive_outputs(Job& job);

@@ -6,6 +6,7 @@
 
 #include <CGAL/Interval_nt.h>
 #include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
 #include <tbb/parallel_sort.h>
@@ -388,89 +389,14 @@ TileTriangulator cgal_tile_triangulator() {
   };
 }
 
+TileFinalizer host_finalizer(TileTriangulator triangulate) {
+  return [triangulate = std::move(triangulate)](const TileJob& job) {
+    TileResult timing;
+    return final_on_host(job.all, job.ids, job.segments, job.rect, triangulate, std::string(job.what), timing);
+  };
+}
+
 namespace {
-
-// The first level's tiles of every rank at rank 0 (TileSharing). A rank other than 0 sends each tile as it is
-// done (at 1B points on two ranks, rank 1's final triangles are ~6 GB: sent after its last tile, they were seconds
-// of serial work), then a last message; rank 0 receives them beside its own tiles, into `results`, and marks
-// their final region in `in_final` once `bookkeeping` has sized it. A rank with another plan is drained and named.
-class TileExchange {
- public:
-  TileExchange(const TileSharing& sharing, std::vector<TileResult>& results, uint64_t n, uint64_t tile_points,
-               std::vector<uint8_t>& in_final, const std::shared_future<void>& bookkeeping)
-      : sharing_(sharing), results_(results), n_(n), tile_points_(tile_points), in_final_(in_final),
-        bookkeeping_(bookkeeping) {
-    if (!sender() && sharing_.from_any_thread) receiving_ = std::async(std::launch::async, [this] { receive(); });
-  }
-  bool sender() const { return sharing_.rank != 0; }
-  // This rank's tile t is done: sent now where MPI takes calls from any thread, one at a time.
-  void done(size_t t) {
-    if (!sender() || !sharing_.from_any_thread) return;
-    std::lock_guard<std::mutex> lock(send_mutex_);
-    send(t);
-  }
-  // After this rank's tiles: a sender's tiles not sent yet (none if it gave up) and its last message; at rank 0,
-  // every other rank's tiles, or the refusal of a rank with another plan.
-  void end(const std::vector<size_t>& mine, bool gave_up) {
-    if (!sender()) {
-      receiving_.valid() ? receiving_.get() : receive();
-      if (!refused_.empty()) throw std::runtime_error(refused_);
-      return;
-    }
-    if (!sharing_.from_any_thread && !gave_up)
-      for (size_t t : mine) send(t);
-    sharing_.send(message(TileMessage::kDone, nullptr), {});
-  }
-
- private:
-  static TileLists lists_of(TileResult& r) {
-    auto bytes = [](auto& list) { return std::as_writable_bytes(std::span(list.data(), list.size())); };
-    return {bytes(r.final_triangles), bytes(r.border), bytes(r.split)};
-  }
-  TileMessage message(uint64_t tile, const TileResult* r) const {
-    TileMessage m;
-    m.rank = uint64_t(sharing_.rank);
-    m.tiles = results_.size(), m.points = n_, m.tile_points = tile_points_, m.tile = tile;
-    if (r) m.lengths[0] = r->final_triangles.size(), m.lengths[1] = r->border.size(), m.lengths[2] = r->split.size();
-    return m;
-  }
-  void send(size_t t) {
-    sharing_.send(message(t, &results_[t]), lists_of(results_[t]));
-    results_[t] = TileResult{};  // rank 0's now
-  }
-  void receive() {
-    sharing_.receive([this](const TileMessage& m) { return where(m); }, [this](const TileMessage& m) { got(m); });
-  }
-  TileLists where(const TileMessage& m) {
-    if (m.tiles != results_.size() || m.points != n_ || m.tile_points != tile_points_ || m.tile >= results_.size()) {
-      if (refused_.empty())
-        refused_ = "rank " + std::to_string(m.rank) + " planned other tiles than rank 0 (" + std::to_string(m.tiles) +
-                   " tiles of at most " + std::to_string(m.tile_points) + " points against " +
-                   std::to_string(results_.size()) + " of at most " + std::to_string(tile_points_) +
-                   "): give every rank the same input and --max-tile-points";
-    }
-    TileResult& r = refused_.empty() ? results_[m.tile] : drained_;
-    resize_touched(r.final_triangles, m.lengths[0]);
-    r.border.resize(m.lengths[1]);
-    r.split.resize(m.lengths[2]);
-    return lists_of(r);
-  }
-  void got(const TileMessage& m) {
-    if (m.tile == TileMessage::kDone || !refused_.empty()) return;
-    bookkeeping_.get();  // its error, if any
-    mark_final(results_[m.tile].final_triangles, in_final_);
-  }
-
-  const TileSharing& sharing_;
-  std::vector<TileResult>& results_;
-  const uint64_t n_, tile_points_;
-  std::vector<uint8_t>& in_final_;
-  const std::shared_future<void>& bookkeeping_;
-  std::mutex send_mutex_;
-  std::future<void> receiving_;
-  std::string refused_;
-  TileResult drained_;  // a refused rank's tiles, received and dropped
-};
 
 // What the merge triangulates (tiling.md): the vertices not inside the final region with the border's, the
 // segments between them (a segment with an end inside the final region lies inside it; split ones as their
@@ -647,13 +573,6 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   auto tile_name = [&](size_t t) {
     return "tile " + std::to_string(t + 1) + " of " + std::to_string(tiles) + ", level " + std::to_string(level);
   };
-  // Shared among processes: this rank's tiles only (the first level; the merge's levels are rank 0's).
-  const TileSharing* sharing = level == 1 && options.sharing && options.sharing->ranks > 1 ? options.sharing : nullptr;
-  std::vector<size_t> mine;
-  for (size_t t = 0; t < tiles; ++t)
-    if (!sharing || int(t % size_t(sharing->ranks)) == sharing->rank) mine.push_back(t);
-  std::optional<TileExchange> exchange;
-  if (sharing) exchange.emplace(*sharing, results, n, options.max_tile_points, in_final, bookkeeping);
   // Isolated: a thread waiting in a tile's own parallel loops takes no other tile (whose GPU call would make it
   // wait for the device as well).
   auto gather = [&](size_t t) {
@@ -672,7 +591,6 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms",
                   name, r.final_triangles.size(), r.gather_ms, r.cdt_ms, r.other_ms - r.gather_ms,
                   ms_since(t_tiles));
-    if (exchange) exchange->done(t);
   };
   // A tile that throws stops the tiles not yet begun, and the others in flight finish whole. Thrown through TBB,
   // the error cancelled those tiles' own parallel loops halfway: at 1B points a tile then ran its GPU call on
@@ -690,10 +608,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
       stop = true;
     }
   };
-  auto run_mine = [&] {
-    if (options.tiles_in_flight == 0 || options.tiles_in_flight >= mine.size()) {
-      tbb::parallel_for(size_t(0), mine.size(), size_t(1),
-                        [&](size_t k) { caught([&] { finish(mine[k], gather(mine[k])); }); });
+  auto run_tiles = [&] {
+    if (options.tiles_in_flight == 0 || options.tiles_in_flight >= tiles) {
+      tbb::parallel_for(size_t(0), tiles, size_t(1), [&](size_t t) { caught([&] { finish(t, gather(t)); }); });
     } else {
       // tiles_in_flight tiles on the devices, one more gathered: tiles are gathered one at a time, in order, on
       // every core, so the next tile is ready when a device is free (gathered beside the tiles' own finishing,
@@ -704,8 +621,8 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
           options.tiles_in_flight + 1,
           tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order,
                                          [&](tbb::flow_control& fc) -> size_t {
-                                           if (next == mine.size() || stop.load()) fc.stop();
-                                           return next < mine.size() ? mine[next++] : 0;
+                                           if (next == tiles || stop.load()) fc.stop();
+                                           return next < tiles ? next++ : 0;
                                          }) &
               tbb::make_filter<size_t, size_t>(tbb::filter_mode::serial_in_order,
                                                [&](size_t t) {
@@ -716,26 +633,18 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
                 caught([&] { finish(t, std::move(gathered[t])); });
               }));
     }
-    if (failed) std::rethrow_exception(failed);
   };
-  if (sharing && options.unresolved) {
-    // Ranks whose tiles check themselves all give up together, once their tiles' exchange has ended (a rank that
-    // gave up sends no more tiles): a rank that gave up alone would leave the others waiting in it.
-    std::string why;
-    try {
-      run_mine();
-    } catch (const UnresolvedTile& e) {
-      why = e.what();
-    }
-    exchange->end(mine, !why.empty());
-    if (sharing->any(!why.empty()))
-      throw UnresolvedTile(why.empty() ? "another rank's tile has constraints to split" : why);
+  if (options.waiting_threads > 0) {
+    // TBB's workers are as many as the cores unless told otherwise: the arena alone would not get the threads.
+    const int threads = tbb::this_task_arena::max_concurrency() + int(options.waiting_threads);
+    tbb::global_control more(tbb::global_control::max_allowed_parallelism, size_t(threads));
+    tbb::task_arena wider(threads);
+    wider.execute(run_tiles);
   } else {
-    run_mine();
-    if (exchange) exchange->end(mine, false);
+    run_tiles();
   }
+  if (failed) std::rethrow_exception(failed);
   bookkeeping.get();  // its error, if any
-  if (exchange && exchange->sender()) return {};
 
   const double tiles_wall_ms = ms_since(t_tiles);
   // The merge's input (merge_job). What only the tiles read goes first (at 1B points + 250M segments: 6 GB of the

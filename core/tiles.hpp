@@ -90,34 +90,6 @@ struct TileFinal {
 // circumdisk_inside (a stricter test only makes the merge larger), never more.
 using TileFinalizer = std::function<TileFinal(const TileJob&)>;
 
-// The first level's tiles shared among processes (issue 29: MPI ranks, cli/mpi.cpp): rank r triangulates the
-// tiles t with t % ranks == r. Every other rank sends each tile's results to rank 0 once the tile is done, then a
-// last message; rank 0 receives them beside its own tiles and merges them all as if it had made them. The other
-// ranks' triangulate_tiled returns no triangles. Every rank must hold the same input (the plan is the same).
-struct TileMessage {
-  static constexpr uint64_t kDone = ~uint64_t(0);
-  uint64_t rank = 0;
-  uint64_t tiles = 0, points = 0, tile_points = 0;  // the sender's plan, checked at rank 0
-  uint64_t tile = kDone;  // kDone: the sender's tiles are over
-  uint64_t lengths[3] = {};  // final triangles, border edges, splits
-};
-using TileLists = std::array<std::span<std::byte>, 3>;  // the lists' bytes, in that order
-struct TileSharing {
-  int rank = 0, ranks = 1;
-  // Sends a message and its lists' bytes to rank 0. Called on the thread that finished the tile, one call at a
-  // time, when `from_any_thread`; else every call comes from the caller's thread after its tiles.
-  std::function<void(const TileMessage& m, const TileLists& lists)> send;
-  // Rank 0: every other rank's messages until each has sent kDone: `where` gives a tile's buffers before its lists
-  // arrive, `got` is called once they have. On a thread of its own beside rank 0's tiles when `from_any_thread`.
-  std::function<void(const std::function<TileLists(const TileMessage&)>& where,
-                     const std::function<void(const TileMessage&)>& got)>
-      receive;
-  bool from_any_thread = false;
-  // Whether any rank passes true, on every rank (TileOptions::unresolved: whether some rank's tile has segments
-  // that cross).
-  std::function<bool(bool mine)> any;
-};
-
 struct TileOptions {
   uint64_t max_tile_points =
       0;  // at most this many of a tile's own vertices; below 3 or >= the input: no tiles
@@ -126,7 +98,9 @@ struct TileOptions {
   // Tiles worked on at once, a sliding window (0: as many as the cores take). A device's tiles are large: two at
   // once (one on the device, the next gathered meanwhile) bound host memory by the tile size.
   unsigned tiles_in_flight = 0;
-  const TileSharing* sharing = nullptr;  // null: every tile here
+  // Threads beyond the cores for the tiles, which tiles run by other processes hold while they wait
+  // (core/tile_workers.hpp): so many more tiles at once, with the cores still busy with the others.
+  unsigned waiting_threads = 0;
   // core/tile_plan.hpp; `automatic` is squares without a finalizer (the CPU's tiles); tests force slabs.
   TileShape shape = TileShape::automatic;
   // Slabs only: the first and the last slab cut into this many thinner ones (core/tile_plan.hpp), so that the
@@ -149,6 +123,10 @@ struct TileOptions {
   // is larger: a GPU finalizer allocates its pinned staging meanwhile.
   std::function<void(uint64_t vertices)> reserve;
 };
+
+// CGAL's CDT of the tile (`triangulate`) and the host's final test: what a tile without a finalizer gets, as a
+// finalizer (for tiles run by another process, core/tile_workers.hpp). Its results are in the tile's ids.
+TileFinalizer host_finalizer(TileTriangulator triangulate);
 
 // A finalizer's throw when a tile of an unresolved input (TileOptions::unresolved) has segments that cross (or
 // more vertices on its segments than the GPU's passes split: gpu/constraints.cpp).

@@ -168,7 +168,7 @@ void read_share(const InputSpec& spec, const std::string& ext, ReadOptions optio
   in.sources = piece.sources;
   const size_t before = in.points.size() + in.lines.size();
   const PointClassCounts classes = join_shares(piece, share, in);
-  if (in.points.size() + in.lines.size() == before)
+  if (share.index == 0 && in.points.size() + in.lines.size() == before)
     throw InputError(spec.path, 0, ext == ".las" ? las_nothing_kept(classes) : "no geometry");
 }
 
@@ -219,7 +219,8 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
     spdlog::debug("read: {}: {} points, {} lines in {:.1f} ms", spec.path, part.points_end - part.points_begin,
                   part.lines_end - part.lines_begin,
                   std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-    if (is_region_role(spec.role) && part.lines_end == part.lines_begin)
+    const bool joined_here = !defaults.share || defaults.share->index == 0;  // the others sent theirs away
+    if (joined_here && is_region_role(spec.role) && part.lines_end == part.lines_begin)
       throw UsageError(spec.path + ": role=" + (spec.role == Role::boundary ? "boundary" : "hole") +
                        " needs polygons (rings), and this input has only points");
     part.role = spec.role;

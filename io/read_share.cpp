@@ -130,11 +130,12 @@ PointClassCounts join_shares(InputSet& piece, const ReadShare& share, InputSet& 
   const double sizes_ms = ms();
   uint64_t total = 0;
   for (uint64_t b : point_bytes) total += b;
+  const bool first = share.index == 0;
   const size_t at = in.points.size();
   // Touched first on all cores: MPI's receive faulting fresh pages in ran at ~1.5 GB/s, touched ones ~4.
-  resize_touched(in.points, at + total / sizeof(Point3));
-  share.all_bytes(reinterpret_cast<const char*>(piece.points.data()), reinterpret_cast<char*>(in.points.data() + at),
-                  point_bytes);
+  if (first) resize_touched(in.points, at + total / sizeof(Point3));
+  share.gather_bytes(reinterpret_cast<const char*>(piece.points.data()),
+                     first ? reinterpret_cast<char*>(in.points.data() + at) : nullptr, point_bytes);
   const double points_ms = ms();
   free_storage(piece.points);
 
@@ -154,17 +155,18 @@ PointClassCounts join_shares(InputSet& piece, const ReadShare& share, InputSet& 
   uint64_t line_total = 0;
   for (uint64_t b : line_bytes) line_total += b;
   Points line_points;
-  resize_touched(line_points, line_total / sizeof(Point3));
-  share.all_bytes(reinterpret_cast<const char*>(mine_line_points.data()), reinterpret_cast<char*>(line_points.data()),
-                  line_bytes);
+  if (first) resize_touched(line_points, line_total / sizeof(Point3));
+  share.gather_bytes(reinterpret_cast<const char*>(mine_line_points.data()),
+                     first ? reinterpret_cast<char*>(line_points.data()) : nullptr, line_bytes);
   free_storage(mine_line_points);
 
   // The lines and counts, packed.
   const std::vector<uint64_t> sizes = share.all_sizes(mine.size());
   uint64_t all_size = 0;
   for (uint64_t s : sizes) all_size += s;
-  std::vector<char> all(all_size);
-  share.all_bytes(mine.data(), all.data(), sizes);
+  std::vector<char> all(first ? all_size : 0);
+  share.gather_bytes(mine.data(), first ? all.data() : nullptr, sizes);
+  if (!first) return {};
   std::vector<InputSet> pieces;
   std::vector<Polyline*> lines;
   const char* p = all.data();

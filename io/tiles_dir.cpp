@@ -53,7 +53,7 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
       for (int r = 1; r < ranks; ++r) {
         std::vector<std::pair<size_t, const MeshPiece*>> theirs;
         for (size_t t = size_t(r); t < pieces.size(); t += size_t(ranks)) theirs.emplace_back(t, &pieces[t]);
-        sharing->send(r, fresh.string(), theirs);
+        sharing->send(r, fresh.string(), crs, theirs);
       }
     std::string mine;
     try {
@@ -96,8 +96,8 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
   }
 }
 
-void write_shared_tiles(const Crs& crs, const WriteOptions& options, const TilesDirSharing& sharing) {
-  auto [fresh, pieces] = sharing.receive();
+void write_shared_tiles(const WriteOptions& options, const TilesDirSharing& sharing) {
+  auto [fresh, crs, pieces] = sharing.receive();
   std::string mine;
   try {
     fail_for_tests(sharing.rank);

@@ -27,11 +27,17 @@ std::string tiles_dir_path(const std::string& dir);
 // process says its files are written.
 struct TilesDirSharing {
   int rank = 0, ranks = 1;
-  // Process 0: hands process r the new folder's path and its pieces (index t, the piece).
-  std::function<void(int rank, const std::string& fresh, const std::vector<std::pair<size_t, const MeshPiece*>>&)>
+  // Process 0: hands process r the new folder's path, the mesh's CRS and its pieces (index t, the piece).
+  std::function<void(int rank, const std::string& fresh, const Crs& crs,
+                     const std::vector<std::pair<size_t, const MeshPiece*>>&)>
       send;
-  // Other processes: the new folder's path and their pieces, from process 0.
-  std::function<std::pair<std::string, std::vector<std::pair<size_t, MeshPiece>>>()> receive;
+  // Other processes: what process 0 handed them.
+  struct Handed {
+    std::string fresh;
+    Crs crs;
+    std::vector<std::pair<size_t, MeshPiece>> pieces;
+  };
+  std::function<Handed()> receive;
   // Every process's outcome (empty: its files are written; else why not, naming the process), gathered at
   // process 0 in process order; the others get an empty list.
   std::function<std::vector<std::string>(const std::string& mine)> outcomes;
@@ -43,7 +49,7 @@ struct TilesDirSharing {
 void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const WriteOptions& options,
                      const std::string& dir, const TilesDirSharing* sharing = nullptr);
 // A process other than 0: writes the pieces process 0 hands it and reports how that went.
-void write_shared_tiles(const Crs& crs, const WriteOptions& options, const TilesDirSharing& sharing);
+void write_shared_tiles(const WriteOptions& options, const TilesDirSharing& sharing);
 
 // The union of the files DIR/index.geojson names: vertices of the same (x, y) merged (their z must agree),
 // triangles in canonical order. Throws InputError naming the file for a bad index, a missing or unreadable file,

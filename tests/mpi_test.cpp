@@ -75,6 +75,9 @@ TEST_F(Mpi, RanksGiveTheSingleProcessBytes) {
     EXPECT_TRUE(slurp(out) == slurp(path("one.ply"))) << ranks << " ranks";
     EXPECT_NE(r.err.find("rank 0 of " + std::to_string(ranks)), std::string::npos) << r.err;
     EXPECT_NE(slurp(path("s.json")).find("\"tiles\""), std::string::npos);
+    // The other ranks ran tiles: rank 0 hands them out as to devices of its own.
+    EXPECT_EQ(slurp(path("s.json")).find("\"tiles_at_other_ranks\": 0"), std::string::npos) << slurp(path("s.json"));
+    EXPECT_NE(slurp(path("s.json")).find("\"tiles_at_other_ranks\""), std::string::npos);
   }
 }
 
@@ -92,6 +95,7 @@ TEST_F(Mpi, GpuRanksGiveTheSingleProcessBytes) {
     const Result r = mpirun(2, "triangulate " + in + " --backend gpu --max-tile-points 60 -v -o " + path("gpu.ply"));
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(slurp(path("gpu.ply")) == slurp(path("one.ply"))) << (crossings ? "crossings" : "clean");
+    EXPECT_NE(r.err.find(" of the tiles ran at the other 1 rank(s)"), std::string::npos) << r.err;
     EXPECT_EQ(r.err.find("constraints to split") != std::string::npos, crossings) << r.err;
     EXPECT_EQ(r.err.find("resolve: setup") != std::string::npos, crossings) << "a resolve ran: " << r.err;
   }
@@ -117,9 +121,11 @@ TEST_F(Mpi, RanksReadSharesOfLasShapefileAndText) {
   const std::string args = path("dem.csv") + " " + path("ground.las") + ":class=2 " + base + ".shp " +
                            path("lines.wkt") + " " + path("area.wkt") + ":role=boundary --backend cgal";
   ASSERT_EQ(run("triangulate " + args + " -o " + path("one.ply") + " -q").code, 0);
+  // Every rank reads a share (CDTGPU_READ_SHARES=ranks: on one host, by default, rank 0 alone reads).
+  const std::string every = "CDTGPU_READ_SHARES=ranks ";
   for (int ranks : {2, 3}) {
     const std::string out = path("shares" + std::to_string(ranks) + ".ply");
-    const Result r = mpirun(ranks, "triangulate " + args + " --max-tile-points 60 -o " + out);
+    const Result r = mpirun(ranks, "triangulate " + args + " --max-tile-points 60 -o " + out, every);
     ASSERT_EQ(r.code, 0) << ranks << " ranks: " << r.err;
     EXPECT_TRUE(slurp(out) == slurp(path("one.ply"))) << ranks << " ranks";
   }
@@ -133,11 +139,12 @@ TEST_F(Mpi, RanksReadSharesOfLasShapefileAndText) {
   ASSERT_NE(at, std::string::npos) << one.err;
   const std::string message = one.err.substr(at, one.err.find('\n', at) - at);
   EXPECT_NE(message.find("column 3 is not a number: 'high'"), std::string::npos) << message;
-  for (int ranks : {2, 3}) {
-    const Result r = mpirun(ranks, "triangulate " + args + " -o " + path("bad.ply"));
-    EXPECT_NE(r.code, 0) << ranks;
-    EXPECT_NE(r.err.find(message), std::string::npos) << ranks << " ranks: " << r.err;
-  }
+  for (int ranks : {2, 3})
+    for (const std::string& env : {every, std::string()}) {
+      const Result r = mpirun(ranks, "triangulate " + args + " -o " + path("bad.ply"), env);
+      EXPECT_NE(r.code, 0) << ranks;
+      EXPECT_NE(r.err.find(message), std::string::npos) << ranks << " ranks " << env << ": " << r.err;
+    }
   EXPECT_FALSE(std::filesystem::exists(path("bad.ply")));
 }
 

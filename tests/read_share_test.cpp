@@ -25,7 +25,8 @@ namespace {
 
 using namespace cdtgpu;
 
-// All-gathers among `count` threads: each posts its own, waits for all, copies every one, waits again.
+// Gathers among `count` threads, as MPI ranks do (cli/mpi.cpp): each posts its own and waits for all; the first
+// copies every one; all wait again.
 class ThreadExchange {
  public:
   explicit ThreadExchange(uint32_t count) : sync_(count), sizes_(count), data_(count) {
@@ -40,10 +41,10 @@ class ThreadExchange {
         sync_.arrive_and_wait();
         return all;
       };
-      s.all_bytes = [this, i](const char* mine, char* all, const std::vector<uint64_t>& sizes) {
+      s.gather_bytes = [this, i](const char* mine, char* all, const std::vector<uint64_t>& sizes) {
         data_[i] = mine;
         sync_.arrive_and_wait();
-        for (size_t r = 0; r < sizes.size(); ++r) {
+        for (size_t r = 0; all && r < sizes.size(); ++r) {
           if (sizes[r]) std::memcpy(all, data_[r], sizes[r]);
           all += sizes[r];
         }
@@ -207,16 +208,19 @@ TEST_F(ReadShareTest, EveryShareCountGivesTheWholeRead) {
   for (uint32_t count : {1u, 2u, 3u, 5u, 8u}) {
     std::vector<std::vector<InputPart>> parts;
     const std::vector<InputSet> ins = read_shared(args, count, &parts);
-    for (uint32_t i = 0; i < count; ++i) {
-      const std::string what = "share " + std::to_string(i) + " of " + std::to_string(count);
-      expect_same(ins[i], whole, what);
-      ASSERT_EQ(parts[i].size(), whole_parts.size());
-      for (size_t k = 0; k < parts[i].size(); ++k) {
-        EXPECT_EQ(parts[i][k].points_begin, whole_parts[k].points_begin) << what;
-        EXPECT_EQ(parts[i][k].points_end, whole_parts[k].points_end) << what;
-        EXPECT_EQ(parts[i][k].lines_begin, whole_parts[k].lines_begin) << what;
-        EXPECT_EQ(parts[i][k].lines_end, whole_parts[k].lines_end) << what;
-      }
+    // The first share holds the whole input; the others sent theirs and hold nothing.
+    for (uint32_t i = 1; i < count; ++i) {
+      EXPECT_TRUE(ins[i].points.empty()) << "share " << i << " of " << count;
+      EXPECT_TRUE(ins[i].lines.empty()) << "share " << i << " of " << count;
+    }
+    const std::string what = "share 0 of " + std::to_string(count);
+    expect_same(ins[0], whole, what);
+    ASSERT_EQ(parts[0].size(), whole_parts.size());
+    for (size_t k = 0; k < parts[0].size(); ++k) {
+      EXPECT_EQ(parts[0][k].points_begin, whole_parts[k].points_begin) << what;
+      EXPECT_EQ(parts[0][k].points_end, whole_parts[k].points_end) << what;
+      EXPECT_EQ(parts[0][k].lines_begin, whole_parts[k].lines_begin) << what;
+      EXPECT_EQ(parts[0][k].lines_end, whole_parts[k].lines_end) << what;
     }
   }
 }
@@ -230,7 +234,7 @@ TEST_F(ReadShareTest, AHeaderAfterLongCommentsIsStillAHeader) {
   const InputSet whole = read_whole({path("late.xyz")});
   ASSERT_EQ(whole.points.size(), 3u);
   for (uint32_t count : {2u, 3u, 4u, 7u})
-    for (const InputSet& in : read_shared({path("late.xyz")}, count)) expect_same(in, whole, std::to_string(count));
+    expect_same(read_shared({path("late.xyz")}, count)[0], whole, std::to_string(count));
 }
 
 TEST_F(ReadShareTest, ErrorsNameTheLineOfTheWholeFile) {

@@ -1,6 +1,7 @@
 // The tiled CDT (core/tiles): with tiles of 16 to 500 points, on uniform, clustered, grid and degenerate
 // layouts, with crossing and long constraints, the mesh equals triangulate_cgal's (the single run) exactly;
 // the tiles' counts say the path really tiled.
+#include "core/tile_workers.hpp"
 #include "core/tiles.hpp"
 
 #include <CGAL/Exact_rational.h>
@@ -188,98 +189,71 @@ TEST(Tiles, AFailingTileLeavesTheTilesInFlightWhole) {
   EXPECT_EQ(partial.load(), 0) << "of " << loops.load() << " tiles in flight";
 }
 
-// Ranks run one after another in one process (TileSharing): the other ranks' messages are kept, and rank 0's
-// receive hands them over in the order they were sent.
-struct Mailbox {
-  std::vector<std::pair<TileMessage, std::array<std::vector<std::byte>, 3>>> sent;
-  std::mutex mutex;
-
-  TileSharing sharing(int rank, int ranks, bool from_any_thread) {
-    TileSharing s;
-    s.rank = rank;
-    s.ranks = ranks;
-    s.from_any_thread = from_any_thread;
-    s.send = [this](const TileMessage& m, const TileLists& lists) {
-      std::lock_guard<std::mutex> lock(mutex);
-      auto& [head, bytes] = sent.emplace_back();
-      head = m;
-      for (size_t k = 0; k < 3; ++k) bytes[k].assign(lists[k].begin(), lists[k].end());
-    };
-    s.receive = [this](const std::function<TileLists(const TileMessage&)>& where,
-                       const std::function<void(const TileMessage&)>& got) {
-      for (const auto& [head, bytes] : sent) {
-        if (head.tile != TileMessage::kDone) {
-          const TileLists to = where(head);
-          for (size_t k = 0; k < 3; ++k) {
-            ASSERT_EQ(to[k].size(), bytes[k].size());
-            std::copy(bytes[k].begin(), bytes[k].end(), to[k].begin());
-          }
-        }
-        got(head);
-      }
-    };
-    return s;
-  }
-  size_t done() const {
-    return size_t(std::count_if(sent.begin(), sent.end(),
-                                [](const auto& s) { return s.first.tile == TileMessage::kDone; }));
-  }
-};
-
-// Tiles shared among processes (TileSharing, as MPI ranks run them): ranks 1 and 2 triangulate their tiles and
-// hand them over, rank 0 merges everything; the same triangles as the single run, none on the other ranks. Tiles
-// sent as they are done (MPI calls from any thread) and after the tiles.
-TEST(Tiles, SharedAmongRanksGiveTheSingleRun) {
+// Tiles run by other processes (core/tile_workers.hpp, as MPI ranks run them): each worker gets a tile's
+// vertices and segments only, as they travel, and answers in the tile's ids. The same triangles as the single
+// run; every worker takes tiles, never two in one slot at once, and this process never more than its own slots.
+TEST(Tiles, TilesRunByWorkersGiveTheSingleRun) {
   InputSet in = random_points(3000, 41);
-  in.lines.push_back(line({{-10, 500, 0}, {1010, 480, 0}}));  // crosses every rank's tiles
+  in.lines.push_back(line({{-10, 500, 0}, {1010, 480, 0}}));  // crosses many tiles
   in.lines.push_back(line({{500, -10, 0}, {520, 1010, 0}}));
   const PreparedInput p = prepare(in);
   const CdtResult single = triangulate_cgal(p);
-  for (bool from_any_thread : {true, false})
-    for (int ranks : {2, 3}) {
-      Mailbox mail;
-      for (int rank = ranks - 1; rank >= 0; --rank) {
-        const TileSharing sharing = mail.sharing(rank, ranks, from_any_thread);
-        TileOptions opt;
-        opt.max_tile_points = 100;
-        opt.sharing = &sharing;
-        TileStats ts;
-        const CdtResult r = triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
-        if (rank != 0) {
-          EXPECT_TRUE(r.mesh.triangles.empty()) << rank << " of " << ranks;
-          continue;
-        }
-        EXPECT_EQ(mail.done(), size_t(ranks - 1));
-        EXPECT_GE(mail.sent.size(), 16u / size_t(ranks) + 1);
-        EXPECT_GE(ts.tiles, 16u);
-        EXPECT_EQ(r.mesh.vertices, single.mesh.vertices) << ranks << " ranks";
-        EXPECT_TRUE(r.mesh.triangles == single.mesh.triangles)
-            << ranks << " ranks, from any thread " << from_any_thread;
+  const TileFinalizer host = host_finalizer(cgal_tile_triangulator());
+  for (const std::vector<unsigned>& slots : {std::vector<unsigned>{1}, std::vector<unsigned>{2, 3}}) {
+    std::vector<std::vector<std::atomic<bool>>> busy;
+    for (unsigned n : slots) busy.emplace_back(n);
+    std::vector<std::atomic<int>> taken(slots.size());
+    std::atomic<bool> twice{false};
+    TileWorkers workers;
+    workers.slots = slots;
+    workers.run = [&](unsigned w, unsigned slot, const TileWork& sent) {
+      if (busy[w][slot].exchange(true)) twice = true;
+      TileWork got = sent;  // what arrives: nothing of the whole input
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));  // the transfers: other tiles begin meanwhile
+      TileFinal f = host(got.job());
+      ++taken[w];
+      busy[w][slot] = false;
+      return f;
+    };
+    std::atomic<int> here{0}, most_here{0};
+    const TileFinalizer local = [&](const TileJob& job) {
+      const int now = ++here;
+      for (int m = most_here; now > m && !most_here.compare_exchange_weak(m, now);) {
       }
-    }
+      TileFinal f = host(job);
+      --here;
+      return f;
+    };
+    TileOptions opt;
+    opt.max_tile_points = 100;
+    opt.shape = TileShape::squares;
+    opt.finalize = with_workers(local, 2, workers);
+    opt.waiting_threads = workers.total_slots();
+    TileStats ts;
+    const CdtResult r = triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator(), &ts);
+    EXPECT_GE(ts.tiles, 16u);
+    EXPECT_EQ(r.mesh.vertices, single.mesh.vertices);
+    EXPECT_TRUE(r.mesh.triangles == single.mesh.triangles) << slots.size() << " workers";
+    for (size_t w = 0; w < slots.size(); ++w) EXPECT_GT(taken[w].load(), 0) << "worker " << w;
+    EXPECT_FALSE(twice.load());
+    EXPECT_LE(most_here.load(), 2);
+  }
 }
 
-// A rank whose plan differs (another tile size: hosts with other core counts and the auto size) is refused at
-// rank 0, never merged.
-TEST(Tiles, RanksWithAnotherPlanAreRefused) {
+// A worker's tile that finds segments to resolve fails the tiling here as a tile of this process would, so the
+// caller resolves and tiles again.
+TEST(Tiles, AWorkersUnresolvedTileFailsTheTiling) {
   const PreparedInput p = prepare(random_points(2000, 43));
-  Mailbox mail;
-  for (int rank : {1, 0}) {
-    const TileSharing sharing = mail.sharing(rank, 2, true);
-    TileOptions opt;
-    opt.max_tile_points = rank == 1 ? 300 : 100;
-    opt.sharing = &sharing;
-    if (rank == 1) {
-      triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator());
-      continue;
-    }
-    try {
-      triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator());
-      ADD_FAILURE() << "another plan was merged";
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find("rank 1 planned other tiles than rank 0"), std::string::npos) << e.what();
-    }
-  }
+  TileWorkers workers;
+  workers.slots = {2};
+  workers.run = [](unsigned, unsigned, const TileWork& work) -> TileFinal {
+    throw UnresolvedTile(work.what + ": two segments cross");
+  };
+  TileOptions opt;
+  opt.max_tile_points = 100;
+  opt.finalize = with_workers(host_finalizer(cgal_tile_triangulator()), 1, workers);
+  opt.waiting_threads = 2;
+  EXPECT_THROW(triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator()), UnresolvedTile);
 }
 
 // The final-triangle test never says inside when the exact answer is no: random, flat and huge triangles at
