@@ -110,9 +110,18 @@ GpuStart::~GpuStart() {
 }
 
 bool GpuStart::begin_ahead(std::function<std::shared_ptr<void>(gpu::GpuCdt&)> work) {
-  settle();
-  if (!ready_ || ahead_.valid()) return false;
-  ahead_ = std::async(std::launch::async, [work = std::move(work), &cdt = *ready_->cdt] { return work(cdt); });
+  if (ahead_.valid()) return false;
+  {
+    std::lock_guard<std::mutex> lock(settle_mutex_);
+    if (failed_) return false;
+  }
+  // The start waited for on the work's thread: prepare does not wait for it (under MPI two processes making
+  // their devices at once took 0.4-0.55 s each, and prepare waited ~0.6 s for it).
+  ahead_ = std::async(std::launch::async, [this, work = std::move(work)]() -> std::shared_ptr<void> {
+    settle();
+    if (!ready_) return nullptr;  // the start failed: cdt() says why
+    return work(*ready_->cdt);
+  });
   return true;
 }
 
@@ -132,6 +141,7 @@ void GpuStart::drop_ahead() {
 
 // The start's outcome, once: the device ready, or its failure kept for cdt() to rethrow.
 void GpuStart::settle() {
+  std::lock_guard<std::mutex> lock(settle_mutex_);
   if (ready_ || failed_ || !pending_.valid()) return;
   try {
     ready_ = pending_.get();

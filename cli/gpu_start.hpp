@@ -58,8 +58,8 @@ class GpuStart {
   // the writing began. One at a time: a second waits for the first.
   void close_later(std::function<void()> close);
   // Work on the started device begun while the input is prepared (a tiled run's devices and their staging:
-  // cli/stages.cpp, open_tiles_early): waits for the start here, then runs `work` on a thread of its own; false
-  // (nothing run) if the start failed or work was begun already. take_ahead waits for its result (null if none,
+  // cli/stages.cpp, open_tiles_early): on a thread of its own, once the start is done; false (nothing run) if the
+  // start failed already or work was begun already (a start that fails later runs nothing). take_ahead waits for its result (null if none,
   // or if it failed: logged); a result not taken is destroyed before the device closes.
   bool begin_ahead(std::function<std::shared_ptr<void>(gpu::GpuCdt&)> work);
   std::shared_ptr<void> take_ahead();
@@ -71,8 +71,9 @@ class GpuStart {
     gpu::Context ctx;
     std::unique_ptr<gpu::GpuCdt> cdt;
   };
-  void settle();
+  void settle();  // thread-safe: the work begun ahead waits for the start on its own thread
   void drop_ahead();
+  std::mutex settle_mutex_;
   std::future<std::unique_ptr<Ready>> pending_;
   std::unique_ptr<Ready> ready_;
   std::future<std::shared_ptr<void>> ahead_;
