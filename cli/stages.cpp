@@ -575,6 +575,24 @@ void choose_backend(Job& job, GpuStarts& gpus) {
   }
 }
 
+namespace {
+// A tiled run's devices (tile_devices) and their staging for tiles of n points, on a started device: rank 0's
+// before prepare (open_tiles_early), an MPI worker's before it serves (serve_tiles).
+std::shared_ptr<TilesAhead> open_tile_devices(const Job& job, gpu::GpuCdt& cdt, uint64_t n, const char* when) {
+  const int64_t m = job.options.max_tile_points;
+  configure_cdt(job, cdt);
+  auto ahead = std::make_shared<TilesAhead>();
+  ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(job.options.devices, cdt.context(), cdt));
+  uint64_t tile = gpu_tile_points(cdt.context(), n, m);
+  if (m < 0) tile = std::min(tile, ahead->devices->max_tile_points());
+  ahead->tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts()));
+  if (tiled_on_any_device(n, m)) ahead->tiles->reserve(tile_staging_points(n, tile));
+  spdlog::debug("gpu start: {} tile device(s) opened {}, their staging begun for tiles of {} points",
+                ahead->devices->cdts().size(), when, tile);
+  return ahead;
+}
+}  // namespace
+
 // A GPU run whose input is more than a device takes (or than --max-tile-points) opens its tile devices and
 // reserves their staging while prepare runs, each device warming up with a tile of the expected size (on
 // hardware GPUs): at 1B points the first tile waited ~2 s for its staging, and each device's first tile made
@@ -583,57 +601,33 @@ void choose_backend(Job& job, GpuStarts& gpus) {
 void open_tiles_early(Job& job) {
   if (!job.want_gpu || !job.start) return;
   const uint64_t n = point_count(job.in);
-  const int64_t m = job.options.max_tile_points;
-  if (!tiled_on_any_device(n, m)) return;
-  job.tiles_ahead = job.start->begin_ahead([&job, devices = job.options.devices, m, n](gpu::GpuCdt& cdt) {
-    configure_cdt(job, cdt);
-    auto ahead = std::make_shared<TilesAhead>();
-    ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(devices, cdt.context(), cdt));
-    uint64_t tile = gpu_tile_points(cdt.context(), n, m);
-    if (m < 0) tile = std::min(tile, ahead->devices->max_tile_points());
-    ahead->tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts()));
-    ahead->tiles->reserve(tile_staging_points(n, tile));
-    spdlog::debug("gpu start: {} tile device(s) opened before prepare, their staging begun for tiles of {} points",
-                  ahead->devices->cdts().size(), tile);
-    return std::shared_ptr<void>(ahead);
+  if (!tiled_on_any_device(n, job.options.max_tile_points)) return;
+  job.tiles_ahead = job.start->begin_ahead([&job, n](gpu::GpuCdt& cdt) {
+    return std::shared_ptr<void>(open_tile_devices(job, cdt, n, "before prepare"));
   });
 }
 
 // An MPI rank other than 0: its share of the inputs read and sent to rank 0 (if it reads one), then the tiles rank
-// 0 hands it, on
-// its GPU (started as rank 0's is, from the files' estimate) or its cores, until rank 0 has no more. Its devices
-// and their staging are made before it says what it takes, as open_tiles_early makes rank 0's.
+// 0 hands it, on its GPU (started as rank 0's is, from the files' estimate) or its cores, until rank 0 has no more.
+// Its devices and their staging are made before it says what it takes, as open_tiles_early makes rank 0's.
 void serve_tiles(Job& job) {
   const TriangulateOptions& options = job.options;
   if (options.input.read.share)  // the first rank of its host (cli/mpi.hpp)
     timed(job, "read (this rank's share, sent to rank 0)",
           [&] { job.parts = read_inputs(input_specs(job), options.input.read, job.in); });
-  std::shared_ptr<gpu::TileDevices> devices;
-  std::shared_ptr<gpu::GpuTiles> tiles;
-  if (job.start) {
-    try {
-      gpu::GpuCdt& cdt = job.start->cdt();
-      configure_cdt(job, cdt);
-      devices = std::make_shared<gpu::TileDevices>(tile_devices(options.devices, cdt.context(), cdt));
-      tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices->cdts()));
-      const uint64_t n = estimated_points(job);
-      uint64_t tile = gpu_tile_points(cdt.context(), n, options.max_tile_points);
-      if (options.max_tile_points < 0) tile = std::min(tile, devices->max_tile_points());
-      if (tiled_on_any_device(n, options.max_tile_points)) tiles->reserve(tile_staging_points(n, tile));
+  std::shared_ptr<TilesAhead> gpu;
+  if (job.start) try {
+      gpu = open_tile_devices(job, job.start->cdt(), estimated_points(job), "before taking tiles");
     } catch (const gpu::DeviceError& e) {
       spdlog::warn("this rank takes no GPU tiles: {}", e.what());
-      tiles.reset();
-      devices.reset();
     }
-  }
-  const unsigned gpu_slots = tiles ? unsigned(2 * devices->cdts().size()) : 0;
+  const unsigned gpu_slots = gpu ? unsigned(2 * gpu->devices->cdts().size()) : 0;
   const TileFinalizer on_host = host_finalizer(cgal_tile_triangulator());
   timed(job, "tiles for rank 0", [&] {
     options.ranks->serve(gpu_slots, std::max(1u, std::thread::hardware_concurrency()),
-                         [&](bool gpu, const TileJob& tile) { return gpu ? tiles->finalize(tile) : on_host(tile); });
+                         [&](bool on_gpu, const TileJob& tile) { return on_gpu ? gpu->tiles->finalize(tile) : on_host(tile); });
   });
-  tiles.reset();  // the staging, on the devices' contexts, first
-  devices.reset();
+  if (gpu) gpu->tiles.reset();  // the staging, on the devices' contexts, first
 }
 
 // The merge stays on the CPU even when the device is ready: on all 16 cores of the H100 machine it took 31-44 ms
