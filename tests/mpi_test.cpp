@@ -1,8 +1,8 @@
 // cdtgpu triangulate under mpirun (cli/mpi.hpp, issue 29): 2 and 3 ranks on this machine, the CPU backend in tiny
-// tiles, give the single process's bytes, with constraints through every rank's tiles, regions and --max-edge,
-// and with the inputs read in shares (LAS, shapefile, CSV: io/read_share.hpp); a bad line in a later rank's
-// share is named as the single process names it; a rank killed before it hands over its tiles ends the run with
-// a non-zero exit and the old output intact.
+// tiles, give the single process's bytes, with tiles run at the other ranks, constraints through many tiles,
+// regions and --max-edge, and with the inputs read in shares (LAS, shapefile, CSV: io/read_share.hpp); a bad line
+// in a later rank's share is named as the single process names it; a worker's device error sends the run to the
+// CPU; a rank killed before it hands back a tile ends the run with a non-zero exit and the old output intact.
 // Skips when the build has no MPI.
 #include <gtest/gtest.h>
 #include <shapefil.h>
@@ -99,6 +99,26 @@ TEST_F(Mpi, GpuRanksGiveTheSingleProcessBytes) {
     EXPECT_EQ(r.err.find("constraints to split") != std::string::npos, crossings) << r.err;
     EXPECT_EQ(r.err.find("resolve: setup") != std::string::npos, crossings) << "a resolve ran: " << r.err;
   }
+}
+
+// A worker's device that cannot take its tile fails at rank 0 as rank 0's own would: with auto, every tile then
+// runs on the CPU, the workers' too (CGAL there), and the bytes are the CPU's. Rank 1 alone has its device capped.
+TEST_F(Mpi, AWorkersDeviceErrorSendsEveryTileToTheCpu) {
+#ifdef CDTGPU_TEST_MPI
+  const std::string in = path("dem.csv") + " " + path("lines.wkt");
+  ASSERT_EQ(run("triangulate " + in + " --backend cgal -o " + path("one.ply") + " -q").code, 0);
+  const std::string args = " " + std::string(CDTGPU_BINARY) + " triangulate " + in +
+                           " --max-tile-points 60 -v -o " + path("auto.ply") + " --stats " + path("auto.json");
+  const Result r = run_shell("timeout -k 10 300 " + std::string(MPIEXEC) +
+                             " --oversubscribe -x CDTGPU_AUTO_MIN_POINTS=1 -n 1" + args +
+                             " : -x CDTGPU_AUTO_MIN_POINTS=1 -x CDTGPU_DEVICE_MEMORY_LIMIT=64K -n 1" + args);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(slurp(path("auto.ply")) == slurp(path("one.ply")));
+  const std::string stats = slurp(path("auto.json"));
+  EXPECT_NE(stats.find("\"backend\": \"cgal\""), std::string::npos) << stats;
+  EXPECT_NE(stats.find("CDTGPU_DEVICE_MEMORY_LIMIT"), std::string::npos) << stats;  // the worker's error, named
+  EXPECT_EQ(stats.find("\"tiles_at_other_ranks\": 0"), std::string::npos) << stats;
+#endif
 }
 
 TEST_F(Mpi, RanksReadSharesOfLasShapefileAndText) {
