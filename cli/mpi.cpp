@@ -56,16 +56,25 @@ void send_bytes(const void* p, uint64_t n, int to, int tag = kTilesTag) {
   MPI_Send(&n, 1, MPI_UINT64_T, to, tag, MPI_COMM_WORLD);
   send_pieces(p, n, to, tag);
 }
+// A list of n elements, as one piece after another.
 template <typename Vec>
-void recv_into(Vec& v, int from, int tag = kTilesTag) {
-  uint64_t n = 0;
-  MPI_Recv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+void send_list(const Vec& v, int to, int tag) {
+  send_pieces(v.data(), v.size() * sizeof(v[0]), to, tag);
+}
+template <typename Vec>
+void recv_list(Vec& v, uint64_t n, int from, int tag) {
   // Touched first on all cores: MPI's receive faulting fresh pages in ran at ~1.5 GB/s, touched ones ~4.
   if constexpr (std::is_same_v<Vec, std::string>)
     v.resize(n);
   else
-    resize_touched(v, n / sizeof(v[0]));
-  recv_pieces(v.data(), n, from, tag);
+    resize_touched(v, n);
+  recv_pieces(v.data(), n * sizeof(v[0]), from, tag);
+}
+template <typename Vec>
+void recv_into(Vec& v, int from, int tag = kTilesTag) {
+  uint64_t n = 0;
+  MPI_Recv(&n, 1, MPI_UINT64_T, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  recv_list(v, n / sizeof(v[0]), from, tag);
 }
 
 // Tiles handed out by rank 0 (core/tile_workers.hpp). Each worker slot has a tag of its own for its tiles and
@@ -95,19 +104,6 @@ MPI_Status await_message(int from, int tag) {
     if (there) return status;
     std::this_thread::sleep_for(std::chrono::microseconds(200));
   }
-}
-
-template <typename Vec>
-void send_list(const Vec& v, int to, int tag) {
-  send_pieces(v.data(), v.size() * sizeof(v[0]), to, tag);
-}
-template <typename Vec>
-void recv_list(Vec& v, uint64_t n, int from, int tag) {
-  if constexpr (std::is_same_v<Vec, std::string>)
-    v.resize(n);
-  else
-    resize_touched(v, n);  // touched on all cores first, as recv_into's
-  recv_pieces(v.data(), n * sizeof(v[0]), from, tag);
 }
 
 // Rank 0: a tile at `rank`, in its `slot`; the worker's failure thrown here as the worker caught it.
