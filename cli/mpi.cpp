@@ -173,10 +173,12 @@ void serve(int rank, bool threads, unsigned gpu_slots, unsigned host_slots,
   MPI_Send(hello, 2, MPI_UINT64_T, 0, kHelloTag, MPI_COMM_WORLD);
   std::vector<std::future<void>> running;
   for (;;) {
-    MPI_Status status;
-    do status = await_message(0, MPI_ANY_TAG);
-    while (status.MPI_TAG < kJobTag || status.MPI_TAG >= kAnswerTag);
-    const int tag = status.MPI_TAG;
+    // Rank 0 sends nothing else before its end (--tiles-out's pieces come after it, and MPI keeps their order).
+    const int tag = await_message(0, MPI_ANY_TAG).MPI_TAG;
+    if (tag < kJobTag || tag >= kAnswerTag) {
+      spdlog::error("a message with tag {} from rank 0 where a tile was expected", tag);
+      MPI_Abort(MPI_COMM_WORLD, 3);
+    }
     JobHead h;
     MPI_Recv(&h, int(sizeof h), MPI_BYTE, 0, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
     if (h.end) break;
