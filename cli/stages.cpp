@@ -521,8 +521,11 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
   const TriangulateOptions& options = job.options;
   const uint64_t estimate = estimated_points(job);
   spdlog::debug("about {} input points in the files", estimate);
+  // An MPI worker runs tiles only, each in staging of its own: the start's staging (up to 1 GiB, pinned) would
+  // serve a whole run it never makes.
+  const bool worker = options.ranks && options.ranks->rank != 0;
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= gpus.auto_min_points))
-    job.start = &gpus.start(options.device, hardware_only(options), estimate);
+    job.start = &gpus.start(options.device, hardware_only(options), worker ? 0 : estimate);
 }
 
 
