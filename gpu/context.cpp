@@ -10,6 +10,7 @@
 #include <cstring>
 #include <future>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string_view>
 #include <vector>
@@ -243,6 +244,12 @@ bool validation_layer_available() {
 }
 
 std::vector<DeviceInfo> list_devices() {
+  // Once a process: each call made and destroyed an instance of its own. Under MPI a rank listed the devices to
+  // pick its GPU, then again to open its tile devices, 0.1-0.5 s each while the other ranks started too.
+  static std::mutex mutex;
+  static std::optional<std::vector<DeviceInfo>> listed;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (listed) return *listed;
   VkInstance instance = make_instance(false, nullptr);
   std::vector<DeviceInfo> out;
   try {
@@ -253,6 +260,7 @@ std::vector<DeviceInfo> list_devices() {
     throw;
   }
   vkDestroyInstance(instance, nullptr);
+  listed = out;
   return out;
 }
 

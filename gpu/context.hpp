@@ -57,7 +57,8 @@ struct ContextOptions {
   double* staging_ms = nullptr;
 };
 
-// Lists every physical device the loader sees (creates and destroys its own instance).
+// Lists every physical device the loader sees (the first call creates and destroys an instance of its own; later
+// calls give the same list).
 std::vector<DeviceInfo> list_devices();
 // Index into `devices` of the device the options would pick; throws DeviceError when none fits.
 size_t pick_device(const std::vector<DeviceInfo>& devices, const std::string& override_name);
