@@ -8,7 +8,6 @@
 #include <optional>
 
 #include "core/touched.hpp"
-#include "core/uninit.hpp"
 
 namespace cdtgpu {
 

@@ -24,7 +24,6 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
-#include <optional>
 #include <stdexcept>
 #include <span>
 #include <thread>

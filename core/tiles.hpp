@@ -18,7 +18,6 @@
 //            Tiled again while that shrinks it, else one call of the triangulator.
 #pragma once
 #include <array>
-#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <limits>
