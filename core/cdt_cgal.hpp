@@ -10,9 +10,10 @@ struct CdtResult {
   uint64_t steiner_points = 0;  // vertices created where constraints cross
 };
 
-// CDT of prepared.vertices with every constraint segment. Constraints through other vertices are split there;
-// crossing constraints get a Steiner vertex at the crossing (exact intersection, rounded to double), its z
-// interpolated along the lower-indexed constraint. Fewer than 3 vertices, or all collinear: no triangles.
+// CDT of prepared.vertices with every constraint segment, by the rules of docs/rules.md: constraints through
+// other vertices are split there; crossing constraints get a Steiner vertex at the crossing (exact intersection,
+// rounded to double), its z interpolated along the lower-indexed constraint (resolve_if_needed, then
+// cdt_of_graph). Fewer than 3 vertices, or all collinear: no triangles.
 CdtResult triangulate_cgal(const PreparedInput& prepared);
 
 // The CDT of a planar straight-line graph (segments meet only at shared endpoints, none holds a vertex inside:

@@ -15,11 +15,12 @@
 #include <CGAL/property_map.h>
 
 #include <algorithm>
-#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <numeric>
+
+#include "core/resolve.hpp"
 
 namespace cdtgpu {
 
@@ -72,6 +73,36 @@ bool collinear(const std::vector<P2>& p) {
   for (size_t i = j + 1; i < p.size(); ++i)
     if (CGAL::orientation(p[0], p[j], p[i]) != CGAL::COLLINEAR) return false;
   return true;
+}
+
+// resolve_if_needed of `prepared` in the order the resolve relies on (verify's callers may hand any order):
+// vertices sorted by (x, y) and unique, constraints (a < b) sorted.
+ResolvedInput rules_graph(const PreparedInput& prepared) {
+  const Points& v = prepared.vertices;
+  auto less = [](const Point3& a, const Point3& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; };
+  bool sorted = std::adjacent_find(v.begin(), v.end(), [&](const Point3& a, const Point3& b) {
+                  return !less(a, b);
+                }) == v.end();
+  for (const Edge& e : prepared.constraints) sorted = sorted && e[0] < e[1];
+  sorted = sorted && std::is_sorted(prepared.constraints.begin(), prepared.constraints.end());
+  if (sorted) return resolve_if_needed(prepared);
+  PreparedInput p;
+  std::vector<uint32_t> order(v.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return less(v[a], v[b]); });
+  std::vector<uint32_t> id(v.size());
+  for (uint32_t i : order) {
+    if (p.vertices.empty() || less(p.vertices.back(), v[i])) p.vertices.push_back(v[i]);
+    id[i] = uint32_t(p.vertices.size() - 1);
+  }
+  for (const Edge& e : prepared.constraints) {
+    const uint32_t a = id[e[0]], b = id[e[1]];
+    if (a != b) p.constraints.push_back({std::min(a, b), std::max(a, b)});
+  }
+  std::sort(p.constraints.begin(), p.constraints.end());
+  p.constraints.erase(std::unique(p.constraints.begin(), p.constraints.end()), p.constraints.end());
+  ResolvedInput r = resolve_constraints(p);
+  return r;
 }
 
 }  // namespace
@@ -255,65 +286,57 @@ VerifyReport verify_mesh(const Mesh& mesh, const PreparedInput& prepared, size_t
     }
   }
 
-  // Constraints: each a path of mesh edges from a to b through vertices on the segment (exactly, or Steiner
-  // vertices within rounding of it). The path's edges are the constrained edges.
+  // Constraints: the rules' planar graph (docs/rules.md, core/resolve): each constraint split at the vertices
+  // exactly on it and at its crossings, whose Steiner vertices are the exact crossings rounded to doubles. Each
+  // piece must be a mesh edge, each Steiner vertex in the mesh with the rules' z, and no other vertex added.
+  // (Following each constraint through the mesh's vertices near it instead was ambiguous where rounded crossings
+  // cascade: two Steiner vertices 7e-12 apart beside one constraint at UTM coordinates.)
   std::vector<uint8_t> constrained(he.size(), 0);
-  std::vector<uint32_t> crossings(V, 0);  // constraint paths through each non-input vertex
+  bool indices_ok = true;
   for (size_t c = 0; c < prepared.constraints.size(); ++c) {
     const uint32_t a = prepared.constraints[c][0], b = prepared.constraints[c][1];
-    if (a >= mesh_of.size() || b >= mesh_of.size()) {
+    if (a >= prepared.vertices.size() || b >= prepared.vertices.size() || a == b) {
       fail.add("constraint " + std::to_string(c) + " (" + std::to_string(a) + ", " + std::to_string(b) +
-               ") has a vertex index out of range");
+               ") has a vertex index out of range or twice");
+      indices_ok = false;
+    }
+  }
+  const ResolvedInput graph = indices_ok ? rules_graph(prepared) : ResolvedInput{};
+  const Points& gv = graph.unchanged ? prepared.vertices : graph.vertices;
+  const std::vector<Edge>& pieces = graph.unchanged ? prepared.constraints : graph.constraints;
+  std::vector<uint32_t> mesh_of_graph(gv.size(), kNone);
+  std::vector<uint8_t> in_graph(V, 0);
+  for (uint32_t i = 0; i < gv.size(); ++i) {
+    const Point3& p = gv[i];
+    auto it = std::lower_bound(by_xy.begin(), by_xy.end(), p, [&](uint32_t a, const Point3& q) {
+      return mv[a].x != q.x ? mv[a].x < q.x : mv[a].y < q.y;
+    });
+    if (it == by_xy.end() || mv[*it].x != p.x || mv[*it].y != p.y) {
+      fail.add("the Steiner vertex (" + num(p.x) + ", " + num(p.y) + ") where constraints cross is not in the mesh");
       continue;
     }
-    const uint32_t A = mesh_of[a], B = mesh_of[b];
-    if (A == kNone || B == kNone) continue;  // already reported
-    const P2 &pa = P[A], &pb = P[B];
-    const double ux = pb.x() - pa.x(), uy = pb.y() - pa.y();
-    const double len2 = ux * ux + uy * uy, len = std::sqrt(len2);
-    const double mag = std::max({std::abs(pa.x()), std::abs(pa.y()), std::abs(pb.x()), std::abs(pb.y())});
-    const double tol = 1e-9 * len + 8 * DBL_EPSILON * mag;
-    auto on_segment = [&](uint32_t w) {
-      if (is_input[w])
-        return CGAL::orientation(pa, pb, P[w]) == CGAL::COLLINEAR &&
-               CGAL::collinear_are_strictly_ordered_along_line(pa, P[w], pb);
-      const double wx = P[w].x() - pa.x(), wy = P[w].y() - pa.y();
-      const double along = wx * ux + wy * uy;
-      return std::abs(wx * uy - wy * ux) <= tol * len && along > 0 && along < len2;
-    };
-    uint32_t cur = A;
-    for (uint32_t steps = 0; cur != B; ++steps) {
-      uint32_t best = kNone, best_he = kNone;
-      double best_along = HUGE_VAL;
-      auto consider = [&](uint32_t w, uint32_t h) {
-        if (w == B) {
-          best = w, best_he = h, best_along = -HUGE_VAL;
-          return;
-        }
-        const double along = (P[w].x() - P[cur].x()) * ux + (P[w].y() - P[cur].y()) * uy;
-        if (along > 0 && along < best_along && on_segment(w)) best = w, best_he = h, best_along = along;
-      };
-      for (uint32_t h = first[cur]; h < first[cur + 1]; ++h) consider(he[h].to, h);
-      if (bprev[cur] != kNone) consider(bprev[cur], find_half_edge(bprev[cur], cur));
-      if (best == kNone || steps > V) {
-        fail.add("constraint " + std::to_string(c) + " from " + vtx(mv, A) + " to " + vtx(mv, B) +
-                 " is not covered by mesh edges: no edge along it leaves " + vtx(mv, cur));
-        break;
-      }
-      if (best_he != kNone) {
-        constrained[best_he] = 1;
-        if (twin[best_he] != kNone) constrained[twin[best_he]] = 1;
-      }
-      if (best != B && !is_input[best]) ++crossings[best];
-      cur = best;
-    }
+    mesh_of_graph[i] = *it;
+    in_graph[*it] = 1;
+    if (!is_input[*it] && mv[*it].z != p.z)
+      fail.add("Steiner " + vtx(mv, *it) + " has z " + num(mv[*it].z) + " but the rules give " + num(p.z));
   }
   for (uint32_t v = 0; v < V; ++v) {
     if (is_input[v]) continue;
     ++report.steiner_vertices;
-    if (crossings[v] < 2)
-      fail.add(vtx(mv, v) + " is not an input vertex and not a crossing of two constraints (on " +
-               std::to_string(crossings[v]) + " constraint paths)");
+    if (!in_graph[v]) fail.add(vtx(mv, v) + " is not an input vertex and not a crossing of constraints");
+  }
+  for (const Edge& e : pieces) {
+    const uint32_t a = mesh_of_graph[e[0]], b = mesh_of_graph[e[1]];
+    if (a == kNone || b == kNone) continue;  // already reported
+    uint32_t h = find_half_edge(a, b);
+    if (h == kNone) h = find_half_edge(b, a);
+    if (h == kNone) {
+      fail.add("the constraint from " + vtx(mv, a) + " to " + vtx(mv, b) +
+               " (a constraint split at its vertices and crossings) is not covered by mesh edges");
+      continue;
+    }
+    constrained[h] = 1;
+    if (twin[h] != kNone) constrained[twin[h]] = 1;
   }
 
   // Locally Delaunay: every interior edge not on a constraint path, under CGAL's perturbed incircle test.

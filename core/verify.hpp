@@ -16,8 +16,8 @@ struct VerifyReport {
 };
 
 // Valid triangulation of the convex hull (edge-manifold, all triangles CCW, boundary = convex hull,
-// V - E + F = 1), every input vertex present, every constraint a union of mesh edges (through Steiner
-// vertices where constraints cross), every non-constrained edge locally Delaunay under CGAL's perturbed
+// V - E + F = 1), every input vertex present, every constraint a union of mesh edges as the rules split it
+// (docs/rules.md: the pieces and Steiner vertices of resolve_constraints, each piece an edge, no other vertex), every non-constrained edge locally Delaunay under CGAL's perturbed
 // incircle. Stops collecting after max_failures. `constrained`, if given, receives the mesh edges that lie on
 // constraints, each (smaller vertex, larger vertex), sorted.
 VerifyReport verify_mesh(const Mesh& mesh, const PreparedInput& prepared, size_t max_failures = 20,

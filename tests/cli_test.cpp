@@ -584,6 +584,37 @@ TEST_F(Cli, GpuTilesOfAnInputToSplitGiveTheSingleRunsBytes) {
   EXPECT_GE(stats["counts"]["tiles"].get<int>(), 2);
 }
 
+// Contours on a lattice that cross beside T-junctions: (7,6)-(9,7) crosses (10,5)-(7,7), and (8,6)-(11,9) passes
+// exactly through (9,7). The default backend for so small an input is the CPU's single run, which was CGAL's own
+// crossing handling and segfaulted here (CGAL 5.5.1); now every backend and tiling writes one mesh.
+TEST_F(Cli, LatticeCrossingsBesideTJunctionsGiveOneMeshOnEveryBackend) {
+  std::string dem;
+  for (int i = 0; i <= 14; ++i)
+    for (int j = 0; j <= 14; ++j)
+      dem += std::to_string(i) + " " + std::to_string(j) + " " + std::to_string((i * j) % 7) + "\n";
+  write("dem.xyz", dem);
+  write("lines.wkt",
+        "LINESTRING Z (11 9 5, 9 7 5, 7 6 5, 9 7 5, 10 10 5, 11 9 5, 9 11 5, 6 9 5)\n"
+        "LINESTRING Z (10 5 5, 7 7 5, 5 7 5, 3 10 5)\n"
+        "LINESTRING Z (7 3 5, 7 1 5, 8 3 5, 5 3 5, 8 6 5, 11 9 5)\n");
+  const std::string in = path("dem.xyz") + " " + path("lines.wkt") + " --crs none -q";
+  Result r = run("triangulate " + in + " -o " + path("auto.ply") + " --stats " + path("auto.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto stats = nlohmann::json::parse(slurp(path("auto.json")));
+  EXPECT_EQ(stats["backend"], "cgal");
+  EXPECT_GT(stats["counts"]["steiner_points"].get<int>(), 0);
+  r = run("verify " + path("auto.ply") + " " + path("dem.xyz") + " " + path("lines.wkt") + " --crs none");
+  EXPECT_EQ(r.code, 0) << r.err;
+  const bool gpu = !first_usable_device().empty();
+  for (const std::string how :
+       {"--backend cgal --max-tile-points 16", "--backend gpu", "--backend gpu --max-tile-points 40"}) {
+    if (!gpu && how.find("gpu") != std::string::npos) continue;
+    r = run("triangulate " + in + " " + how + " -o " + path("other.ply"));
+    ASSERT_EQ(r.code, 0) << how << ": " << r.err;
+    EXPECT_TRUE(slurp(path("other.ply")) == slurp(path("auto.ply"))) << how;
+  }
+}
+
 // Segments through vertices and none crossing (a contour through DEM points, footprints sharing a wall): GPU tiles
 // split them themselves, no resolve runs, and the bytes and the count of splits are the untiled run's.
 TEST_F(Cli, GpuTilesSplitSegmentsThroughVerticesThemselves) {

@@ -17,6 +17,7 @@
 #include "core/resolve.hpp"
 #include "core/tiles.hpp"
 #include "core/tiles_ahead.hpp"
+#include "core/verify.hpp"
 #include "core/workloads.hpp"
 #include "gpu/check.hpp"
 #include "gpu/cdt_pipeline.hpp"
@@ -159,6 +160,54 @@ TEST(GpuTiles, HardLayoutsWithTheDevicesFinalTest) {
       }
     }
   }
+}
+
+// Degenerate lattice inputs (tile_layouts::lattice_soup) on every path of cdtgpu triangulate: the CPU's single
+// run, its tiles (squares and slabs), the GPU's single run and its tiles as the CLI runs them (unresolved first,
+// then resolved if a tile finds a crossing). One mesh: the CDT of the rules' graph. The CPU's single run was
+// CGAL's own crossing handling until it crashed on the first of these.
+TEST(GpuTiles, LatticeSoupsGiveOneMeshOnEveryPath) {
+  const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
+  const gpu::GpuCdt cdt(ctx);
+  const gpu::GpuTiles tiles = gpu::gpu_tiles({&cdt});
+  int crossing = 0;
+  for (uint64_t seed = 1; seed <= 16; ++seed) {
+    SCOPED_TRACE("lattice soup " + std::to_string(seed));
+    const PreparedInput p = prepare(tile_layouts::lattice_soup(seed));
+    const CdtResult single = triangulate_cgal(p);
+    // The CDT of the rules' graph: its pieces are the constrained edges.
+    std::vector<Edge> constrained;
+    const VerifyReport v = verify_mesh(single.mesh, p, 20, &constrained);
+    EXPECT_TRUE(v.ok()) << (v.failures.empty() ? "" : v.failures.front());
+    EXPECT_EQ(constrained, resolve_constraints(p).constraints);
+    crossing += single.steiner_points > 0;
+    auto expect_single = [&](const CdtResult& r, const std::string& what) {
+      EXPECT_EQ(r.steiner_points, single.steiner_points) << what;
+      EXPECT_EQ(r.mesh.vertices, single.mesh.vertices) << what;
+      EXPECT_TRUE(r.mesh.triangles == single.mesh.triangles) << what;
+    };
+    for (const TileShape shape : {TileShape::squares, TileShape::slabs}) {
+      TileOptions opt;
+      opt.max_tile_points = 16;
+      opt.shape = shape;
+      expect_single(triangulate_tiled(resolve_constraints(p), opt, cgal_tile_triangulator()),
+                    shape == TileShape::slabs ? "CPU slabs" : "CPU tiles");
+    }
+    expect_single(cdt.triangulate(p), "GPU");
+    for (uint64_t tp : {40, 300}) {
+      TileStats ts;
+      std::optional<Triangles> t = tiled_cdt_unresolved(p, device_tiles(tp, tiles), tiles.triangulate, &ts);
+      CdtResult r;
+      if (t) {
+        r.mesh.vertices = p.vertices;
+        r.mesh.triangles = std::move(*t);
+      } else {
+        r = triangulate_tiled(resolve_constraints(p), device_tiles(tp, tiles), tiles.triangulate);
+      }
+      expect_single(r, "GPU tiles of " + std::to_string(tp) + (t ? "" : ", resolved after they gave up"));
+    }
+  }
+  EXPECT_GE(crossing, 8);
 }
 
 // Tiles of the prepared input that check themselves (core/tiles_ahead, tiled_cdt_unresolved): every hard layout

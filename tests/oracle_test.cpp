@@ -529,7 +529,7 @@ TEST_F(Broken, ExtraVertexIsNotASteinerPoint) {
   mesh.triangles[0] = {t[0], t[1], v};
   mesh.triangles.push_back({t[1], t[2], v});
   mesh.triangles.push_back({t[2], t[0], v});
-  EXPECT_TRUE(fails_with("not a crossing of two constraints"));
+  EXPECT_TRUE(fails_with("not an input vertex and not a crossing of constraints"));
 }
 
 TEST(Verify, NoTrianglesForNonCollinearInputFails) {

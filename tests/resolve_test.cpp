@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cfloat>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -21,7 +22,9 @@
 #include "core/verify.hpp"
 #include "core/workloads.hpp"
 #include "io/readers.hpp"
+#include "tests/cgal_plus.hpp"
 #include "tests/peer_inputs.hpp"
+#include "tests/tile_layouts.hpp"
 
 namespace cdtgpu {
 namespace {
@@ -111,8 +114,8 @@ PreparedInput as_prepared(const ResolvedInput& r) {
 }
 
 // Every original constraint is a chain of resolved constraints from its one end to the other through
-// vertices within rounding of it (1e-9 of its length): what the cascades of rounded Steiner vertices can
-// make, where verify_mesh (which takes only input vertices exactly on the segment) is stricter.
+// vertices within rounding of it (verify_mesh's tolerance: 1e-9 of its length plus 8 ulps of its coordinates'
+// magnitude): what the cascades of rounded Steiner vertices can make.
 std::string chain_failures(const PreparedInput& p, const ResolvedInput& r) {
   std::vector<std::vector<uint32_t>> adj(r.vertices.size());
   for (const Edge& e : r.constraints) adj[e[0]].push_back(e[1]), adj[e[1]].push_back(e[0]);
@@ -128,7 +131,8 @@ std::string chain_failures(const PreparedInput& p, const ResolvedInput& r) {
   for (const Edge& c : p.constraints) {
     ++mark;
     const Point3 &a = p.vertices[c[0]], &b = p.vertices[c[1]];
-    const double len = std::hypot(b.x - a.x, b.y - a.y), tol = 1e-9 * len;
+    const double mag = std::max({std::abs(a.x), std::abs(a.y), std::abs(b.x), std::abs(b.y)});
+    const double len = std::hypot(b.x - a.x, b.y - a.y), tol = 1e-9 * len + 8 * DBL_EPSILON * mag;
     auto near = [&](const Point3& w) {
       const double t = ((w.x - a.x) * (b.x - a.x) + (w.y - a.y) * (b.y - a.y)) / (len * len);
       const double d = std::abs((w.x - a.x) * (b.y - a.y) - (w.y - a.y) * (b.x - a.x)) / len;
@@ -151,13 +155,13 @@ std::string chain_failures(const PreparedInput& p, const ResolvedInput& r) {
 
 struct Outcome {
   ResolvedInput resolved;
-  CdtResult reference;    // triangulate_cgal(prepared), if compared
-  CdtResult of_resolved;  // triangulate_cgal of the resolved vertices and constraints
+  CdtResult reference;    // CGAL's own crossings (tests/cgal_plus.hpp), if compared
+  CdtResult of_resolved;  // cgal_plus of the resolved vertices and constraints (no crossing left for CGAL)
 };
 
 struct Checks {
   bool brute_force = true;  // the O(V E + E^2) cleanliness check
-  bool reference = true;    // compare with triangulate_cgal(prepared): Steiner count and mesh
+  bool reference = true;    // compare with CGAL's own crossings (cgal_plus): Steiner count and mesh
   bool verify = true;       // the CDT of the resolved graph passes verify_mesh with the original constraints
 };
 
@@ -181,14 +185,14 @@ Outcome check_all(const PreparedInput& p, Checks checks = {}) {
   expect_keeps_input_vertices(p, o.resolved);
   const std::string chains = chain_failures(p, o.resolved);
   EXPECT_TRUE(chains.empty()) << chains;
-  o.of_resolved = triangulate_cgal(as_prepared(o.resolved));
+  o.of_resolved = cgal_plus::triangulate(as_prepared(o.resolved));
   EXPECT_EQ(o.of_resolved.steiner_points, 0u) << "the resolved graph still has crossings for CGAL";
   if (checks.verify) {
     const VerifyReport v = verify_mesh(o.of_resolved.mesh, p);
     EXPECT_TRUE(v.ok()) << failures(v);
   }
   if (checks.reference) {
-    o.reference = triangulate_cgal(p);
+    o.reference = cgal_plus::triangulate(p);
     EXPECT_EQ(o.resolved.steiner_points, o.reference.steiner_points);
     EXPECT_EQ(o.of_resolved.mesh.vertices, o.reference.mesh.vertices);
     EXPECT_EQ(o.of_resolved.mesh.triangles, o.reference.mesh.triangles);
@@ -404,11 +408,10 @@ TEST(Resolve, StarThroughAnInexactPoint) {
     in.lines.push_back(line(
         {{cx + r * std::cos(a), cy + r * std::sin(a), 0}, {cx - r * std::cos(a), cy - r * std::sin(a), 0}}));
   }
-  // 21 crossings within a few ulps of each other. The mesh is CGAL's; verify_mesh cannot check it: its walk
-  // along a constraint takes any Steiner vertex within its tolerance of the segment, and here all of them
-  // are, so it strays onto another constraint's path (it reports the same for CGAL's own mesh).
+  // 21 crossings within a few ulps of each other. (verify_mesh once walked each constraint through any Steiner
+  // vertex within its tolerance of the segment, and strayed here onto another constraint's path; it checks
+  // the rules' graph now.)
   Checks checks;
-  checks.verify = false;
   const Outcome o = check_all(prepare(in), checks);
   EXPECT_EQ(o.resolved.steiner_points, 21u);
 }
@@ -416,11 +419,11 @@ TEST(Resolve, StarThroughAnInexactPoint) {
 TEST(Resolve, VertexOnConstraintBeyondARoundedCrossing) {
   // (0,0)-(9,3) passes exactly through the vertices (3,1) and (6,2), and crosses (-1,5)-(4,-5) at
   // (9/7, 3/7), which rounds to a point just off it. The rule splits the constraint at both vertices and at
-  // the Steiner vertex. triangulate_cgal does not here: it inserts (-1,5)-(4,-5) first (its lower end sorts
+  // the Steiner vertex. CGAL's CT_plus_2 does not here: it inserts (-1,5)-(4,-5) first (its lower end sorts
   // first), then walks (0,0)-(9,3) from (0,0), meets the rounded crossing S and goes on along S-(9,3),
   // which misses (3,1) and (6,2) by about 1e-17, so its constrained edge S-(9,3) passes beside them. Had
   // the order been the other way, CGAL would have split at them. Its mesh differs from the CDT of this
-  // graph; both pass verify_mesh (which accepts a path through vertices within rounding of the segment).
+  // graph, which verify_mesh checks.
   InputSet in;
   in.points = {{3, 1, 0}, {6, 2, 0}, {-2, -2, 0}, {10, 6, 0}};
   in.lines.push_back(line({{-1, 5, 0}, {4, -5, 0}}));
@@ -431,7 +434,7 @@ TEST(Resolve, VertexOnConstraintBeyondARoundedCrossing) {
   const Outcome o = check_all(p, checks);
   const ResolvedInput& r = o.resolved;
   EXPECT_EQ(r.steiner_points, 1u);
-  EXPECT_EQ(r.steiner_points, triangulate_cgal(p).steiner_points);
+  EXPECT_EQ(r.steiner_points, cgal_plus::triangulate(p).steiner_points);
   EXPECT_EQ(r.split_at_vertices, 2u);
   const double sx = 9.0 / 7, sy = 3.0 / 7;  // IEEE division: the exact quotients rounded to nearest
   EXPECT_TRUE(has_constraint(r, 0, 0, sx, sy));
@@ -441,10 +444,10 @@ TEST(Resolve, VertexOnConstraintBeyondARoundedCrossing) {
 }
 
 TEST(Resolve, TJunctionBesideAnInexactCrossing) {
-  // The smallest input found on which triangulate_cgal crashes (segfault in find_intersected_faces, CGAL
-  // 5.5.1; reduced from SoupOnAnIntegerLattice). D = (4,5)-(8,1) passes exactly through (7,2), the end of
-  // C = (4,0)-(7,2), and just before it crosses A = (0,3)-(8,2) at (48/7, 15/7). CGAL inserts A, B, C, then
-  // D: it splits D at the rounded crossing S and walks on along S-(8,1), which misses (7,2) by ~1e-16 and
+  // The smallest input found on which CGAL's CT_plus_2 (cgal_plus) crashes (segfault in
+  // find_intersected_faces, CGAL 5.5.1; reduced from SoupOnAnIntegerLattice). D = (4,5)-(8,1) passes
+  // exactly through (7,2), the end of C = (4,0)-(7,2), and just before it crosses A = (0,3)-(8,2) at
+  // (48/7, 15/7). CGAL inserts A, B, C, then D: it splits D at the rounded crossing S and walks on along S-(8,1), which misses (7,2) by ~1e-16 and
   // so crosses C's edge right beside it; CT_plus_2 then intersects the original C and D, gets exactly
   // (7,2), and inserts that point as a new vertex into the crossed edge, which already ends at (7,2).
   InputSet in;
@@ -467,9 +470,8 @@ TEST(Resolve, TJunctionBesideAnInexactCrossing) {
 // (kind 0) a vertex at S / 2^k lies exactly on the piece 0-S, though not on A; or (kind 1) a segment Q
 // starts at a double W strictly between A and the piece 0-S and leaves away from A, so it crosses the
 // piece but not A. The crossing of Q and the piece rounds onto W: A's chain goes 0, W, S, ... through an
-// input vertex that is not exactly on A, which verify_mesh does not accept (CGAL is worse here: its mesh
-// of these inputs has a clockwise triangle). So: brute force, threads, chains (check_all does those), and
-// a valid CDT of the resolved graph.
+// input vertex that is not exactly on A (CGAL's own mesh of these inputs has a clockwise triangle). So: brute
+// force, threads, chains and verify_mesh (check_all does those), and a valid CDT of the resolved graph.
 TEST(Resolve, CascadesAfterRounding) {
   int cascades = 0;
   for (uint64_t seed = 0; seed < 80; ++seed) {
@@ -510,7 +512,6 @@ TEST(Resolve, CascadesAfterRounding) {
     const PreparedInput p = prepare(in);
     Checks checks;
     checks.reference = false;
-    checks.verify = false;
     const Outcome o = check_all(p, checks);
     const VerifyReport v = verify_mesh(o.of_resolved.mesh, as_prepared(o.resolved));
     EXPECT_TRUE(v.ok()) << failures(v);
@@ -585,8 +586,8 @@ TEST(Resolve, SoupOnAnIntegerLattice) {
       l.points.push_back({double(uniform_below(rng, 9)), double(uniform_below(rng, 9)), double(i)});
     if (l.points[0] != l.points[1]) in.lines.push_back(l);
   }
-  // triangulate_cgal crashes on this input (see TJunctionBesideAnInexactCrossing for the 4 segments that
-  // do it). So no reference here; the CDT of the resolved graph must still be the CDT of the original
+  // CGAL's CT_plus_2 (cgal_plus) crashes on this input (see TJunctionBesideAnInexactCrossing for the 4
+  // segments that do it). So no reference here; the CDT of the resolved graph must still be the CDT of the original
   // constraints.
   Checks checks;
   checks.reference = false;
@@ -597,7 +598,7 @@ TEST(Resolve, SoupOnAnIntegerLattice) {
 
 TEST(Resolve, ManySmallRandomInputs) {
   // Three kinds: real coordinates (compared with CGAL), and integer / half-integer lattices full of
-  // collinear overlaps, segments through vertices and several segments through one point (triangulate_cgal
+  // collinear overlaps, segments through vertices and several segments through one point (CGAL's CT_plus_2
   // crashes on some of those, see SoupOnAnIntegerLattice: checked by brute force and verify only).
   for (uint64_t seed = 100; seed < 190; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
@@ -619,6 +620,21 @@ TEST(Resolve, ManySmallRandomInputs) {
     checks.reference = kind == 0;
     check_all(prepare(in), checks);
   }
+}
+
+TEST(Resolve, LatticeSoups) {
+  // tests/tile_layouts.hpp: lattice nodes, duplicates, rows, rings of points; lines along rows, columns and
+  // diagonals, doubling back, footprints sharing walls. CGAL's CT_plus_2 crashes or loops on many of them: checked
+  // by brute force, chains and verify_mesh.
+  int steiner = 0;
+  for (uint64_t seed = 1; seed <= 16; ++seed) {
+    SCOPED_TRACE("lattice soup " + std::to_string(seed));
+    const PreparedInput p = prepare(tile_layouts::lattice_soup(seed));
+    Checks checks;
+    checks.reference = false;
+    steiner += check_all(p, checks).resolved.steiner_points > 0;
+  }
+  EXPECT_GE(steiner, 8);
 }
 
 TEST(Resolve, ConstraintsInAnotherOrderGiveTheSameGraph) {
@@ -716,7 +732,6 @@ TEST(Resolve, RingAcrossContours) {
   for (int k : {1, 2}) in.points.push_back({std::ldexp(s->x, -k), std::ldexp(s->y, -k), 0});
   Checks checks;
   checks.reference = false;  // as in CascadesAfterRounding: CGAL's own mesh of such inputs is not a CDT
-  checks.verify = false;
   const Outcome cascade = check_all(prepare(in), checks);
   EXPECT_GE(cascade.resolved.split_at_vertices, o.resolved.split_at_vertices + 2);
 }

@@ -1,12 +1,15 @@
 // Inputs that are hard for tiles (tests/tiles_test on CGAL tiles, tests/gpu_tiles_test on the device's final
 // test): points and constraints on and across tile borders, co-circular grids, duplicates, clusters, flat rows.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "core/model.hpp"
+#include "core/repair.hpp"
 #include "core/workloads.hpp"
 
 namespace cdtgpu::tile_layouts {
@@ -107,6 +110,73 @@ inline InputSet terrain_with_contours() {
   return terrain_workload(o);
 }
 
+// Lattice soups: points on (and between) the nodes of an m x m lattice with duplicates, collinear rows or
+// co-circular rings, and lines along lattice rows, columns and diagonals, between random nodes (crossings at
+// rounded points beside T-junctions), contour-like paths that double back on themselves and footprint rings
+// sharing walls. CGAL's own crossing handling (tests/cgal_plus.hpp) crashed or looped on 21 of the first 60
+// and split 6 otherwise; every path of cdtgpu must give the one mesh of the rules (docs/rules.md).
+inline InputSet lattice_soup(uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  auto below = [&](uint64_t n) { return int(uniform_below(rng, n)); };
+  auto between = [&](int a, int b) { return a + below(uint64_t(b - a + 1)); };
+  InputSet in;
+  const int m = between(8, 40);
+  const double s = std::vector<double>{1.0, 0.1, 3.0, 1e-3, 0.5}[below(5)];
+  const double ox = below(2) ? 500000.0 : 0.0, oy = below(2) ? 6000000.0 : 0.0;
+  auto at = [&](double i, double j, double z) { return Point3{ox + i * s, oy + j * s, z}; };
+  const int kind = below(4), n = between(50, 1200);
+  for (int k = 0; k < n; ++k) {
+    if (kind == 0 || below(4) == 0) {
+      in.points.push_back(at(between(0, m), between(0, m), below(10)));
+    } else if (kind == 1) {
+      in.points.push_back(at(unit_double(rng) * m, unit_double(rng) * m, below(10)));
+    } else if (kind == 2) {
+      in.points.push_back(at(between(0, 4 * m) / 4.0, between(0, m) + (below(20) == 0 ? 1e-9 : 0.0), below(10)));
+    } else {
+      const double a = below(360) * 3.14159265358979 / 180, r = between(1, 4) * m / 10.0;
+      in.points.push_back(at(m / 2.0 + r * std::cos(a), m / 2.0 + r * std::sin(a), below(10)));
+    }
+  }
+  for (int l = 0, lines = below(41); l < lines; ++l) {
+    Polyline p;
+    switch (below(6)) {
+      case 0: {
+        const int r = between(0, m);
+        p.points = {at(between(0, m), r, 1), at(between(0, m), r, 1)};
+        break;
+      }
+      case 1: {
+        const int c = between(0, m);
+        p.points = {at(c, between(0, m), 2), at(c, between(0, m), 2)};
+        break;
+      }
+      case 2: {
+        const int a = between(0, m / 2), b = between(0, m / 2), d = between(1, m / 2);
+        p.points = {at(a, b, 3), at(a + d, b + d, 3)};
+        break;
+      }
+      case 3:
+        p.points = {at(between(0, m), between(0, m), 4), at(between(0, m), between(0, m), 4)};
+        break;
+      case 4: {
+        int x = between(0, m), y = between(0, m);
+        for (int k = 0, steps = between(2, 12); k < steps; ++k) {
+          p.points.push_back(at(x, y, 5));
+          x = std::clamp(x + between(-3, 3), 0, m), y = std::clamp(y + between(-3, 3), 0, m);
+        }
+        break;
+      }
+      default: {
+        const int x = between(0, m - 3), y = between(0, m - 3), w = between(1, 3), h = between(1, 3);
+        p.points = {at(x, y, 6), at(x + w, y, 6), at(x + w, y + h, 6), at(x, y + h, 6)};
+        p.closed = true;
+      }
+    }
+    add_polyline(in, std::move(p));  // as a reader hands it over: repeated vertices removed
+  }
+  return in;
+}
+
 // Every layout above by name.
 inline std::vector<std::pair<std::string, InputSet>> all() {
   return {{"crossing constraints", crossing_constraints()},
@@ -118,7 +188,8 @@ inline std::vector<std::pair<std::string, InputSet>> all() {
           {"clustered points", clustered_points()},
           {"collinear rows", collinear_rows()},
           {"all collinear", all_collinear()},
-          {"footprint rings", footprint_rings()}};
+          {"footprint rings", footprint_rings()},
+          {"lattice soup", lattice_soup(1)}};
 }
 
 }  // namespace cdtgpu::tile_layouts
