@@ -28,6 +28,8 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
+#include <vector>
 
 #include "core/big_array.hpp"
 #include "core/error.hpp"
@@ -107,40 +109,28 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
     const double ux = pb.x() - pa.x(), uy = pb.y() - pa.y();
     const double len2 = ux * ux + uy * uy, len = std::sqrt(len2);
     const double mag = std::max({std::abs(pa.x()), std::abs(pa.y()), std::abs(pb.x()), std::abs(pb.y())});
-    const double tol = 1e-9 * len + 8 * DBL_EPSILON * mag;  // verify.cpp's tolerance for Steiner vertices
+    const double tol = 1e-9 * len + 8 * DBL_EPSILON * mag;  // rounding: of Steiner vertices, of merged crossings
+    // 0: exactly on the open segment; 1: within rounding of it; 2: neither.
     auto on_segment = [&](uint32_t w) {
       const P2 pw = P(w);
-      if (is_input[w])
-        return CGAL::orientation(pa, pb, pw) == CGAL::COLLINEAR &&
-               CGAL::collinear_are_strictly_ordered_along_line(pa, pw, pb);
+      if (CGAL::orientation(pa, pb, pw) == CGAL::COLLINEAR)
+        return CGAL::collinear_are_strictly_ordered_along_line(pa, pw, pb) ? 0 : 2;
       const double wx = pw.x() - pa.x(), wy = pw.y() - pa.y();
       const double along = wx * ux + wy * uy;
-      return std::abs(wx * uy - wy * ux) <= tol * len && along > 0 && along < len2;
+      return std::abs(wx * uy - wy * ux) <= tol * len && along > 0 && along < len2 ? 1 : 2;
     };
-    uint32_t cur = A;
-    for (uint32_t steps = 0; cur != B; ++steps) {
-      uint32_t best = kNone, best_he = kNone;
-      double best_along = HUGE_VAL;
-      auto consider = [&](uint32_t w, uint32_t h) {
-        if (best == B) return;
-        if (w == B) {
-          best = w, best_he = h;
-          return;
-        }
-        const double along = (mv[w].x - mv[cur].x) * ux + (mv[w].y - mv[cur].y) * uy;
-        if (along > 0 && (along < best_along || (along == best_along && w < best)) && on_segment(w))
-          best = w, best_he = h, best_along = along;
-      };
-      // The fan around cur: turn one way through twins of the previous half-edges; at the hull, consider
-      // the hull half-edge ending at cur and turn the other way from the start.
-      const uint32_t h0 = e.corner[cur];
+    auto along = [&](uint32_t w) { return (mv[w].x - pa.x()) * ux + (mv[w].y - pa.y()) * uy; };
+    // The fan around v: turn one way through twins of the previous half-edges; at the hull, take the hull
+    // half-edge ending at v and turn the other way from the start. visit(w, half-edge between v and w).
+    auto fan = [&](uint32_t v, auto&& visit) {
+      const uint32_t h0 = e.corner[v];
       uint32_t h = h0;
       bool hull = false;
       do {
-        consider(to_of(mesh.triangles, h), h);
+        visit(to_of(mesh.triangles, h), h);
         const uint32_t p = prev_of(h);
         if (e.twin[p] == kNone) {
-          consider(from_of(mesh.triangles, p), p);
+          visit(from_of(mesh.triangles, p), p);
           hull = true;
           break;
         }
@@ -148,21 +138,78 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
       } while (h != h0);
       for (h = h0; hull && e.twin[h] != kNone;) {
         h = next_of(e.twin[h]);
-        consider(to_of(mesh.triangles, h), h);
+        visit(to_of(mesh.triangles, h), h);
       }
-      if (best == kNone || steps > V) {
-        size_t m = uncovered.load();
-        while (c < m && !uncovered.compare_exchange_weak(m, c)) {
+    };
+    thread_local std::vector<uint32_t> path;  // the half-edges along the constraint
+    path.clear();
+    // The walk: from each vertex, the nearest one further along that is on the segment (input vertices
+    // exactly, Steiner vertices within rounding).
+    auto walk = [&] {
+      for (uint32_t cur = A, steps = 0; cur != B; ++steps) {
+        uint32_t best = kNone, best_he = kNone;
+        double best_along = HUGE_VAL;
+        fan(cur, [&](uint32_t w, uint32_t h) {
+          if (best == B) return;
+          if (w == B) {
+            best = w, best_he = h;
+            return;
+          }
+          const double a = (mv[w].x - mv[cur].x) * ux + (mv[w].y - mv[cur].y) * uy;
+          if (a > 0 && (a < best_along || (a == best_along && w < best))) {
+            const int kind = on_segment(w);
+            if (kind == 0 || (kind == 1 && !is_input[w])) best = w, best_he = h, best_along = a;
+          }
+        });
+        if (best == kNone || steps > V) return false;
+        path.push_back(best_he);
+        cur = best;
+      }
+      return true;
+    };
+    // Where the walk stops: a crossing that rounded onto an input vertex beside the constraint (docs/rules.md),
+    // or a cascade of rounded crossings. The path through the fewest vertices not exactly on the segment, input
+    // ones too (a 0-1 search; every step goes further along, so it ends).
+    auto search = [&] {
+      path.clear();
+      struct Node {
+        uint32_t cost, prev, he;
+      };
+      std::unordered_map<uint32_t, Node> seen{{A, {0, kNone, kNone}}};
+      std::deque<uint32_t> queue{A};
+      while (!queue.empty()) {
+        const uint32_t u = queue.front();
+        queue.pop_front();
+        if (u == B) {
+          for (uint32_t w = B; w != A; w = seen[w].prev) path.push_back(seen[w].he);
+          return true;
         }
-        return;
+        const uint32_t cu = seen[u].cost;
+        const double au = along(u);
+        fan(u, [&](uint32_t w, uint32_t h) {
+          const int kind = w == B ? 0 : along(w) > au ? on_segment(w) : 2;
+          if (kind == 2) return;
+          const uint32_t cw = cu + uint32_t(kind);
+          auto [it, fresh] = seen.try_emplace(w, Node{cw, u, h});
+          if (!fresh && it->second.cost <= cw) return;
+          it->second = {cw, u, h};
+          kind == 0 ? queue.push_front(w) : queue.push_back(w);
+        });
       }
-      for (uint32_t h : {best_he, e.twin[best_he]}) {
+      return false;
+    };
+    if (!walk() && !search()) {
+      size_t m = uncovered.load();
+      while (c < m && !uncovered.compare_exchange_weak(m, c)) {
+      }
+      return;
+    }
+    for (const uint32_t step : path)
+      for (uint32_t h : {step, e.twin[step]}) {
         if (h == kNone) continue;
         shared(flag[h]).fetch_or(kConstrained, std::memory_order_relaxed);
         if (toggle) shared(flag[h]).fetch_xor(toggle, std::memory_order_relaxed);
       }
-      cur = best;
-    }
   });
   if (uncovered != SIZE_MAX)
     throw std::logic_error("regions: constraint " + std::to_string(uncovered.load()) +
