@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 #include <spdlog/spdlog.h>
 
@@ -20,7 +21,8 @@ namespace cdtgpu {
 
 uint64_t auto_min_points() {
   if (const char* v = std::getenv("CDTGPU_AUTO_MIN_POINTS"); v && *v) return std::strtoull(v, nullptr, 10);
-  return kAutoMinPoints;
+  const uint64_t cores = std::clamp(std::thread::hardware_concurrency(), 1u, kAutoMaxCores);
+  return std::max(kAutoMinPoints, kAutoPointsPerCore * cores);
 }
 
 uint64_t batch_auto_min_points() {

@@ -17,10 +17,16 @@
 
 namespace cdtgpu {
 
-// Below this many input points `--backend auto` runs CGAL without touching Vulkan: the GPU's start-up
-// (instance, device, pipelines from the cache) costs more than CGAL's whole triangulation. Measured on the
-// H100 machine with `cdtgpu bench --table e2e` (docs/performance.md). CDTGPU_AUTO_MIN_POINTS overrides it.
+// Below auto_min_points() input points `--backend auto` runs the CPU (CGAL, in tiles on every core) without
+// touching Vulkan: the GPU's start-up (instance, device, pipelines from the cache, ~0.2 s) costs more than the
+// CPU's whole triangulation. That grows with the points a core: kAutoPointsPerCore a core (at most
+// kAutoMaxCores cores counted), never below kAutoMinPoints. Measured with `cdtgpu bench --table e2e` on the
+// H200 machine's 16 cores (docs/performance.md, 2026-11-29): 500K + 125K points 208 ms on the CPU against 284
+// on the GPU, 1M + 250K 355 against 316; kAutoMinPoints from one core's CGAL (the H100 machine, 2026-11-25).
+// CDTGPU_AUTO_MIN_POINTS overrides it.
 constexpr uint64_t kAutoMinPoints = 100000;
+constexpr uint64_t kAutoPointsPerCore = 45000;
+constexpr unsigned kAutoMaxCores = 32;
 uint64_t auto_min_points();
 // In a batch of kBatchWarmJobs jobs or more the start-up is paid once, and auto sends jobs of this many points
 // to the GPU: 200 jobs of 20K points + 5K segments on the H100 machine took 16.5 ms a job on the GPU, 42-59 on

@@ -14,6 +14,7 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 #include <sys/wait.h>
@@ -176,7 +177,10 @@ TEST_F(Cli, AutoBackendPicksByInputSizeAndDevice) {
   ASSERT_EQ(small.code, 0) << small.err;
   auto stats = nlohmann::json::parse(slurp(path("small.json")));
   EXPECT_EQ(stats["backend"], "cgal");
-  EXPECT_NE(stats["backend_reason"].get<std::string>().find("fewer than 100000"), std::string::npos);
+  // 100K points, or 45K a core beyond that (cli/gpu_start.hpp)
+  const unsigned cores = std::clamp(std::thread::hardware_concurrency(), 1u, 32u);
+  const std::string fewer = "fewer than " + std::to_string(std::max<uint64_t>(100000, 45000ull * cores));
+  EXPECT_NE(stats["backend_reason"].get<std::string>().find(fewer), std::string::npos) << stats["backend_reason"];
   EXPECT_FALSE(stats.contains("device"));
   EXPECT_EQ(slurp(path("small.ply")), slurp(path("cgal.ply")));
 
