@@ -33,6 +33,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <chrono>
@@ -62,6 +63,12 @@ using Q = CGAL::Exact_rational;
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 // A cascade needs each round's rounding to land a new piece on something else; far below this in practice.
 constexpr int kMaxRounds = 200;
+// From this round on, a crossing of pieces whose rounded point is within kSnapUlps units in the last place (of
+// the larger coordinate of the two pieces) of an end of either takes that end (docs/rules.md). Without it, two
+// constraints within rounding of one line, crossed by a third, made new crossings beside one point forever:
+// where x is near 0 and y near 6e6, each round's vertex moved ~1e-11 along x with y fixed by its ulp (1e-9).
+constexpr int kSnapFromRound = 4;
+constexpr double kSnapUlps = 4;
 // Grid shape: columns of about sqrt(kCellVertices * n) vertices, so that cells of a square domain hold about
 // kCellVertices vertices; rows per column: one per kRowItems vertices and segments in the column.
 constexpr double kCellVertices = 4;
@@ -343,7 +350,7 @@ class Resolver {
       dirty_pieces.clear();
       dirty_vertices.clear();
       const auto r0 = std::chrono::steady_clock::now();
-      apply(ev, dirty_pieces, dirty_vertices);
+      apply(ev, dirty_pieces, dirty_vertices, round >= kSnapFromRound);
       vdirty_.resize(steiner_.size(), 0);
       for (uint32_t u : dirty_vertices) vdirty_[u - n0_] = 1;
       streams(dirty_pieces, dirty_vertices);
@@ -704,6 +711,23 @@ class Resolver {
     return true;
   }
 
+  // The end of `ends` nearest the crossing (Chebyshev distance, ties to the smaller index), if it is within
+  // kSnapUlps units in the last place of the largest coordinate of the ends: the crossing's point becomes it.
+  void snap_to_end(Crossing& c, const std::array<uint32_t, 4>& ends) const {
+    double mag = 0;
+    for (uint32_t w : ends) mag = std::max({mag, std::abs(vert(w).x), std::abs(vert(w).y)});
+    const double reach = kSnapUlps * mag * DBL_EPSILON;
+    uint32_t best = kNone;
+    double best_d = HUGE_VAL;
+    for (uint32_t w : ends) {
+      const double d = std::max(std::abs(vert(w).x - c.x), std::abs(vert(w).y - c.y));
+      if (d <= reach && (d < best_d || (d == best_d && w < best))) best = w, best_d = d;
+    }
+    if (best == kNone) return;
+    c.x = vert(best).x;
+    c.y = vert(best).y;
+  }
+
   uint32_t existing_vertex(double x, double y) const {
     // Only the point's column can hold it (a short search, in cache when the points come in x order).
     const uint32_t c = cols_.of(x);
@@ -717,13 +741,16 @@ class Resolver {
     return s == steiner_at_.end() ? kNone : s->second;
   }
 
-  void apply(const Events& ev, std::vector<uint32_t>& new_pieces, std::vector<uint32_t>& new_vertices) {
+  // snap: a crossing whose rounded point is within kSnapUlps of an end of either piece takes that end.
+  void apply(const Events& ev, std::vector<uint32_t>& new_pieces, std::vector<uint32_t>& new_vertices,
+             bool snap = false) {
     // Crossings, exactly (in parallel: each is independent).
     std::vector<Crossing> cr(ev.cross.size());
     parallel_chunks(cr.size(), threads_, 64, [&](size_t b, size_t e, unsigned) {
       for (size_t i = b; i < e; ++i) {
         const Edge &s = seg_[ev.cross[i].first], &t = seg_[ev.cross[i].second];
         cr[i] = intersect(xy(s[0]), xy(s[1]), xy(t[0]), xy(t[1]));
+        if (snap) snap_to_end(cr[i], {s[0], s[1], t[0], t[1]});
       }
     });
     // One vertex per distinct rounded point, numbered in (x, y) order; an existing vertex there is reused.

@@ -622,6 +622,23 @@ TEST(Resolve, ManySmallRandomInputs) {
   }
 }
 
+TEST(Resolve, NearlyCoincidentConstraintsCrossedByAThirdEnd) {
+  // B and C lie on one decimal line (y - x = 5999999.997) but not on one line of doubles, and overlap; A crosses
+  // both near x = 0.098. With x near 0 and y near 6e6, each rounded crossing moved ~1e-11 along x with y fixed
+  // by its ulp (9.3e-10), and the pieces crossed again beside it: 200 rounds, then "crossings still appear"
+  // (reduced from a lattice soup of 14592 vertices). From round 4 such crossings take the piece's end instead.
+  InputSet in;
+  const double y0 = 6000000;
+  in.lines.push_back(line({{0.056000000000000001, y0 + 0.0029999996, 0}, {0.13200000000000001, y0 + 0.1689999998, 1}}));
+  in.lines.push_back(line({{0.073999999999999996, y0 + 0.0710000005, 2}, {0.14999999999999999, y0 + 0.1469999999, 3}}));
+  in.lines.push_back(line({{0.026000000000000002, y0 + 0.023, 4}, {0.10100000000000001, y0 + 0.0980000002, 5}}));
+  Checks checks;
+  checks.reference = false;  // the rules' own case (docs/rules.md), not CGAL's
+  const Outcome o = check_all(prepare(in), checks);
+  EXPECT_GE(o.resolved.steiner_points, 3u);
+  EXPECT_LE(o.resolved.steiner_points, 12u);
+}
+
 TEST(Resolve, LatticeSoups) {
   // tests/tile_layouts.hpp: lattice nodes, duplicates, rows, rings of points; lines along rows, columns and
   // diagonals, doubling back, footprints sharing walls. CGAL's CT_plus_2 crashes or loops on many of them: checked

@@ -177,6 +177,18 @@ inline InputSet lattice_soup(uint64_t seed) {
   return in;
 }
 
+// Two constraints within rounding of one line (a decimal diagonal at y ~ 6e6, x ~ 0), overlapping, crossed by a
+// third near their overlap: the resolve's rounded crossings cascaded there until they were snapped to piece ends.
+inline InputSet nearly_coincident_crossed() {
+  InputSet in = random_points(600, 17, 0.2);
+  for (Point3& p : in.points) p.y += 6000000;
+  const double y0 = 6000000;
+  in.lines.push_back(line({{0.056000000000000001, y0 + 0.0029999996, 0}, {0.13200000000000001, y0 + 0.1689999998, 1}}));
+  in.lines.push_back(line({{0.073999999999999996, y0 + 0.0710000005, 2}, {0.14999999999999999, y0 + 0.1469999999, 3}}));
+  in.lines.push_back(line({{0.026000000000000002, y0 + 0.023, 4}, {0.10100000000000001, y0 + 0.0980000002, 5}}));
+  return in;
+}
+
 // Every layout above by name.
 inline std::vector<std::pair<std::string, InputSet>> all() {
   return {{"crossing constraints", crossing_constraints()},
@@ -189,7 +201,8 @@ inline std::vector<std::pair<std::string, InputSet>> all() {
           {"collinear rows", collinear_rows()},
           {"all collinear", all_collinear()},
           {"footprint rings", footprint_rings()},
-          {"lattice soup", lattice_soup(1)}};
+          {"lattice soup", lattice_soup(1)},
+          {"nearly coincident constraints crossed by a third", nearly_coincident_crossed()}};
 }
 
 }  // namespace cdtgpu::tile_layouts
