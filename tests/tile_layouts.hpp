@@ -115,16 +115,17 @@ inline InputSet terrain_with_contours() {
 // rounded points beside T-junctions), contour-like paths that double back on themselves and footprint rings
 // sharing walls. CGAL's own crossing handling (tests/cgal_plus.hpp) crashed or looped on 21 of the first 60
 // and split 6 otherwise; every path of cdtgpu must give the one mesh of the rules (docs/rules.md).
-inline InputSet lattice_soup(uint64_t seed) {
+// `scale` multiplies the points and lines (and widens the lattice): bench/tools/paths_stress runs larger ones.
+inline InputSet lattice_soup(uint64_t seed, int scale = 1) {
   std::mt19937_64 rng(seed);
   auto below = [&](uint64_t n) { return int(uniform_below(rng, n)); };
   auto between = [&](int a, int b) { return a + below(uint64_t(b - a + 1)); };
   InputSet in;
-  const int m = between(8, 40);
+  const int m = between(8, 40) * (scale > 1 ? scale / 2 + 1 : 1);
   const double s = std::vector<double>{1.0, 0.1, 3.0, 1e-3, 0.5}[below(5)];
   const double ox = below(2) ? 500000.0 : 0.0, oy = below(2) ? 6000000.0 : 0.0;
   auto at = [&](double i, double j, double z) { return Point3{ox + i * s, oy + j * s, z}; };
-  const int kind = below(4), n = between(50, 1200);
+  const int kind = below(4), n = between(50, 1200) * scale;
   for (int k = 0; k < n; ++k) {
     if (kind == 0 || below(4) == 0) {
       in.points.push_back(at(between(0, m), between(0, m), below(10)));
@@ -137,7 +138,7 @@ inline InputSet lattice_soup(uint64_t seed) {
       in.points.push_back(at(m / 2.0 + r * std::cos(a), m / 2.0 + r * std::sin(a), below(10)));
     }
   }
-  for (int l = 0, lines = below(41); l < lines; ++l) {
+  for (int l = 0, lines = below(41) * scale; l < lines; ++l) {
     Polyline p;
     switch (below(6)) {
       case 0: {
