@@ -19,6 +19,8 @@
 #include <cstdio>
 #include <limits>
 #include <numeric>
+#include <utility>
+#include <vector>
 
 #include "core/resolve.hpp"
 
@@ -101,8 +103,7 @@ ResolvedInput rules_graph(const PreparedInput& prepared) {
   }
   std::sort(p.constraints.begin(), p.constraints.end());
   p.constraints.erase(std::unique(p.constraints.begin(), p.constraints.end()), p.constraints.end());
-  ResolvedInput r = resolve_constraints(p);
-  return r;
+  return resolve_constraints(p);
 }
 
 }  // namespace
@@ -306,13 +307,17 @@ VerifyReport verify_mesh(const Mesh& mesh, const PreparedInput& prepared, size_t
   const std::vector<Edge>& pieces = graph.unchanged ? prepared.constraints : graph.constraints;
   std::vector<uint32_t> mesh_of_graph(gv.size(), kNone);
   std::vector<uint8_t> in_graph(V, 0);
+  std::vector<std::pair<double, double>> inputs;  // a missing input vertex is reported above
+  for (const Point3& p : prepared.vertices) inputs.push_back({p.x, p.y});
+  std::sort(inputs.begin(), inputs.end());
   for (uint32_t i = 0; i < gv.size(); ++i) {
     const Point3& p = gv[i];
     auto it = std::lower_bound(by_xy.begin(), by_xy.end(), p, [&](uint32_t a, const Point3& q) {
       return mv[a].x != q.x ? mv[a].x < q.x : mv[a].y < q.y;
     });
     if (it == by_xy.end() || mv[*it].x != p.x || mv[*it].y != p.y) {
-      fail.add("the Steiner vertex (" + num(p.x) + ", " + num(p.y) + ") where constraints cross is not in the mesh");
+      if (!std::binary_search(inputs.begin(), inputs.end(), std::pair<double, double>(p.x, p.y)))
+        fail.add("the Steiner vertex (" + num(p.x) + ", " + num(p.y) + ") where constraints cross is missing");
       continue;
     }
     mesh_of_graph[i] = *it;
