@@ -169,7 +169,8 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
     };
     // Where the walk stops: a crossing that rounded onto an input vertex beside the constraint (docs/rules.md),
     // or a cascade of rounded crossings. The path through the fewest vertices not exactly on the segment, input
-    // ones too (a 0-1 search; every step goes further along, so it ends).
+    // ones too (a 0-1 search). A step may go back along the segment by rounding: rounded crossings beside it
+    // need not lie in the order of the exact ones (a vertex is queued again only for a cheaper path: it ends).
     auto search = [&] {
       path.clear();
       struct Node {
@@ -187,7 +188,7 @@ void mark_constraints(const Mesh& mesh, const PreparedInput& prepared, const std
         const uint32_t cu = seen[u].cost;
         const double au = along(u);
         fan(u, [&](uint32_t w, uint32_t h) {
-          const int kind = w == B ? 0 : along(w) > au ? on_segment(w) : 2;
+          const int kind = w == B ? 0 : along(w) > au - tol * len ? on_segment(w) : 2;
           if (kind == 2) return;
           const uint32_t cw = cu + uint32_t(kind);
           auto [it, fresh] = seen.try_emplace(w, Node{cw, u, h});

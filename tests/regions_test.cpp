@@ -410,11 +410,12 @@ TEST(Regions, MaxEdgeAloneMatchesTheOracleOnEveryPath) {
 // input vertex beside a constraint, and cascades of rounded crossings, where the walk along the constraint
 // stops (a stress run's CLI runs with such lines as boundaries failed on 5 of 40 soups, on both backends:
 // "regions: constraint N is not covered by mesh edges"); the path through the fewest vertices off the segment
-// then. The same on any thread count.
+// then (soups at scale 5 too: one needed a step back along the segment, rounded crossings lying out of the
+// exact ones' order). The same on any thread count.
 TEST(Regions, LatticeSoupsWithEveryConstraintARegionEdge) {
-  for (uint64_t seed = 1; seed <= 40; ++seed) {
+  for (uint64_t seed = 1; seed <= 60; ++seed) {
     SCOPED_TRACE("lattice soup " + std::to_string(seed));
-    const PreparedInput p = prepare(tile_layouts::lattice_soup(seed));
+    const PreparedInput p = prepare(tile_layouts::lattice_soup(seed, seed > 40 ? 5 : 1));
     const Mesh all = triangulate_cgal(p).mesh;
     for (const double max_edge : {0.0, 1.0}) {
       RegionRules rules;
