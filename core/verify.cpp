@@ -77,8 +77,9 @@ bool collinear(const std::vector<P2>& p) {
   return true;
 }
 
-// resolve_if_needed of `prepared` in the order the resolve relies on (verify's callers may hand any order):
-// vertices sorted by (x, y) and unique, constraints (a < b) sorted.
+// resolve_if_needed of `prepared` in prepare's order (verify's callers may hand any): vertices sorted by (x, y)
+// and unique, constraints (a < b) sorted and unique. The resolve takes constraints in any order, but a Steiner
+// vertex's z follows the lowest-indexed constraint through it, from its first end.
 ResolvedInput rules_graph(const PreparedInput& prepared) {
   const Points& v = prepared.vertices;
   auto less = [](const Point3& a, const Point3& b) { return a.x != b.x ? a.x < b.x : a.y < b.y; };

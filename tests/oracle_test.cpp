@@ -532,6 +532,28 @@ TEST_F(Broken, ExtraVertexIsNotASteinerPoint) {
   EXPECT_TRUE(fails_with("not an input vertex and not a crossing of constraints"));
 }
 
+// verify_mesh resolves the constraints by the rules, which need the vertices sorted: a hand-made input in
+// another order (vertices shuffled, constraints reversed and shuffled) is checked the same.
+TEST(Verify, PreparedInputInAnyOrder) {
+  InputSet in = uniform_points(500, 31);
+  in.lines.push_back(line({{0.1, 0.1, 0}, {0.9, 0.8, 1}}));
+  in.lines.push_back(line({{0.1, 0.9, 2}, {0.8, 0.05, 3}}));  // crosses the first
+  const PreparedInput p = prepare(in);
+  const CdtResult r = triangulate_cgal(p);
+  ASSERT_EQ(r.steiner_points, 1u);
+  std::mt19937_64 rng(4);
+  std::vector<uint32_t> perm(p.vertices.size());
+  std::iota(perm.begin(), perm.end(), 0u);
+  std::shuffle(perm.begin(), perm.end(), rng);
+  PreparedInput q = p;
+  for (uint32_t i = 0; i < perm.size(); ++i) q.vertices[perm[i]] = p.vertices[i];
+  for (Edge& e : q.constraints) e = {perm[e[1]], perm[e[0]]};
+  std::shuffle(q.constraints.begin(), q.constraints.end(), rng);
+  const VerifyReport v = verify_mesh(r.mesh, q);
+  EXPECT_TRUE(v.ok()) << failures(v);
+  EXPECT_EQ(v.steiner_vertices, 1u);
+}
+
 TEST(Verify, NoTrianglesForNonCollinearInputFails) {
   InputSet in;
   in.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
