@@ -192,6 +192,7 @@ struct TileResult {
   Triangles final_triangles;
   std::vector<Edge> border;
   std::vector<std::array<uint32_t, 3>> split;  // TileFinal::split
+  std::vector<uint32_t> merge_ids;  // a slab's: its vertices in the merge (unmarked_ids), sorted
   double cdt_ms = 0, other_ms = 0;
   double gather_ms = 0, final_ms = 0;  // parts of other_ms: the tile's input, the host's final test and border
 };
@@ -348,9 +349,38 @@ void mark_final(const Triangles& final_triangles, std::vector<uint8_t>& in_final
   });
 }
 
+// The ids in [lo, hi) that are in the merge: in_final cleared at the border's vertices (there and then on it marks
+// the vertices that are not), those not marked, sorted. Read 8 marks at a time: nearly all are 1.
+std::vector<uint32_t> unmarked_ids(std::vector<uint8_t>& in_final, std::span<const Edge> border, uint32_t lo,
+                                   uint32_t hi) {
+  tbb::parallel_for(size_t(0), border.size(), [&](size_t i) {
+    for (uint32_t id : border[i]) std::atomic_ref<uint8_t>(in_final[id]).store(0, std::memory_order_relaxed);
+  });
+  constexpr uint64_t kOnes = 0x0101010101010101;
+  const uint32_t w0 = (lo + 7) / 8, w1 = std::max(w0, hi / 8);  // whole words; the ends one by one
+  auto word_at = [&](size_t w) {
+    uint64_t word;
+    std::memcpy(&word, in_final.data() + 8 * w, 8);
+    return ~word & kOnes;  // a 1 in the low bit of each vertex's byte that is in the merge
+  };
+  std::vector<uint32_t> ids;
+  for (uint32_t i = lo; i < std::min(hi, 8 * w0); ++i)
+    if (!in_final[i]) ids.push_back(i);
+  std::vector<uint32_t> middle = compact<uint32_t>(
+      w1 - w0, [&](size_t w) { return std::popcount(word_at(w0 + w)); },
+      [&](size_t w, uint32_t* at) {
+        for (uint64_t m = word_at(w0 + w); m; m &= m - 1) *at++ = uint32_t(8 * (w0 + w) + std::countr_zero(m) / 8);
+        return at;
+      });
+  ids.insert(ids.end(), middle.begin(), middle.end());
+  for (uint32_t i = std::max(lo, 8 * w1); i < hi; ++i)
+    if (!in_final[i]) ids.push_back(i);
+  return ids;
+}
+
 TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const TileTriangulator& triangulate,
                        const TileFinalizer& finalize, const std::string& name, std::vector<uint8_t>& in_final,
-                       const std::shared_future<void>& in_final_zeroed, bool unresolved) {
+                       const std::shared_future<void>& in_final_zeroed, bool unresolved, bool slab) {
   const auto t0 = Clock::now();
   const RawVector<uint32_t>& ids = g.ids;
   TileResult r;
@@ -374,6 +404,9 @@ TileResult finish_tile(const Points& v, GatheredTile g, const Node& node, const 
   // A final triangle's vertices are strictly inside the tile, so they are its own: no other tile writes them.
   in_final_zeroed.get();  // rethrows its error
   mark_final(r.final_triangles, in_final);
+  // A slab's border and unmarked vertices are its own ids too (its column): its merge vertices, found beside the
+  // other tiles (a pass over every vertex's mark after the last tile took 46-57 ms at 1B points on one H200).
+  if (slab) r.merge_ids = unmarked_ids(in_final, r.border, node.lo, node.hi);
   r.other_ms = r.gather_ms + ms_since(t0) - r.cdt_ms;
   return r;
 }
@@ -399,7 +432,8 @@ namespace {
 
 // What the merge triangulates (tiling.md): the vertices not inside the final region with the border's, the
 // segments between them (a segment with an end inside the final region lies inside it; split ones as their
-// pieces) and the border edges, in the merge's own ids. `in_final` is read, then freed.
+// pieces) and the border edges, in the merge's own ids. `in_final` is read, then freed. For slabs the merge's
+// vertices are found already (`slab_ids`: each slab's unmarked_ids as it finished, in id order).
 struct MergeJob {
   std::vector<uint32_t> ids;  // the merge's vertex i is the level's ids[i]
   Points vertices;
@@ -407,38 +441,31 @@ struct MergeJob {
 };
 
 MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std::vector<Edge>& border,
-                   const VertexSplits& split_segments, std::vector<uint8_t>& in_final) {
+                   const VertexSplits& split_segments, std::vector<uint8_t>& in_final, bool slabs,
+                   std::vector<uint32_t> slab_ids) {
   const size_t n = v.size();
+  auto t = Clock::now();
+  std::string steps;  // -v: where the merge's input goes
+  auto step = [&](const char* what) {
+    steps += fmt::format(", {} {:.1f}", what, ms_since(t));
+    t = Clock::now();
+  };
   const std::vector<Edge>& split_ones = split_segments.split;
   auto not_split = [&](const Edge& e) {
     return split_ones.empty() || !std::binary_search(split_ones.begin(), split_ones.end(), e);
   };
   // The merge's vertices: those not in the final region, and the border's (in_final cleared there, so from here
-  // on it marks the vertices that are not in the merge). Read 8 marks at a time: nearly all are 1.
-  tbb::parallel_for(size_t(0), border.size(), [&](size_t i) {
-    for (uint32_t id : border[i]) std::atomic_ref<uint8_t>(in_final[id]).store(0, std::memory_order_relaxed);
-  });
-  constexpr uint64_t kOnes = 0x0101010101010101;
-  auto word_at = [&](size_t w) {
-    uint64_t word;
-    std::memcpy(&word, in_final.data() + 8 * w, 8);
-    return ~word & kOnes;  // a 1 in the low bit of each vertex's byte that is in the merge
-  };
-  const size_t words = n / 8;
-  std::vector<uint32_t> ids = compact<uint32_t>(
-      words, [&](size_t w) { return std::popcount(word_at(w)); },
-      [&](size_t w, uint32_t* at) {
-        for (uint64_t m = word_at(w); m; m &= m - 1) *at++ = uint32_t(8 * w + std::countr_zero(m) / 8);
-        return at;
-      });
-  for (size_t i = 8 * words; i < n; ++i)
-    if (!in_final[i]) ids.push_back(uint32_t(i));
+  // on it marks the vertices that are not in the merge). Slabs found their own as they finished.
+  std::vector<uint32_t> ids = std::move(slab_ids);
+  if (!slabs) ids = unmarked_ids(in_final, border, 0, uint32_t(n));
+  step("vertices");
   RawVector<uint32_t> local_of(n);  // only written, and read, at the merge's vertices
   Points merge_vertices(ids.size());
   tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) {
     local_of[ids[i]] = uint32_t(i);
     merge_vertices[i] = v[ids[i]];
   });
+  step("local ids");
   // The segments between them: such a segment's first end is a merge vertex, and segments are sorted by it
   // (tile_segments checks), so each merge vertex's are found from the last one's by a galloping search, not by a
   // pass over every segment (250M at 1B points).
@@ -457,6 +484,7 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
     }
   });
   segments_from[ids.size()] = uint32_t(segments.size());
+  step("segments found");
   // The border edges and the split segments' pieces between merge vertices, in local ids, listed under their
   // smaller end and merged there with that vertex's segments: the merge's segments come out sorted and unique.
   // Appended and sorted whole, they took ~0.6 s of a 4.5M-vertex merge's input on 2 cores.
@@ -475,6 +503,7 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   tbb::parallel_for(size_t(0), border.size(), [&](size_t i) { extra[pieces + i] = key(local_border[i]); });
   tbb::parallel_sort(extra.begin(), extra.end());
   extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
+  step("border and pieces");
   std::vector<uint32_t> extra_from(ids.size() + 1);
   each(extra.size() + 1, [&](size_t k) {
     const uint64_t lo = k == 0 ? 0 : (extra[k - 1] >> 32) + 1, hi = k == extra.size() ? ids.size() : extra[k] >> 32;
@@ -509,6 +538,8 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
         return at;
       });
   free_storage_on_all_cores(in_final);
+  step("segments");
+  spdlog::debug("the merge's input, ms: {}", steps.substr(2));
   return MergeJob{std::move(ids), std::move(merge_vertices), std::move(merge_segments), std::move(local_border)};
 }
 
@@ -584,7 +615,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     const std::string name = tile_name(t);
     tbb::this_task_arena::isolate([&] {
       results[t] = finish_tile(v, std::move(g), plan.nodes[plan.tiles[t]], triangulate, options.finalize, name,
-                               in_final, bookkeeping, level == 1 && options.unresolved);
+                               in_final, bookkeeping, level == 1 && options.unresolved, plan.slabs);
     });
     const TileResult& r = results[t];
     spdlog::debug("{}: {} final triangles; gather {:.0f} ms, CDT {:.0f} ms, the rest {:.0f} ms; done at {:.0f} ms",
@@ -665,6 +696,14 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     runs[t] = std::move(results[t].final_triangles);
     border.insert(border.end(), results[t].border.begin(), results[t].border.end());
   }
+  std::vector<uint32_t> slab_ids;  // the slabs' merge vertices, in id order
+  if (plan.slabs) {
+    std::vector<size_t> by_id(tiles);
+    std::iota(by_id.begin(), by_id.end(), size_t(0));
+    std::sort(by_id.begin(), by_id.end(),
+              [&](size_t a, size_t b) { return plan.nodes[plan.tiles[a]].lo < plan.nodes[plan.tiles[b]].lo; });
+    for (size_t t : by_id) slab_ids.insert(slab_ids.end(), results[t].merge_ids.begin(), results[t].merge_ids.end());
+  }
   results.clear();
   // Segments the tiles split at vertices: the merge takes their pieces, as the resolve would have split them.
   VertexSplits split_segments;
@@ -674,7 +713,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     spdlog::debug("tiles, level {}: {} segments split at {} vertices", level, split_segments.split.size(),
                   split_segments.splits);
   }
-  const MergeJob m = merge_job(v, segments, border, split_segments, in_final);
+  const MergeJob m = merge_job(v, segments, border, split_segments, in_final, plan.slabs, std::move(slab_ids));
   s.tiles += tiles;
   s.levels += 1;
   if (level == 1) s.final_triangles = final_count;
