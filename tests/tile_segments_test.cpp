@@ -37,9 +37,11 @@ Graph grid_graph() {
   return g;
 }
 
+// Also in slabs of 20 points, half a column: slabs of no width, whose cut a segment steps across to reach the
+// slab before.
 TEST(TileSegments, SlabsGetEverySegmentTheirClosedXRangeMeets) {
   const Graph g = grid_graph();
-  for (uint64_t max_points : {300, 130, 1000}) {
+  for (uint64_t max_points : {300, 130, 1000, 20}) {
     const TilePlan plan = plan_tiles(g.v, max_points, TileShape::slabs);
     ASSERT_TRUE(plan.slabs);
     const TileSegments ts = tile_segments(g.v, g.segments, plan);
@@ -57,6 +59,10 @@ TEST(TileSegments, SlabsGetEverySegmentTheirClosedXRangeMeets) {
       EXPECT_EQ(std::vector<uint32_t>(got.begin(), got.end()), expected) << max_points << ", slab " << t;
     }
     EXPECT_GT(on_cut, 0u) << "some segment ends on a cut";
+    if (max_points == 20)
+      EXPECT_TRUE(std::any_of(plan.tiles.begin(), plan.tiles.end(),
+                              [&](uint32_t t) { return plan.nodes[t].rect.x0 == plan.nodes[t].rect.x1; }))
+          << "a slab of no width";
   }
 }
 
