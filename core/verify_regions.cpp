@@ -3,6 +3,7 @@
 // every band their y range meets).
 #include "core/verify_regions.hpp"
 
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
 #include <algorithm>
@@ -18,6 +19,7 @@ namespace {
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using P2 = K::Point_2;
+using XP2 = CGAL::Exact_predicates_exact_constructions_kernel::Point_2;  // exact coordinates
 using Corners = std::array<std::array<double, 3>, 3>;  // (x, y, z) of the corners, sorted by (x, y)
 
 std::string num(double v) {
@@ -58,12 +60,14 @@ class Rays {
     }
   }
 
-  // Parity of the segments crossed by the ray from c to +x; c is on none of them.
-  bool odd(const P2& c) const {
+  // Parity of the segments crossed by the ray from c to +x; c is on none of them. XP2: a point with exact
+  // coordinates (a sliver's centroid, where no point inside it has double ones).
+  template <class Point>
+  bool odd(const Point& c) const {
     if (segs_.empty()) return false;
     bool inside = false;
-    for (uint32_t i : list_[band(c.y())]) {
-      const P2 &p = segs_[i][0], &q = segs_[i][1];
+    for (uint32_t i : list_[band(CGAL::to_double(c.y()))]) {  // rounding keeps it in a band of c's segments
+      const Point p(segs_[i][0].x(), segs_[i][0].y()), q(segs_[i][1].x(), segs_[i][1].y());
       if ((p.y() > c.y()) == (q.y() > c.y())) continue;
       // Upward p -> q: crossed when c is left of it; downward: when c is right of it.
       const CGAL::Orientation o = CGAL::orientation(p, q, c);
@@ -176,11 +180,11 @@ VerifyReport verify_regions(const Mesh& mesh, const PreparedInput& prepared, con
     if (gone[i]) continue;
     const Point3 &a = full.mesh.vertices[t[0]], &b = full.mesh.vertices[t[1]], &c = full.mesh.vertices[t[2]];
     P2 inner;
-    if (!interior_point(P2(a.x, a.y), P2(b.x, b.y), P2(c.x, c.y), inner)) {
-      fail("reference " + describe(corners(full.mesh, t)) + " has no interior point in doubles: not checked");
-      continue;
-    }
-    if (rays.odd(inner) != rules.outside_kept) ++count[corners(full.mesh, t)];
+    // A sliver with no point strictly inside in doubles: its centroid, exactly.
+    const bool odd = interior_point(P2(a.x, a.y), P2(b.x, b.y), P2(c.x, c.y), inner)
+                         ? rays.odd(inner)
+                         : rays.odd(CGAL::centroid(XP2(a.x, a.y), XP2(b.x, b.y), XP2(c.x, c.y)));
+    if (odd != rules.outside_kept) ++count[corners(full.mesh, t)];
   }
   for (const Triangle& t : mesh.triangles) {
     if (t[0] >= mesh.vertices.size() || t[1] >= mesh.vertices.size() || t[2] >= mesh.vertices.size()) {
