@@ -9,7 +9,8 @@
 // parity of region segments crossed by a ray to +x (exact orientation tests, half-open in y), odd or even as
 // RegionRules says, and not trimmed: with rules.max_edge, the triangles reached from beyond the hull across
 // edges longer than it that lie on no constraint (the constrained edges as verify_mesh finds them) are left
-// out. The mesh must hold exactly the rest, with the CDT's vertices and z. The parity is that of the input's
+// out. The mesh must hold exactly the rest, with the CDT's vertices and z. Region lines that do not close
+// (an end met an odd number of times) are a UsageError: their regions leak, which the parity does not model. The parity is that of the input's
 // segments: where a crossing's rounded Steiner vertex moves a region edge off its segment, a sliver between
 // the two may be judged otherwise than the mesh's region edges judge it (docs/testing.md).
 #pragma once

@@ -458,6 +458,36 @@ TEST(Regions, VerifyAcceptsLatticeSoupsInsideABoundaryTheyCross) {
   }
 }
 
+// Region lines that do not close leak (docs/rules.md), which verify's ray parity does not model: it says so
+// (a UsageError, exit 2 in the CLI) instead of rejecting the mesh. The same line closed is checked.
+TEST(Regions, VerifyRefusesRegionLinesThatDoNotClose) {
+  InputSet in;
+  for (int x = 0; x <= 10; ++x)
+    for (int y = 0; y <= 10; ++y) in.points.push_back({double(x), double(y), 0});
+  Polyline line;
+  line.points = {{2.5, 2.5, 0}, {7.5, 2.5, 0}, {7.5, 7.5, 0}, {2.5, 7.5, 0}};
+  in.lines.push_back(line);
+  for (const bool closed : {false, true}) {
+    in.lines[0].closed = closed;
+    const PreparedInput p = prepare(in);
+    RegionRules rules;
+    rules.region_edge = region_constraints(p, in.lines);
+    Mesh m = triangulate_cgal(p).mesh;
+    apply_regions(m, p, rules);
+    if (closed) {
+      EXPECT_TRUE(verify_regions(m, p, rules).ok());
+      continue;
+    }
+    try {
+      verify_regions(m, p, rules);
+      ADD_FAILURE() << "an open region line was verified";
+    } catch (const UsageError& e) {
+      EXPECT_NE(std::string(e.what()).find("do not close (2 open ends, the first at (2.5, 2.5))"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(Regions, CanonicalOrderKept) {
   const std::vector<Layer> layers = lake_with_island();
   Mesh m = ours(layers);
