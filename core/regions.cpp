@@ -648,6 +648,17 @@ RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts
   return rules;
 }
 
+OpenEnds open_region_ends(const PreparedInput& prepared, const RegionRules& rules) {
+  std::vector<uint8_t> odd(prepared.vertices.size(), 0);
+  for (size_t c = 0; c < prepared.constraints.size() && c < rules.region_edge.size(); ++c)
+    if (rules.region_edge[c])
+      for (uint32_t v : prepared.constraints[c]) odd[v] ^= 1;
+  OpenEnds ends;
+  for (size_t v = odd.size(); v-- > 0;)
+    if (odd[v]) ++ends.count, ends.first = uint32_t(v);
+  return ends;
+}
+
 RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules) {
   RegionStats stats;
   const size_t T = mesh.triangles.size(), V = mesh.vertices.size();

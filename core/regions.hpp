@@ -50,6 +50,15 @@ RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts
 // overlaps are resolved the same way on the mesh edges, by apply_regions.
 std::vector<uint8_t> region_constraints(const PreparedInput& prepared, const std::vector<Polyline>& rings);
 
+// Region lines that do not close: the prepared vertices that region edges meet an odd number of times (closed
+// rings meet each an even number: an edge two rings share drops out at both ends). Their regions leak, the
+// nesting levels going around an open end.
+struct OpenEnds {
+  uint64_t count = 0;
+  uint32_t first = 0;  // the first such vertex, when count > 0
+};
+OpenEnds open_region_ends(const PreparedInput& prepared, const RegionRules& rules);
+
 // Drops the triangles outside the domain and those trimmed, then the vertices left in no triangle. `mesh` is
 // the CDT of `prepared` in canonical order; it stays canonical. A mesh without triangles is left as it is; one
 // of 1,431,655,765 triangles or more (half-edges numbered in 32 bits) is a UsageError.

@@ -151,18 +151,12 @@ std::vector<uint8_t> trimmed_reference(const Mesh& m, const std::vector<Edge>& c
 
 VerifyReport verify_regions(const Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules,
                             size_t max_failures) {
-  // Closed rings meet every vertex an even number of times (an edge two rings share drops out at both ends), and
-  // only inside them is a ray's parity the nesting level's.
-  std::vector<uint8_t> odd_end(prepared.vertices.size(), 0);
-  for (size_t c = 0; c < prepared.constraints.size() && c < rules.region_edge.size(); ++c)
-    if (rules.region_edge[c])
-      for (uint32_t v : prepared.constraints[c]) odd_end[v] ^= 1;
-  if (const auto open = std::find(odd_end.begin(), odd_end.end(), 1); open != odd_end.end()) {
-    const Point3& p = prepared.vertices[size_t(open - odd_end.begin())];
-    throw UsageError("verify: the boundary and hole lines do not close (" +
-                     std::to_string(std::count(odd_end.begin(), odd_end.end(), 1)) + " open ends, the first at (" +
-                     num(p.x) + ", " + num(p.y) + ")): a region that does not close leaks (docs/rules.md, " +
-                     "\"Regions\"), which verify does not check; close the rings");
+  // Only inside closed rings is a ray's parity the nesting level.
+  if (const OpenEnds open = open_region_ends(prepared, rules); open.count) {
+    const Point3& p = prepared.vertices[open.first];
+    throw UsageError("verify: the boundary and hole lines do not close (" + std::to_string(open.count) +
+                     " open ends, the first at (" + num(p.x) + ", " + num(p.y) + ")): a region that does not " +
+                     "close leaks (docs/rules.md, \"Regions\"), which verify does not check; close the rings");
   }
   const CdtResult full = triangulate_cgal(prepared);
   std::vector<Edge> constrained;

@@ -386,6 +386,32 @@ TEST_F(Cli, VerifyChecksMaxEdgeTrimming) {
   EXPECT_EQ(run("verify " + path("whole.ply") + " " + coast + " --max-edge -1").code, 2);
 }
 
+// Boundary lines that do not close: triangulate warns, naming an open end (their region leaks, docs/rules.md);
+// verify says it does not check them (exit 2). The same boundary closed: no warning, verified.
+TEST_F(Cli, OpenBoundaryLinesAreNamed) {
+  std::string xyz;
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 20; ++j) xyz += std::to_string(5 * i) + " " + std::to_string(5 * j) + " " + std::to_string(i + j) + "\n";
+  write("grid.xyz", xyz);
+  write("open.wkt", "LINESTRING (20 20, 80 20, 80 80, 20 80)\n");
+  write("ring.wkt", "POLYGON ((20 20, 80 20, 80 80, 20 80, 20 20))\n");
+  for (const std::string b : {"open", "ring"}) {
+    const std::string in = path("grid.xyz") + " " + path(b + ".wkt") + ":role=boundary,z=0 --crs none";
+    Result t = run("triangulate " + in + " --backend cgal -o " + path(b + ".ply"));
+    ASSERT_EQ(t.code, 0) << t.err;
+    Result v = run("verify " + path(b + ".ply") + " " + in);
+    if (b == "ring") {
+      EXPECT_EQ(t.err.find("do not close"), std::string::npos) << t.err;
+      EXPECT_EQ(v.code, 0) << v.err;
+      continue;
+    }
+    EXPECT_NE(t.err.find("boundary and hole lines do not close (2 open ends, the first at (20, 20))"),
+              std::string::npos) << t.err;
+    EXPECT_EQ(v.code, 2) << v.err;
+    EXPECT_NE(v.err.find("do not close (2 open ends, the first at (20, 20))"), std::string::npos) << v.err;
+  }
+}
+
 // --devices: tiles spread over the devices it names give the same bytes; a list that is not one is a usage error.
 TEST_F(Cli, TilesOnTheDevicesListed) {
   write_terrain();
