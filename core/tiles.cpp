@@ -357,15 +357,15 @@ std::vector<uint32_t> unmarked_ids(std::vector<uint8_t>& in_final, std::span<con
     for (uint32_t id : border[i]) std::atomic_ref<uint8_t>(in_final[id]).store(0, std::memory_order_relaxed);
   });
   constexpr uint64_t kOnes = 0x0101010101010101;
-  const uint32_t w0 = (lo + 7) / 8, w1 = std::max(w0, hi / 8);  // whole words; the ends one by one
+  const uint64_t w0 = (uint64_t(lo) + 7) / 8, w1 = std::max<uint64_t>(w0, hi / 8);  // whole words; the ends alone
   auto word_at = [&](size_t w) {
     uint64_t word;
     std::memcpy(&word, in_final.data() + 8 * w, 8);
     return ~word & kOnes;  // a 1 in the low bit of each vertex's byte that is in the merge
   };
   std::vector<uint32_t> ids;
-  for (uint32_t i = lo; i < std::min(hi, 8 * w0); ++i)
-    if (!in_final[i]) ids.push_back(i);
+  for (uint64_t i = lo; i < std::min<uint64_t>(hi, 8 * w0); ++i)
+    if (!in_final[i]) ids.push_back(uint32_t(i));
   std::vector<uint32_t> middle = compact<uint32_t>(
       w1 - w0, [&](size_t w) { return std::popcount(word_at(w0 + w)); },
       [&](size_t w, uint32_t* at) {
@@ -373,8 +373,8 @@ std::vector<uint32_t> unmarked_ids(std::vector<uint8_t>& in_final, std::span<con
         return at;
       });
   ids.insert(ids.end(), middle.begin(), middle.end());
-  for (uint32_t i = std::max(lo, 8 * w1); i < hi; ++i)
-    if (!in_final[i]) ids.push_back(i);
+  for (uint64_t i = std::max<uint64_t>(lo, 8 * w1); i < hi; ++i)
+    if (!in_final[i]) ids.push_back(uint32_t(i));
   return ids;
 }
 
