@@ -649,14 +649,17 @@ RegionRules region_rules(const InputSet& in, const std::vector<InputPart>& parts
 }
 
 OpenEnds open_region_ends(const PreparedInput& prepared, const RegionRules& rules) {
-  std::vector<uint8_t> odd(prepared.vertices.size(), 0);
+  // Both ends of every region edge, sorted: a byte a vertex would cost every run (1.25 GB at 1B points).
+  std::vector<uint32_t> ends;
   for (size_t c = 0; c < prepared.constraints.size() && c < rules.region_edge.size(); ++c)
-    if (rules.region_edge[c])
-      for (uint32_t v : prepared.constraints[c]) odd[v] ^= 1;
-  OpenEnds ends;
-  for (size_t v = odd.size(); v-- > 0;)
-    if (odd[v]) ++ends.count, ends.first = uint32_t(v);
-  return ends;
+    if (rules.region_edge[c]) ends.insert(ends.end(), prepared.constraints[c].begin(), prepared.constraints[c].end());
+  std::sort(ends.begin(), ends.end());
+  OpenEnds open;
+  for (size_t i = 0, j = 0; i < ends.size(); i = j) {
+    while (j < ends.size() && ends[j] == ends[i]) ++j;
+    if ((j - i) % 2 && open.count++ == 0) open.first = ends[i];
+  }
+  return open;
 }
 
 RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules) {
