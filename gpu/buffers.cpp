@@ -252,9 +252,10 @@ void HostStaging::fit(const Context& ctx, VkDeviceSize bytes) {
 }
 
 void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes,
-                       Queue on) {
+                       Queue on, VkDeviceSize staging_offset) {
   check_range(dst, bytes, 0, "copy from staging");
-  if (bytes) copy_region(ctx, staging.buffer.buffer, 0, dst.buffer, 0, bytes, on);
+  check_range(staging.buffer, bytes, staging_offset, "copy from staging");
+  if (bytes) copy_region(ctx, staging.buffer.buffer, staging_offset, dst.buffer, 0, bytes, on);
 }
 
 void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes,

@@ -66,9 +66,10 @@ struct HostStaging {
 // Where a copy runs: the compute queue (the caller holds the device), or the context's copy queue beside it
 // (Context::copy_queue; the compute queue where there is none). Callers on the copy queue take turns.
 enum class Queue { compute, copy };
-// The device's copies between a staging buffer (from its start) and a device buffer, synchronously.
+// The device's copies between a staging buffer (from its start, or from staging_offset) and a device buffer,
+// synchronously.
 void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes,
-                       Queue on = Queue::compute);
+                       Queue on = Queue::compute, VkDeviceSize staging_offset = 0);
 void copy_to_staging(const Context& ctx, const Buffer& src, const HostStaging& staging, VkDeviceSize bytes,
                      Queue on = Queue::compute);
 

@@ -1,6 +1,7 @@
 #include "gpu/cdt_pipeline.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <future>
@@ -10,6 +11,7 @@
 #include <spdlog/spdlog.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "core/parallel.hpp"
 #include "core/resolve.hpp"
@@ -171,7 +173,8 @@ void GpuCdt::keep(GpuTriangulation& tri) const {
 }
 
 void GpuCdt::constrain(GpuTriangulation& tri, std::span<const Edge> constraints, GpuCdtStats& s,
-                       bool recycle, bool unresolved, std::vector<std::array<uint32_t, 3>>* split) const {
+                       bool recycle, bool unresolved, std::vector<std::array<uint32_t, 3>>* split,
+                       const Buffer* uploaded) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
   //    constraints: the Delaunay triangulation is the answer.
@@ -179,7 +182,7 @@ void GpuCdt::constrain(GpuTriangulation& tri, std::span<const Edge> constraints,
   if (tri.num_slots > 0 && !constraints.empty()) {
     ConstraintOptions options = constraint_options;
     options.unresolved = unresolved;
-    ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, options);
+    ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, options, uploaded);
     if (split) *split = std::move(edges.split);
     if (recycle) inserter_.recycle(std::move(edges));  // its flags, for the next tile or run
     add_gpu(s, "cdt ", s.constraints.stage_ms);
@@ -229,7 +232,7 @@ TileFinal GpuCdt::finalize_tile(const TileJob& job, GpuCdtStats* stats) const {
   stage_points(job, staging);
   TileFinal f;
   Buffer sorted;
-  const uint32_t count = compute_tile(job, upload_tile(uint32_t(job.ids.size()), staging, s), staging, f, sorted, s);
+  const uint32_t count = compute_tile(job, upload_tile(job, staging, s), staging, f, sorted, s);
   download_tile(std::move(sorted), count, staging, s);
   unstage_triangles(staging, count, f);
   return f;
@@ -239,7 +242,36 @@ uint64_t GpuCdt::staging_bytes(uint64_t vertices) {
   return std::max<uint64_t>(16, 2 * sizeof(Triangle)) * vertices;  // the points, at most 2n triangles
 }
 
-void GpuCdt::stage_points(const TileJob& job, HostStaging& staging) { write_points(job.all, job.ids, staging.mapped); }
+namespace {
+// Where a tile's segments lie in its staging buffer, if they fit there: behind its points.
+bool segments_staged(uint64_t n, uint64_t m) { return m > 0 && m <= n; }
+uint64_t segments_offset(uint64_t n) { return n * 16; }
+}  // namespace
+
+void GpuCdt::stage_points(const TileJob& job, HostStaging& staging) {
+  const uint64_t n = job.ids.size(), m = job.segments.size();
+  if (!segments_staged(n, m)) return write_points(job.all, job.ids, staging.mapped);
+  // Copied and checked in one pass, beside the points (insert_constraints' check, which an uploaded list skips).
+  Edge* to = reinterpret_cast<Edge*>(static_cast<char*>(staging.mapped) + segments_offset(n));
+  std::atomic<uint64_t> bad{m};
+  tbb::parallel_invoke([&] { write_points(job.all, job.ids, staging.mapped); },
+                       [&] {
+                         tbb::parallel_for(tbb::blocked_range<uint64_t>(0, m, 1 << 16),
+                                           [&](const tbb::blocked_range<uint64_t>& r) {
+                                             for (uint64_t i = r.begin(); i < r.end(); ++i) {
+                                               const Edge e = job.segments[i];
+                                               if (e[0] >= n || e[1] >= n) {
+                                                 uint64_t b = bad.load();
+                                                 while (i < b && !bad.compare_exchange_weak(b, i)) {}
+                                               }
+                                               to[i] = e;
+                                             }
+                                           });
+                       });
+  if (const uint64_t b = bad.load(); b < m)
+    throw std::invalid_argument("insert_constraints: constraint " + std::to_string(b) + " has a vertex index past " +
+                                std::to_string(n) + " points");
+}
 
 Buffer GpuCdt::from_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const {
   Buffer b;
@@ -270,17 +302,27 @@ void GpuCdt::top_up_shelf(std::vector<Buffer>& list, uint64_t bytes, const char*
   }
 }
 
-Buffer GpuCdt::upload_tile(uint32_t n, const HostStaging& staging, GpuCdtStats& s) const {
-  const auto t = Clock::now();
-  Buffer points = from_shelf(shelf_->points, uint64_t(n) * 16, "points", false);
-  copy_from_staging(ctx_, staging, points, uint64_t(n) * 16, Queue::copy);
-  record_stage(s, "upload", t);
+Buffer GpuCdt::upload_points(uint64_t n, const HostStaging& staging) const {
+  Buffer points = from_shelf(shelf_->points, n * 16, "points", false);
+  copy_from_staging(ctx_, staging, points, n * 16, Queue::copy);
   return points;
 }
 
-uint32_t GpuCdt::compute_tile(const TileJob& job, Buffer points, HostStaging& staging, TileFinal& f, Buffer& sorted,
+GpuCdt::TileUpload GpuCdt::upload_tile(const TileJob& job, const HostStaging& staging, GpuCdtStats& s) const {
+  const auto t = Clock::now();
+  const uint64_t n = job.ids.size(), m = job.segments.size();
+  TileUpload up{upload_points(n, staging), {}};
+  if (segments_staged(n, m)) {
+    up.segments = from_shelf(shelf_->segments, m * 8, "cdt constraints", false);
+    copy_from_staging(ctx_, staging, up.segments, m * 8, Queue::copy, segments_offset(n));
+  }
+  record_stage(s, "upload", t);
+  return up;
+}
+
+uint32_t GpuCdt::compute_tile(const TileJob& job, TileUpload up, HostStaging& staging, TileFinal& f, Buffer& sorted,
                               GpuCdtStats& s) const {
-  return run_staged(std::move(points), uint32_t(job.ids.size()), job.segments, job.rect, staging, f, sorted, s,
+  return run_staged(std::move(up), uint32_t(job.ids.size()), job.segments, job.rect, staging, f, sorted, s,
                     job.unresolved);
 }
 
@@ -292,7 +334,7 @@ void GpuCdt::download_tile(Buffer sorted, uint32_t count, const HostStaging& sta
   shelf_->sorted.push_back(std::move(sorted));
 }
 
-uint32_t GpuCdt::run_staged(Buffer points, uint32_t n, std::span<const Edge> segments, const TileRect& rect,
+uint32_t GpuCdt::run_staged(TileUpload up, uint32_t n, std::span<const Edge> segments, const TileRect& rect,
                             HostStaging& staging, TileFinal& f, Buffer& sorted, GpuCdtStats& s,
                             bool unresolved) const {
   const auto t_all = Clock::now();
@@ -313,8 +355,12 @@ uint32_t GpuCdt::run_staged(Buffer points, uint32_t n, std::span<const Edge> seg
       shelf_->sorted.pop_back();
     }
   }
-  GpuTriangulation tri = build(std::move(points), n, s, &kept_);
-  constrain(tri, segments, s, /*recycle=*/true, unresolved, &f.split);
+  GpuTriangulation tri = build(std::move(up.points), n, s, &kept_);
+  constrain(tri, segments, s, /*recycle=*/true, unresolved, &f.split, up.segments.buffer ? &up.segments : nullptr);
+  if (up.segments.buffer) {
+    std::lock_guard<std::mutex> lock(shelf_->mutex);
+    shelf_->segments.push_back(std::move(up.segments));
+  }
   auto t = Clock::now();
   double ms = 0;
   f.border = finals_.mark(tri, rect, cache_, &ms);
@@ -352,7 +398,7 @@ void GpuCdt::warm_up_tiles(uint64_t vertices, HostStaging& staging) const {
   GpuCdtStats s;
   TileFinal f;
   Buffer sorted;
-  run_staged(upload_tile(n, staging, s), n, {}, TileRect{}, staging, f, sorted, s);
+  run_staged(TileUpload{upload_points(n, staging), {}}, n, {}, TileRect{}, staging, f, sorted, s);
   // Two of each buffer the copies hold, made now too: while a tile computes, the next one's points go up and the
   // last one's triangles come down.
   const uint64_t sorted_bytes = sorted.size;

@@ -82,10 +82,18 @@ class GpuCdt {
   // their count (the border in `f`); those downloaded into `staging` on the copy queue; then copied out (host
   // work). One tile's copies run beside another's compute: a tile of 125M points moves 2 GB up and 3 GB down,
   // ~0.2 s of its 0.7 s device call at 1B points. Stage times are added to `s`.
+  //
+  // The tile's segments go the same way, behind its points in the staging buffer where they fit (no more segments
+  // than points): uploaded inside the device's hold, they took 20 ms of a 1B-point tile's call on one device and
+  // 50 ms on each of two, the copy on all cores meeting the other tile's host copies.
   static uint64_t staging_bytes(uint64_t vertices);  // a tile of this many vertices
   static void stage_points(const TileJob& job, HostStaging& staging);
-  Buffer upload_tile(uint32_t n, const HostStaging& staging, GpuCdtStats& s) const;
-  uint32_t compute_tile(const TileJob& job, Buffer points, HostStaging& staging, TileFinal& f, Buffer& sorted,
+  struct TileUpload {
+    Buffer points;
+    Buffer segments;  // none where they did not fit (compute_tile uploads them itself)
+  };
+  TileUpload upload_tile(const TileJob& job, const HostStaging& staging, GpuCdtStats& s) const;
+  uint32_t compute_tile(const TileJob& job, TileUpload up, HostStaging& staging, TileFinal& f, Buffer& sorted,
                         GpuCdtStats& s) const;
   void download_tile(Buffer sorted, uint32_t count, const HostStaging& staging, GpuCdtStats& s) const;
   static void unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f);
@@ -124,6 +132,7 @@ class GpuCdt {
     kept_.clear();
     std::lock_guard<std::mutex> lock(shelf_->mutex);
     shelf_->points.clear();
+    shelf_->segments.clear();
     shelf_->sorted.clear();
   }
 
@@ -135,19 +144,22 @@ class GpuCdt {
   // The build of uploaded points, its stages added to `s`.
   GpuTriangulation build(Buffer points, uint32_t n, GpuCdtStats& s, BufferCache* keep) const;
   // compute_tile's work. unresolved: TileJob::unresolved.
-  uint32_t run_staged(Buffer points, uint32_t n, std::span<const Edge> segments, const TileRect& rect,
+  uint32_t run_staged(TileUpload up, uint32_t n, std::span<const Edge> segments, const TileRect& rect,
                       HostStaging& staging, TileFinal& f, Buffer& sorted, GpuCdtStats& s,
                       bool unresolved = false) const;
+  // A staging buffer's first n points on the device (the copy queue), in a buffer from the shelf.
+  Buffer upload_points(uint64_t n, const HostStaging& staging) const;
   // One of the shelf's buffers at least `bytes` long (made when none is).
   Buffer from_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const;
   // Buffers of `bytes` added to the shelf's `list` until it holds two.
   void top_up_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const;
   // Stage 3: the constraints inserted.
   // recycle: the inserter's flags stay in the cache for the next tile or run. unresolved:
-  // ConstraintOptions::unresolved, its splits into `split` (ConstrainedEdges::split).
+  // ConstraintOptions::unresolved, its splits into `split` (ConstrainedEdges::split). uploaded: the constraints
+  // on the device already (ConstraintInserter::insert).
   void constrain(GpuTriangulation& tri, std::span<const Edge> constraints, GpuCdtStats& s,
                  bool recycle = false, bool unresolved = false,
-                 std::vector<std::array<uint32_t, 3>>* split = nullptr) const;
+                 std::vector<std::array<uint32_t, 3>>* split = nullptr, const Buffer* uploaded = nullptr) const;
   // The triangulation's buffers into kept_ (and the shared cache) for the next tile or run.
   void keep(GpuTriangulation& tri) const;
   // Stage 4: the triangles downloaded in canonical order into `storage`.
@@ -161,11 +173,11 @@ class GpuCdt {
   // run to the next.
   mutable BufferCache kept_;
   // The buffers tiles' copies hold beside another tile's compute (upload_tile, download_tile): points on their
-  // way up, sorted triangles on their way down; two of each in steady state. Locked: the copies run on other
-  // threads than the compute.
+  // way up (and segments), sorted triangles on their way down; two of each in steady state. Locked: the copies
+  // run on other threads than the compute.
   struct Shelf {
     std::mutex mutex;
-    std::vector<Buffer> points, sorted;
+    std::vector<Buffer> points, segments, sorted;
   };
   std::unique_ptr<Shelf> shelf_ = std::make_unique<Shelf>();
   Primitives prims_;

@@ -273,8 +273,9 @@ void ConstraintInserter::recycle(ConstrainedEdges&& edges) const {
 void ConstraintInserter::release() const { scratch_.reset(); }
 
 ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<const Edge> constraints,
-                                            ConstraintStats* stats, const ConstraintOptions& options) const {
-  if (!options.unresolved) return insert_once(tri, constraints, stats, options, false);
+                                            ConstraintStats* stats, const ConstraintOptions& options,
+                                            const Buffer* uploaded) const {
+  if (!options.unresolved) return insert_once(tri, constraints, stats, options, false, uploaded);
   // A constraint through vertices is split at them and the whole is inserted again: the walks that find them
   // are the first submission's, before anything flips, so the triangulation is still the one given. One pass
   // finds them all unless there are more than CDT_THROUGH_CAP; after kPasses the resolve splits them instead.
@@ -287,7 +288,8 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   for (int pass = 0;; ++pass) {
     const auto t_pass = std::chrono::steady_clock::now();
     try {
-      ConstrainedEdges r = insert_once(tri, list, stats, checked, pass < kPasses);
+      // The uploaded list is the first pass's only.
+      ConstrainedEdges r = insert_once(tri, list, stats, checked, pass < kPasses, pass == 0 ? uploaded : nullptr);
       r.split = std::move(split);
       return r;
     } catch (ThroughVertices& t) {
@@ -347,7 +349,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
 
 ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::span<const Edge> constraints,
                                                  ConstraintStats* stats, const ConstraintOptions& options,
-                                                 bool split_through) const {
+                                                 bool split_through, const Buffer* uploaded) const {
   const uint32_t m = static_cast<uint32_t>(constraints.size());
   const uint32_t slots = tri.num_slots;
   const bool fixed_slots = options.layout == ConstraintOptions::Layout::FixedSlots;
@@ -357,8 +359,9 @@ ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::spa
   const uint32_t max_groups = ctx_.props.limits.maxComputeWorkGroupCount[0];
   const uint32_t max_steps = 3 * slots + 64;
   if (constraints.size() >= CDT_NEVER) throw std::invalid_argument("insert_constraints: too many constraints");
-  // On all cores: a 1B-point tile's 31M constraints took ~30 ms on one, inside the device's hold.
-  const size_t bad = tbb::parallel_reduce(
+  // On all cores: a 1B-point tile's 31M constraints took ~30 ms on one, inside the device's hold. An uploaded
+  // list was checked as it was staged.
+  const size_t bad = uploaded ? constraints.size() : tbb::parallel_reduce(
       tbb::blocked_range<size_t>(0, constraints.size(), 1 << 16), constraints.size(),
       [&](const tbb::blocked_range<size_t>& r, size_t first) {
         for (size_t i = r.begin(); i < r.end() && i < first; ++i)
@@ -390,8 +393,11 @@ ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::spa
 
   // Uploaded as they are (two uint32 each): a copy into a fresh array was ~0.2 s on one core per 31M.
   static_assert(sizeof(Edge) == 8);
-  const Buffer& cons = get("cdt constraints", uint64_t(m) * 8);
-  if (m) upload(ctx_, cons, constraints.data(), uint64_t(m) * 8);
+  if (uploaded && uploaded->size < uint64_t(m) * 8)
+    throw std::invalid_argument("insert_constraints: the uploaded constraints' buffer is too small");
+  if (uploaded) needed += uploaded->size;
+  const Buffer& cons = uploaded ? *uploaded : get("cdt constraints", uint64_t(m) * 8);
+  if (m && !uploaded) upload(ctx_, cons, constraints.data(), uint64_t(m) * 8);
   const Buffer& start = get("cdt start slots", uint64_t(m) * 4);
   const Buffer& counts = get("cdt crossing counts", uint64_t(m) * 4);
   const Buffer& offsets = get("cdt row offsets", uint64_t(m) * 4);

@@ -118,9 +118,10 @@ class ConstraintInserter {
 
   // Makes every constraint an edge of `tri`, then restores the constrained Delaunay property. Throws
   // DeviceError when a constraint breaks the input requirements (crossing, through a vertex, outside the hull),
-  // except as ConstraintOptions::unresolved says.
+  // except as ConstraintOptions::unresolved says. `uploaded`: the constraints copied to the device already
+  // (8 bytes each, checked against the points; a tile's, gpu/cdt_pipeline), read and left as they are.
   ConstrainedEdges insert(GpuTriangulation& tri, std::span<const Edge> constraints, ConstraintStats* stats = nullptr,
-                          const ConstraintOptions& options = {}) const;
+                          const ConstraintOptions& options = {}, const Buffer* uploaded = nullptr) const;
   // Frees the scratch buffers kept since the last call.
   void release() const;
   // Puts a result's flags into `cache` for the next call's (tiles: 4 bytes a slot, 1 GB a tile at 1B points,
@@ -136,7 +137,8 @@ class ConstraintInserter {
   // insert() of resolved constraints. split_through: walks that meet vertices on their constraints hand the
   // pairs back (as ThroughVertices, gpu/constraints.cpp) instead of an error.
   ConstrainedEdges insert_once(GpuTriangulation& tri, std::span<const Edge> constraints, ConstraintStats* stats,
-                               const ConstraintOptions& options, bool split_through) const;
+                               const ConstraintOptions& options, bool split_through,
+                               const Buffer* uploaded = nullptr) const;
   const Context& ctx_;
   const Primitives& prims_;
   mutable std::unique_ptr<Scratch> scratch_;

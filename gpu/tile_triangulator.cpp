@@ -135,7 +135,7 @@ class OnDevice {
         TileFinal f;
         GpuCdtStats one;
         const auto t2 = std::chrono::steady_clock::now();
-        Buffer points = on_copy_queue(d, [&] { return cdt.upload_tile(uint32_t(job.ids.size()), staging, one); });
+        GpuCdt::TileUpload up = on_copy_queue(d, [&] { return cdt.upload_tile(job, staging, one); });
         const auto t3 = std::chrono::steady_clock::now();
         Buffer sorted;
         uint32_t count = 0;
@@ -147,7 +147,7 @@ class OnDevice {
           spdlog::debug("{}: waited {:.0f} ms for its staging memory, {:.0f} ms for a slot, staged in {:.0f} ms, "
                         "uploaded in {:.0f} ms, waited {:.0f} ms for the device",
                         job.what, ms(t1 - slot_taken), ms(slot_taken - t0), ms(t2 - t1), ms(t3 - t2), ms(t4 - t3));
-          count = cdt.compute_tile(job, std::move(points), staging, f, sorted, one);
+          count = cdt.compute_tile(job, std::move(up), staging, f, sorted, one);
         }
         const auto t5 = std::chrono::steady_clock::now();
         on_copy_queue(d, [&] { cdt.download_tile(std::move(sorted), count, staging, one); });
