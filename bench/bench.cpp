@@ -343,7 +343,7 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
       ->check(CLI::Range(1, 16));
   cmd->add_option("--tile-ramps", o.tile_ramps,
                   "tiles: a GPU tiled row for each of these ramps, the first and the last slab cut into this many "
-                  "(0 or 1: none, as cdtgpu triangulate runs them)")
+                  "(0 or 1: none; without the option, cdtgpu triangulate's: 2 for tiles of 100M points or more on a GPU)")
       ->delimiter(',');
   cmd->add_option("--devices", o.devices,
                   "tiles: also GPU tiled rows on several devices, 2, 4, ... up to all of these (all, or indices "

@@ -220,9 +220,9 @@ int run_tiles(const BenchOptions& o) {
                                               : std::min(devices.max_tile_points(), p.vertices.size() / (4 * users.size()) + 1);
       gpu::GpuCdtStats sum;
       const gpu::GpuTiles tri = gpu::gpu_tiles(users, &sum);
-      // One row a ramp of --tile-ramps (TileOptions::ramp), each named by it; without it, none, as cdtgpu
-      // triangulate runs its tiles.
-      for (const unsigned ramp : o.tile_ramps.empty() ? std::vector<unsigned>{0} : o.tile_ramps) {
+      // One row a ramp of --tile-ramps (TileOptions::ramp), each named by it; without it, cdtgpu triangulate's.
+      const unsigned ramp_of_cli = gpu::tile_ramp(users, gpu_tile);
+      for (const unsigned ramp : o.tile_ramps.empty() ? std::vector<unsigned>{ramp_of_cli} : o.tile_ramps) {
         const std::string backend = (users.size() == 1 ? "gpu" : "gpu-" + std::to_string(users.size())) +
                                     (o.tile_ramps.empty() ? "" : " ramp " + std::to_string(ramp));
         const double memory_before = gpu::memory_ms();

@@ -107,8 +107,10 @@ void record_tiles(Job& job, const TileStats& ts, uint64_t tile_points);
 
 CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
                                const TileTriangulator& triangulate, unsigned in_flight = 0,
-                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {}) {
-  const TileOptions opt = tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve));
+                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {},
+                               unsigned ramp = 0) {
+  TileOptions opt = tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve));
+  opt.ramp = ramp;
   TileStats ts;
   job.stats.counts["constraint_splits_at_vertices"] = in.split_at_vertices;
   CdtResult r = timed(job, "triangulate: tiles and merge", [&] {
@@ -380,8 +382,9 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           gpu::GpuTiles& tiles = *staged;
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
           if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
-            const TileOptions opt =
+            TileOptions opt =
                 tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
+            opt.ramp = gpu::tile_ramp(devices.cdts(), tile_here);
             TileStats ts;
             std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
@@ -402,7 +405,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           }
           CdtResult r = triangulate_in_tiles(job, std::move(input()), tile_here, tiles.triangulate,
                                              unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
-                                             std::move(tiles.reserve));
+                                             std::move(tiles.reserve), gpu::tile_ramp(devices.cdts(), tile_here));
           stats.counts["gpu_tile_retries"] = retries;
           return r;
         } catch (const gpu::DeviceError& e) {

@@ -103,9 +103,9 @@ struct TileOptions {
   // core/tile_plan.hpp; `automatic` is squares without a finalizer (the CPU's tiles); tests force slabs.
   TileShape shape = TileShape::automatic;
   // Slabs only: the first and the last slab cut into this many thinner ones (core/tile_plan.hpp), so that the
-  // devices start and end on smaller tiles. Off in cdtgpu triangulate: its devices' buffers are sized by their
-  // first tile, and a thin one makes them all regrow at the next (`bench --table tiles --tile-ramps` tries it
-  // on warm devices; docs/tiles.md).
+  // devices start and end on smaller tiles. cdtgpu triangulate takes 2 where its devices are warmed up for the
+  // largest tile (gpu::tile_ramp), else none: a device's buffers are sized by its first tile, and a thin one
+  // would make them all regrow at the next (`bench --table tiles --tile-ramps` tries others; docs/tiles.md).
   unsigned ramp = 0;
   // The input is not resolved, and the finalizer checks each first-level tile for what the resolve would split
   // (TileJob::unresolved; the GPU's constraint insertion meets every such case). A tile with two segments that

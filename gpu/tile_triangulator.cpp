@@ -245,6 +245,10 @@ uint64_t warm_up_from(const std::vector<const GpuCdt*>& cdts) {
   return 100'000'000;
 }
 
+unsigned tile_ramp(const std::vector<const GpuCdt*>& cdts, uint64_t tile_points) {
+  return tile_points >= warm_up_from(cdts) ? 2 : 0;
+}
+
 GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
   const uint64_t from = warm_up_from(cdts);
   return gpu_tiles(std::move(cdts), sum, from);

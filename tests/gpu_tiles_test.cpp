@@ -74,6 +74,8 @@ TEST(GpuTiles, WarmedUpDevicesGiveTheSingleRunsBytes) {
     TileOptions opt;
     opt.max_tile_points = 2000;
     opt.tiles_in_flight = 4;
+    // The second run as cdtgpu triangulate runs warmed-up tiles: slabs, the first and the last cut in two.
+    if (run == 1) opt.shape = TileShape::slabs, opt.ramp = 2;
     opt.finalize = tiles.finalize, opt.reserve = tiles.reserve;
     tiles.reserve(tile_staging_points(p.vertices.size(), opt.max_tile_points));
     // A warm-up is skipped once a tile has begun: waited for here, so that the test does not race it.
@@ -83,8 +85,11 @@ TEST(GpuTiles, WarmedUpDevicesGiveTheSingleRunsBytes) {
     EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << "run " << run;
     EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << "run " << run;
   }
-  // The default: never on a CPU device, 100M points on hardware GPUs.
-  EXPECT_EQ(gpu::warm_up_from({&a}), a.context().info.type == "cpu" ? UINT64_MAX : uint64_t(100'000'000));
+  // The default: never on a CPU device, 100M points on hardware GPUs; the ramp where they warm up.
+  const bool cpu = a.context().info.type == "cpu";
+  EXPECT_EQ(gpu::warm_up_from({&a}), cpu ? UINT64_MAX : uint64_t(100'000'000));
+  EXPECT_EQ(gpu::tile_ramp({&a}, 134'000'000), cpu ? 0u : 2u);
+  EXPECT_EQ(gpu::tile_ramp({&a}, 20'000'000), 0u);
 }
 
 // The device's final triangles of one tile against the host's test on the same CDT: never one the host does not
@@ -123,6 +128,15 @@ TEST(GpuTiles, DeviceFinalTestIsWithinTheHostsTest) {
   const double w = x1 - x0, h = y1 - y0;
   expect_final_within_host(cdt, r.vertices, r.constraints, TileRect{x0 + w / 4, x1 - w / 4, y0 + h / 5, y1 - h / 3}, "uniform, inner");
   expect_final_within_host(cdt, r.vertices, r.constraints, TileRect{-std::numeric_limits<double>::infinity(), x0 + w / 2, y0 + h / 2, std::numeric_limits<double>::infinity()}, "uniform, a corner tile");
+  // More segments than points (nearly every Delaunay edge a segment): not staged behind the points, but
+  // uploaded inside the device's call as a whole run's are (GpuCdt::upload_tile).
+  InputSet dense = uniform_points(2000, 12);
+  add_dt_edge_constraints(dense, 5000, 1.0, 12);
+  const ResolvedInput d = resolve_constraints(prepare(dense));
+  ASSERT_GT(d.constraints.size(), d.vertices.size());
+  expect_final_within_host(cdt, d.vertices, d.constraints,
+                           TileRect{kUniformX0 + 2000, kUniformX0 + 7000, kUniformY0 + 1000, kUniformY0 + 8000},
+                           "more segments than points");
   InputSet grid;
   for (int i = 0; i < 60; ++i)
     for (int j = 0; j < 60; ++j) grid.points.push_back({double(i), double(j), 0.0});
