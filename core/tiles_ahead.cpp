@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include "core/resolve.hpp"
+
 namespace cdtgpu {
 
 std::optional<Triangles> tiled_cdt_unresolved(const PreparedInput& prepared, TileOptions options,
@@ -13,6 +15,16 @@ std::optional<Triangles> tiled_cdt_unresolved(const PreparedInput& prepared, Til
     spdlog::debug("the input has constraints to split ({}): resolved, then tiled again", e.what());
     return std::nullopt;
   }
+}
+
+CdtResult triangulate_tiled_checking(const PreparedInput& prepared, const TileOptions& options,
+                                     const TileTriangulator& triangulate, TileStats* stats) {
+  std::optional<Triangles> t = tiled_cdt_unresolved(prepared, options, triangulate, stats);
+  if (!t) return triangulate_tiled(resolve_constraints(prepared), options, triangulate, stats);
+  CdtResult r;
+  r.mesh.vertices = prepared.vertices;  // unchanged: the tiles split segments at them, and nothing crosses
+  r.mesh.triangles = std::move(*t);
+  return r;
 }
 
 }  // namespace cdtgpu

@@ -7,6 +7,8 @@
 //
 //   std::optional<Triangles> t = tiled_cdt_unresolved(prepared, options, triangulate, &stats);
 //   if (!t) t = triangulate_tiled(resolve_constraints(prepared), options, triangulate, &stats).mesh.triangles;
+//
+// or, with a copy of the prepared vertices, triangulate_tiled_checking(prepared, options, triangulate).
 #pragma once
 #include <optional>
 
@@ -22,5 +24,10 @@ namespace cdtgpu {
 // are not begun); the caller resolves and tiles again.
 std::optional<Triangles> tiled_cdt_unresolved(const PreparedInput& prepared, TileOptions options,
                                               const TileTriangulator& triangulate, TileStats* stats = nullptr);
+
+// The mesh as cdtgpu triangulate makes it in GPU tiles: tiled_cdt_unresolved, else resolved and tiled again. The
+// prepared vertices are copied (the CLI moves its own instead).
+CdtResult triangulate_tiled_checking(const PreparedInput& prepared, const TileOptions& options,
+                                     const TileTriangulator& triangulate, TileStats* stats = nullptr);
 
 }  // namespace cdtgpu

@@ -209,16 +209,8 @@ TEST(GpuTiles, LatticeSoupsGiveOneMeshOnEveryPath) {
     }
     expect_single(cdt.triangulate(p), "GPU");
     for (uint64_t tp : {40, 300}) {
-      TileStats ts;
-      std::optional<Triangles> t = tiled_cdt_unresolved(p, device_tiles(tp, tiles), tiles.triangulate, &ts);
-      CdtResult r;
-      if (t) {
-        r.mesh.vertices = p.vertices;
-        r.mesh.triangles = std::move(*t);
-      } else {
-        r = triangulate_tiled(resolve_constraints(p), device_tiles(tp, tiles), tiles.triangulate);
-      }
-      expect_single(r, "GPU tiles of " + std::to_string(tp) + (t ? "" : ", resolved after they gave up"));
+      expect_single(triangulate_tiled_checking(p, device_tiles(tp, tiles), tiles.triangulate),
+                    "GPU tiles of " + std::to_string(tp));
     }
   }
   EXPECT_GE(crossing, 8);

@@ -83,13 +83,7 @@ int main(int argc, char** argv) {
         opt.tiles_in_flight = 2;
         opt.finalize = tiles.finalize;
         opt.reserve = tiles.reserve;
-        CdtResult r;
-        if (std::optional<Triangles> t = tiled_cdt_unresolved(p, opt, tiles.triangulate)) {
-          r.mesh.vertices = p.vertices;
-          r.mesh.triangles = std::move(*t);
-          return r;
-        }
-        return triangulate_tiled(resolve_constraints(p), opt, tiles.triangulate);
+        return triangulate_tiled_checking(p, opt, tiles.triangulate);
       });
     }
   }
