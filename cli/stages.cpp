@@ -380,11 +380,12 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           staged = ahead && ahead->tiles ? std::move(ahead->tiles)
                                          : std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts()));
           gpu::GpuTiles& tiles = *staged;
+          const unsigned ramp = gpu::tile_ramp(devices.cdts(), tile_here);
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
           if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
             TileOptions opt =
                 tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
-            opt.ramp = gpu::tile_ramp(devices.cdts(), tile_here);
+            opt.ramp = ramp;
             TileStats ts;
             std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
@@ -405,7 +406,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
           }
           CdtResult r = triangulate_in_tiles(job, std::move(input()), tile_here, tiles.triangulate,
                                              unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
-                                             std::move(tiles.reserve), gpu::tile_ramp(devices.cdts(), tile_here));
+                                             std::move(tiles.reserve), ramp);
           stats.counts["gpu_tile_retries"] = retries;
           return r;
         } catch (const gpu::DeviceError& e) {

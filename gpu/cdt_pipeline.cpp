@@ -1,7 +1,6 @@
 #include "gpu/cdt_pipeline.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <future>
@@ -251,26 +250,13 @@ uint64_t segments_offset(uint64_t n) { return n * 16; }
 void GpuCdt::stage_points(const TileJob& job, HostStaging& staging) {
   const uint64_t n = job.ids.size(), m = job.segments.size();
   if (!segments_staged(n, m)) return write_points(job.all, job.ids, staging.mapped);
-  // Copied and checked in one pass, beside the points (insert_constraints' check, which an uploaded list skips).
+  // Beside the points: the inserter's check, which an uploaded list skips, then the copy.
   Edge* to = reinterpret_cast<Edge*>(static_cast<char*>(staging.mapped) + segments_offset(n));
-  std::atomic<uint64_t> bad{m};
   tbb::parallel_invoke([&] { write_points(job.all, job.ids, staging.mapped); },
                        [&] {
-                         tbb::parallel_for(tbb::blocked_range<uint64_t>(0, m, 1 << 16),
-                                           [&](const tbb::blocked_range<uint64_t>& r) {
-                                             for (uint64_t i = r.begin(); i < r.end(); ++i) {
-                                               const Edge e = job.segments[i];
-                                               if (e[0] >= n || e[1] >= n) {
-                                                 uint64_t b = bad.load();
-                                                 while (i < b && !bad.compare_exchange_weak(b, i)) {}
-                                               }
-                                               to[i] = e;
-                                             }
-                                           });
+                         check_constraint_ids(job.segments, n);
+                         copy_on_all_cores(job.segments.data(), m, to);
                        });
-  if (const uint64_t b = bad.load(); b < m)
-    throw std::invalid_argument("insert_constraints: constraint " + std::to_string(b) + " has a vertex index past " +
-                                std::to_string(n) + " points");
 }
 
 Buffer GpuCdt::from_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const {

@@ -272,6 +272,21 @@ void ConstraintInserter::recycle(ConstrainedEdges&& edges) const {
 
 void ConstraintInserter::release() const { scratch_.reset(); }
 
+void check_constraint_ids(std::span<const Edge> constraints, uint64_t num_points) {
+  // On all cores: a 1B-point tile's 31M constraints took ~30 ms on one.
+  const size_t bad = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, constraints.size(), 1 << 16), constraints.size(),
+      [&](const tbb::blocked_range<size_t>& r, size_t first) {
+        for (size_t i = r.begin(); i < r.end() && i < first; ++i)
+          if (constraints[i][0] >= num_points || constraints[i][1] >= num_points) return i;
+        return first;
+      },
+      [](size_t a, size_t b) { return std::min(a, b); });
+  if (bad < constraints.size())
+    throw std::invalid_argument("insert_constraints: constraint " + std::to_string(bad) + " has a vertex index past " +
+                                std::to_string(num_points) + " points");
+}
+
 ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<const Edge> constraints,
                                             ConstraintStats* stats, const ConstraintOptions& options,
                                             const Buffer* uploaded) const {
@@ -359,19 +374,7 @@ ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::spa
   const uint32_t max_groups = ctx_.props.limits.maxComputeWorkGroupCount[0];
   const uint32_t max_steps = 3 * slots + 64;
   if (constraints.size() >= CDT_NEVER) throw std::invalid_argument("insert_constraints: too many constraints");
-  // On all cores: a 1B-point tile's 31M constraints took ~30 ms on one, inside the device's hold. An uploaded
-  // list was checked as it was staged.
-  const size_t bad = uploaded ? constraints.size() : tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, constraints.size(), 1 << 16), constraints.size(),
-      [&](const tbb::blocked_range<size_t>& r, size_t first) {
-        for (size_t i = r.begin(); i < r.end() && i < first; ++i)
-          if (constraints[i][0] >= tri.num_points || constraints[i][1] >= tri.num_points) return i;
-        return first;
-      },
-      [](size_t a, size_t b) { return std::min(a, b); });
-  if (bad < constraints.size())
-    throw std::invalid_argument("insert_constraints: constraint " + std::to_string(bad) + " has a vertex index past " +
-                                std::to_string(tri.num_points) + " points");
+  if (!uploaded) check_constraint_ids(constraints, tri.num_points);  // an uploaded list was checked as it was staged
 
   if (!scratch_) scratch_ = std::make_unique<Scratch>();
   Scratch& sc = *scratch_;

@@ -146,6 +146,10 @@ class ConstraintInserter {
       legal_flip_;
 };
 
+// Throws std::invalid_argument naming the first constraint with a vertex index of num_points or more (insert's
+// own check, which callers that upload the constraints themselves make beforehand).
+void check_constraint_ids(std::span<const Edge> constraints, uint64_t num_points);
+
 // One-shot convenience (builds the pipelines on every call; keep a ConstraintInserter for repeated use).
 ConstrainedEdges insert_constraints(const Context& ctx, GpuTriangulation& tri, std::span<const Edge> constraints,
                                     ConstraintStats* stats = nullptr, const ConstraintOptions& options = {});

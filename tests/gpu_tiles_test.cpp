@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <limits>
 #include <set>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <tuple>
 
@@ -142,6 +144,28 @@ TEST(GpuTiles, DeviceFinalTestIsWithinTheHostsTest) {
     for (int j = 0; j < 60; ++j) grid.points.push_back({double(i), double(j), 0.0});
   const ResolvedInput g = resolve_constraints(prepare(grid));
   expect_final_within_host(cdt, g.vertices, g.constraints, TileRect{10, 40, 5, 50}, "grid, sides on grid lines");
+}
+
+// A tile segment past the tile's points is refused, whether staged behind the points (no more segments than
+// points) or uploaded in the call (more).
+TEST(GpuTiles, ASegmentPastTheTilesPointsIsRefused) {
+  const gpu::Context ctx = gpu::create_context(gpu::ContextOptions{});
+  const gpu::GpuCdt cdt(ctx);
+  const Points all = uniform_points(100, 3).points;
+  std::vector<uint32_t> ids(all.size());
+  for (uint32_t i = 0; i < ids.size(); ++i) ids[i] = i;
+  for (const size_t m : {size_t(5), size_t(150)}) {
+    std::vector<Edge> segments(m, Edge{0, 1});
+    segments[m - 2] = {2, 100};
+    try {
+      cdt.finalize_tile(TileJob{all, ids, segments, TileRect{}, "bad"});
+      ADD_FAILURE() << m << " segments";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("constraint " + std::to_string(m - 2) + " has a vertex index past 100"),
+                std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 // Tiles of at most tp points with the device's final test; tp = 100: slabs (a tile whose ids are a range).
