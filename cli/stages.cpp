@@ -743,12 +743,8 @@ void triangulate_job(Job& job) {
 
 void apply_job_regions(Job& job) {
   const RegionRules rules = region_rules(job.in, job.parts, job.prepared, job.options.max_edge);
-  if (const OpenEnds open = open_region_ends(job.prepared, rules); open.count) {
-    const Point3& p = job.prepared.vertices[open.first];
-    spdlog::warn("boundary and hole lines do not close ({} open ends, the first at ({}, {})): their regions leak "
-                 "(docs/rules.md, \"Regions\")",
-                 open.count, number_text(p.x), number_text(p.y));
-  }
+  if (const OpenEnds open = open_region_ends(job.prepared, rules); open.count)
+    spdlog::warn("{}: their regions leak (docs/rules.md, \"Regions\")", open_ends_text(job.prepared, open));
   const RegionStats rs = timed(job, "regions", [&] { return apply_regions(job.result.mesh, job.prepared, rules); });
   if (rs.triangles_outside || rs.triangles_trimmed)
     spdlog::info("dropped {} triangles outside boundaries or inside holes, {} by --max-edge", rs.triangles_outside,

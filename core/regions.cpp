@@ -662,6 +662,12 @@ OpenEnds open_region_ends(const PreparedInput& prepared, const RegionRules& rule
   return open;
 }
 
+std::string open_ends_text(const PreparedInput& prepared, const OpenEnds& open) {
+  const Point3& p = prepared.vertices[open.first];
+  return "boundary and hole lines do not close (" + std::to_string(open.count) + " open ends, the first at (" +
+         number_text(p.x) + ", " + number_text(p.y) + "))";
+}
+
 RegionStats apply_regions(Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules) {
   RegionStats stats;
   const size_t T = mesh.triangles.size(), V = mesh.vertices.size();

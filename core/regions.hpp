@@ -58,6 +58,8 @@ struct OpenEnds {
   uint32_t first = 0;  // the first such vertex, when count > 0
 };
 OpenEnds open_region_ends(const PreparedInput& prepared, const RegionRules& rules);
+// "boundary and hole lines do not close (N open ends, the first at (x, y))", for the messages that name them.
+std::string open_ends_text(const PreparedInput& prepared, const OpenEnds& open);
 
 // Drops the triangles outside the domain and those trimmed, then the vertices left in no triangle. `mesh` is
 // the CDT of `prepared` in canonical order; it stays canonical. A mesh without triangles is left as it is; one

@@ -152,12 +152,9 @@ std::vector<uint8_t> trimmed_reference(const Mesh& m, const std::vector<Edge>& c
 VerifyReport verify_regions(const Mesh& mesh, const PreparedInput& prepared, const RegionRules& rules,
                             size_t max_failures) {
   // Only inside closed rings is a ray's parity the nesting level.
-  if (const OpenEnds open = open_region_ends(prepared, rules); open.count) {
-    const Point3& p = prepared.vertices[open.first];
-    throw UsageError("verify: the boundary and hole lines do not close (" + std::to_string(open.count) +
-                     " open ends, the first at (" + num(p.x) + ", " + num(p.y) + ")): a region that does not " +
-                     "close leaks (docs/rules.md, \"Regions\"), which verify does not check; close the rings");
-  }
+  if (const OpenEnds open = open_region_ends(prepared, rules); open.count)
+    throw UsageError("verify: the " + open_ends_text(prepared, open) + ": a region that does not close leaks " +
+                     "(docs/rules.md, \"Regions\"), which verify does not check; close the rings");
   const CdtResult full = triangulate_cgal(prepared);
   std::vector<Edge> constrained;
   VerifyReport report = verify_mesh(full.mesh, prepared, max_failures, &constrained);
