@@ -2,6 +2,7 @@
 // run and `cdtgpu batch` (cli/batch.hpp) fill it by the same stage functions, in the same order.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 #include "core/stats.hpp"
 #include "gpu/contours.hpp"
 #include "gpu/raster.hpp"
+#include "io/mesh_file_ahead.hpp"
 #include "io/readers.hpp"
 #include "io/tiles_dir.hpp"
 #include "io/writers.hpp"
@@ -71,6 +73,9 @@ struct Job {
   std::vector<InputPart> parts;  // what each input added, with its role and z rule
   Crs crs;
   PreparedInput prepared;
+  // begin_mesh_file: the output's vertex section being written from prepared.vertices' storage, which stays
+  // until mesh_ahead->wait() (stages.cpp: vertices_may_go). Declared after `prepared`: gone before it.
+  std::unique_ptr<MeshFileAhead> mesh_ahead;
 
   // choose_backend
   bool want_gpu = false;

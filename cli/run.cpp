@@ -31,6 +31,7 @@ int run_triangulate(const TriangulateOptions& options) {
   choose_backend(job, gpus);
   open_tiles_early(job);
   prepare_job(job);
+  begin_mesh_file(job);
   triangulate_job(job);
   if (options.ranks) {
     const uint64_t elsewhere = options.ranks->end();

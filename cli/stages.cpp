@@ -183,10 +183,17 @@ bool prepared_read_later(const Job& job) {
   return job.options.max_edge > 0 || !job.options.preview.empty() || has_region_inputs(job);
 }
 
+// The prepared vertices' storage about to be freed, or handed to a stage that may free it: a mesh file begun
+// from it is done reading it first.
+void vertices_may_go(Job& job) {
+  if (job.mesh_ahead) job.mesh_ahead->wait();
+}
+
 // The prepared vertices and segments, once the triangulation needs them no more and no later stage reads them:
 // 36 bytes a vertex of a tiled run's peak, beside the resolved copy the tiles read. Their counts are in the stats.
 void drop_prepared(Job& job) {
   if (prepared_read_later(job)) return;
+  if (!job.prepared.vertices.empty()) vertices_may_go(job);
   free_storage(job.prepared.vertices);
   free_storage(job.prepared.constraints);
   free_storage(job.prepared.constraint_line);
@@ -210,6 +217,7 @@ ResolvedInput filled(Job& job, ResolvedInput&& r) {
     r.vertices = job.prepared.vertices;
     r.constraints = job.prepared.constraints;
   } else {
+    vertices_may_go(job);
     r.vertices = std::move(job.prepared.vertices);
     r.constraints = std::move(job.prepared.constraints);
   }
@@ -219,6 +227,7 @@ ResolvedInput filled(Job& job, ResolvedInput&& r) {
 // The prepared vertices and segments moved out for a resolve that takes them (their counts stay in
 // job.prepared), the constraints' line numbers freed: for a run where no later stage reads them.
 PreparedInput take_prepared(Job& job) {
+  vertices_may_go(job);
   PreparedInput taken;
   taken.vertices = std::move(job.prepared.vertices);
   taken.constraints = std::move(job.prepared.constraints);
@@ -391,12 +400,9 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
             });
             if (t) {  // no resolve ran: the prepared vertices are the resolved ones (tiles split segments at them)
-              ResolvedInput same;
-              same.unchanged = true;
-              got.emplace(filled(job, std::move(same)));
+              CdtResult r;  // their storage moved (not freed: a mesh file may be begun from it)
+              r.mesh.vertices = prepared_read_later(job) ? job.prepared.vertices : std::move(job.prepared.vertices);
               drop_prepared(job);
-              CdtResult r;
-              r.mesh.vertices = std::move(input().vertices);  // unchanged: the prepared vertices
               r.mesh.triangles = std::move(*t);
               record_tiles(job, ts, tile_here);
               stats.counts["constraint_splits_at_vertices"] = ts.split_at_vertices;
@@ -686,6 +692,13 @@ void prepare_job(Job& job) {
   job.stats.crs_epsg = job.crs.epsg;
 }
 
+void begin_mesh_file(Job& job) {
+  const TriangulateOptions& o = job.options;
+  if (o.output.empty() || o.max_edge > 0 || has_region_inputs(job)) return;
+  job.mesh_ahead = std::make_unique<MeshFileAhead>(o.output, crs_for(job, o.output), job.write, job.prepared.vertices);
+  if (!job.mesh_ahead->begun()) job.mesh_ahead.reset();
+}
+
 // The GPU is waited for as late as possible, so that its start (~160 ms on the H100 machine) overlaps the CPU's
 // work: reading, the duplicate merge and resolving the constraints. Auto falls back to the CPU when the start
 // fails or the device refuses the input; a forced GPU throws.
@@ -811,7 +824,10 @@ namespace {
 // thread of its own beside derive_outputs.
 uint64_t write_mesh_files(const Job& job) {
   const TriangulateOptions& options = job.options;
-  if (!options.output.empty())
+  // A file begun ahead is finished where the mesh has the prepared vertices: the run added none (prepare's
+  // vertices are canonical, a resolve only adds Steiner vertices) and dropped none (no regions, begin_mesh_file).
+  const bool ahead = job.mesh_ahead && job.mesh_ahead->finish(job.result.mesh, job.result.steiner_points == 0);
+  if (!options.output.empty() && !ahead)
     write_mesh_file(job.result.mesh, crs_for(job, options.output), job.write, options.output);
   if (options.tiles_out.empty()) return 0;
   // Pieces as large as the run's tiles, else a million points a file.
@@ -882,6 +898,8 @@ void count_results(Job& job) {
   if (job.grid) c["grid_cells"] = job.grid->z.size();
   if (!job.options.contours_out.empty()) c["contour_lines"] = job.contours.size();
   c["steiner_points"] = result.steiner_points;
+  if (job.mesh_ahead)
+    job.stats.stage_ms.emplace_back("write: mesh vertices, begun ahead (own thread)", job.mesh_ahead->vertices_ms());
   c["vertices"] = result.mesh.vertices.size();
   c["triangles"] = result.mesh.triangles.size();
   job.stats.peak_host_bytes = peak_host_bytes();  // the process's: in a batch, the largest job's so far
@@ -898,6 +916,7 @@ void count_results(Job& job) {
 void release_job(Job& job, GpuStarts* exiting) {
   timed(job, "release", [&] {
     if (exiting) exiting->leave_for_exit();
+    job.mesh_ahead.reset();  // a file not finished (no output was written): removed
     job.in = InputSet{};
     free_storage(job.parts);
     job.prepared = PreparedInput{};

@@ -9,6 +9,7 @@
 //   read_job(job);                  // read, project, drape
 //   choose_backend(job, gpus);      // auto: by the points read
 //   prepare_job(job);               // duplicates merged, segments indexed
+//   begin_mesh_file(job);           // a single run: the mesh file's vertices written during the triangulation
 //   triangulate_job(job);           // CGAL, the GPU, or tiles of either        } the device's stages: one
 //   apply_job_regions(job);         // boundaries, holes, --max-edge            } job at a time in a batch
 //   derive_outputs(job);            // grid, contours, preview's raster         }
@@ -40,6 +41,11 @@ void open_tiles_early(Job& job);
 void prepare_job(Job& job);
 // An MPI rank other than 0 (cli/mpi.hpp): reads its share for rank 0, then runs the tiles rank 0 hands it.
 void serve_tiles(Job& job);
+// The output's vertex section written on a thread of its own from the prepared vertices (io/mesh_file_ahead),
+// where they will be the mesh's: OBJ and PLY files of a run without boundaries, holes or --max-edge. The
+// write stage adds the faces, or writes the whole file where the run added vertices (crossings). Not in a batch,
+// whose writer is busy with the job before.
+void begin_mesh_file(Job& job);
 void triangulate_job(Job& job);
 void apply_job_regions(Job& job);
 void derive_outputs(Job& job);

@@ -26,6 +26,7 @@
 #include <stdexcept>
 #include <streambuf>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace cdtgpu {
@@ -34,15 +35,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// ---- the temporary file removed on SIGINT / SIGTERM / SIGHUP ----
-// One at a time: outputs are written one after another. The handler uses only async-signal-safe calls
-// (unlink, raise); SA_RESETHAND restores the default action, so the re-raised signal ends the process with
-// the status a shell expects (128 + signal).
-char g_temp_path[4096];
-volatile std::sig_atomic_t g_temp_armed = 0;
+// ---- the temporary files removed on SIGINT / SIGTERM / SIGHUP ----
+// A few at a time: outputs are written one after another, but a mesh file begun ahead (ReplacingFile) stays
+// open beside the others. The handler uses only async-signal-safe calls (unlink, raise); SA_RESETHAND restores
+// the default action, so the re-raised signal ends the process with the status a shell expects (128 + signal).
+constexpr int kTempSlots = 4;
+char g_temp_path[kTempSlots][4096];
+volatile std::sig_atomic_t g_temp_armed[kTempSlots] = {};
+std::mutex g_temp_mutex;
 
 extern "C" void remove_temp_and_reraise(int sig) {
-  if (g_temp_armed) ::unlink(g_temp_path);
+  for (int i = 0; i < kTempSlots; ++i)
+    if (g_temp_armed[i]) ::unlink(g_temp_path[i]);
   ::raise(sig);
 }
 
@@ -62,15 +66,23 @@ void install_signal_handlers() {
   });
 }
 
-void arm_temp(const std::string& tmp) {
+// The slot that now names tmp, or -1 (none free, or too long to keep: a signal then leaves it behind).
+int arm_temp(const std::string& tmp) {
   install_signal_handlers();
-  g_temp_armed = 0;
-  if (tmp.size() >= sizeof g_temp_path) return;  // too long to keep: a signal then leaves it behind
-  std::memcpy(g_temp_path, tmp.c_str(), tmp.size() + 1);
-  g_temp_armed = 1;
+  std::lock_guard lock(g_temp_mutex);
+  if (tmp.size() >= sizeof g_temp_path[0]) return -1;
+  for (int i = 0; i < kTempSlots; ++i)
+    if (!g_temp_armed[i]) {
+      std::memcpy(g_temp_path[i], tmp.c_str(), tmp.size() + 1);
+      g_temp_armed[i] = 1;
+      return i;
+    }
+  return -1;
 }
 
-void disarm_temp() { g_temp_armed = 0; }
+void disarm_temp(int slot) {
+  if (slot >= 0) g_temp_armed[slot] = 0;
+}
 
 // ---- a checked stream over a file descriptor ----
 
@@ -84,10 +96,13 @@ class FdBuf : public std::streambuf {
  public:
   // writeback: start the disk writes of each large block as soon as it is written (regular files that are
   // synced before their rename: the sync then waits for the last blocks only, not the whole file).
-  explicit FdBuf(int fd, bool writeback = false) : fd_(fd), writeback_(writeback), buffer_(1 << 16) {
+  // offset: where fd's writes begin (for the writeback's ranges).
+  explicit FdBuf(int fd, bool writeback = false, uint64_t offset = 0)
+      : fd_(fd), writeback_(writeback), written_(offset), flushed_(offset), buffer_(1 << 16) {
     setp(buffer_.data(), buffer_.data() + buffer_.size());
   }
   int error() const { return error_; }
+  uint64_t end() const { return written_; }  // the offset after what was written (drained)
   // Writes what is buffered; false (and error() set) on failure.
   bool drain() {
     const char* p = pbase();
@@ -142,7 +157,7 @@ class FdBuf : public std::streambuf {
   }
   int fd_;
   bool writeback_;
-  uint64_t written_ = 0, flushed_ = 0;
+  uint64_t written_, flushed_;
   std::vector<char> buffer_;
   int error_ = 0;
 };
@@ -153,9 +168,10 @@ class FdBuf : public std::streambuf {
 
 // Runs write over fd and drains the buffer; throws "path: write failed: ..." on an OS error. Does not close
 // fd.
-void write_fd(int fd, const std::string& path, const std::function<void(std::ostream&)>& write,
-              bool writeback = false) {
-  FdBuf buf(fd, writeback);
+// Returns the offset after what it wrote.
+uint64_t write_fd(int fd, const std::string& path, const std::function<void(std::ostream&)>& write,
+                  bool writeback = false, uint64_t offset = 0) {
+  FdBuf buf(fd, writeback, offset);
   std::ostream out(&buf);
   out.exceptions(std::ios::badbit | std::ios::failbit);
   try {
@@ -167,6 +183,7 @@ void write_fd(int fd, const std::string& path, const std::function<void(std::ost
     fail(path, "write failed", buf.error() ? buf.error() : EIO);
   }
   if (!buf.drain()) fail(path, "write failed", buf.error());
+  return buf.end();
 }
 
 void close_checked(int fd, const std::string& path) {
@@ -283,55 +300,85 @@ void free_replaced(int fd) {
   ::close(fd);  // the child holds it (posix_spawn returns once it runs /bin/true)
 }
 
-void write_replacing(const std::string& path, const Target& t,
-                     const std::function<void(std::ostream&)>& write) {
-  const std::string tmp = t.path + ".tmp-" + std::to_string(::getpid());
-  arm_temp(tmp);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-  if (fd < 0) {
+}  // namespace
+
+ReplacingFile::ReplacingFile(const std::string& path, const std::string& target, bool exists, unsigned mode)
+    : path_(path), target_(target), tmp_(target + ".tmp-" + std::to_string(::getpid())), exists_(exists) {
+  slot_ = arm_temp(tmp_);
+  fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
     const int err = errno;
-    disarm_temp();
-    fail(path, "cannot create " + tmp, err);
+    disarm_temp(slot_);
+    fail(path, "cannot create " + tmp_, err);
   }
+  // The new file keeps the old one's permissions (umask applies to a new one only).
+  if (exists && ::fchmod(fd_, mode & 07777) != 0) {
+    const int err = errno;
+    drop();
+    fail(path, "cannot set the permissions of " + tmp_, err);
+  }
+}
+
+std::unique_ptr<ReplacingFile> ReplacingFile::open(const std::string& path) {
+  if (path == "-") return nullptr;
+  const Target t = classify(path);
+  if (t.kind != Target::Replace) return nullptr;
+  return std::unique_ptr<ReplacingFile>(new ReplacingFile(path, t.path, t.exists, t.mode));
+}
+
+ReplacingFile::~ReplacingFile() { drop(); }
+
+void ReplacingFile::drop() {
+  if (fd_ < 0) return;
+  ::close(fd_);
+  fd_ = -1;
+  ::unlink(tmp_.c_str());
+  disarm_temp(slot_);
+}
+
+uint64_t ReplacingFile::write_at(uint64_t offset, const std::function<void(std::ostream&)>& write) {
   try {
-    // The new file keeps the old one's permissions (umask applies to a new one only).
-    if (t.exists && ::fchmod(fd, t.mode & 07777) != 0)
-      fail(path, "cannot set the permissions of " + tmp, errno);
+    if (::lseek(fd_, off_t(offset), SEEK_SET) < 0) fail(path_, "write failed (seek)", errno);
     const auto t0 = std::chrono::steady_clock::now();
-    write_fd(fd, path, write, true);
-    const auto t1 = std::chrono::steady_clock::now();
-    // Synced before the rename, so that a crash can leave the old file or the new one, never an empty one.
-    if (::fsync(fd) != 0 && errno != EINVAL) fail(path, "write failed (sync)", errno);
-    spdlog::debug("{}: written in {:.1f} ms, synced in {:.1f} ms", path,
-                  std::chrono::duration<double, std::milli>(t1 - t0).count(),
-                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count());
+    const uint64_t end = write_fd(fd_, path_, write, true, offset);
+    written_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return end;
   } catch (...) {
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    disarm_temp();
+    drop();
     throw;
   }
+}
+
+void ReplacingFile::commit() {
+  const auto t0 = std::chrono::steady_clock::now();
+  // Synced before the rename, so that a crash can leave the old file or the new one, never an empty one.
+  if (::fsync(fd_) != 0 && errno != EINVAL) {
+    const int err = errno;
+    drop();
+    fail(path_, "write failed (sync)", err);
+  }
+  spdlog::debug("{}: written in {:.1f} ms, synced in {:.1f} ms", path_, written_ms_,
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  const int fd = std::exchange(fd_, -1);
   if (::close(fd) != 0 && errno != EINTR) {
     const int err = errno;
-    ::unlink(tmp.c_str());
-    disarm_temp();
-    fail(path, "write failed (close)", err);
+    ::unlink(tmp_.c_str());
+    disarm_temp(slot_);
+    fail(path_, "write failed (close)", err);
   }
   // The replaced file's pages and blocks are freed when the last reference to it goes, inside the rename
   // unless something holds it open: held here, they are freed elsewhere (free_replaced).
-  const int replaced = t.exists ? ::open(t.path.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK) : -1;
-  if (::rename(tmp.c_str(), t.path.c_str()) != 0) {
+  const int replaced = exists_ ? ::open(target_.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW | O_NONBLOCK) : -1;
+  if (::rename(tmp_.c_str(), target_.c_str()) != 0) {
     const int err = errno;
     if (replaced >= 0) ::close(replaced);
-    ::unlink(tmp.c_str());
-    disarm_temp();
-    fail(path, "cannot rename " + tmp + " into place", err);
+    ::unlink(tmp_.c_str());
+    disarm_temp(slot_);
+    fail(path_, "cannot rename " + tmp_ + " into place", err);
   }
-  disarm_temp();
+  disarm_temp(slot_);
   if (replaced >= 0) free_replaced(replaced);
 }
-
-}  // namespace
 
 bool is_special_output(const std::string& path) {
   if (path == "-") return true;
@@ -352,9 +399,12 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     case Target::InPlace:
       write_in_place(t.path, write);
       return;
-    case Target::Replace:
-      write_replacing(path, t, write);
+    case Target::Replace: {
+      ReplacingFile f(path, t.path, t.exists, t.mode);
+      f.write_at(0, write);
+      f.commit();
       return;
+    }
   }
 }
 

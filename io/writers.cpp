@@ -14,6 +14,7 @@
 #include <charconv>
 #include <cstring>
 #include <filesystem>
+#include <span>
 #include <utility>
 #include <stdexcept>
 #include <vector>
@@ -21,6 +22,7 @@
 #include "core/error.hpp"
 #include "core/uninit.hpp"
 #include "io/atomic_file.hpp"
+#include "io/gis_writers.hpp"
 #include "io/mesh_formats.hpp"
 #include "io/parallel_text.hpp"
 
@@ -75,45 +77,46 @@ std::string one_line(const std::string& s) {
   return r;
 }
 
-void write_obj(const Mesh& mesh, const Crs& crs, Sink& out, std::ostream& stream) {
-  if (!crs.name.empty()) out.text("# crs: " + one_line(crs.name) + "\n");
-  out.flush();
-  check_triangles(mesh);
-  write_items(stream, mesh.vertices.size(), 3 * 25 + 3, [&](uint64_t v, char* p) {
-    return put(put_xyz(put(p, "v "), mesh.vertices[v]), "\n");
-  });
-  write_items(stream, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
-    return put(put_indices(put(p, "f"), mesh.triangles[t], 1), "\n");  // OBJ counts from 1
-  });
-}
+// OBJ and PLY put every vertex before any face: their parts (writers.hpp) are written one after another here,
+// or apart by io/mesh_file_ahead.
+std::string obj_head(const Crs& crs) { return crs.name.empty() ? "" : "# crs: " + one_line(crs.name) + "\n"; }
 
-void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out, std::ostream& stream) {
+std::string ply_head(const Crs& crs, bool ascii, uint64_t vertices, uint64_t triangles) {
   std::string h = "ply\nformat ";
   h += ascii ? "ascii" : "binary_little_endian";
   h += " 1.0\n";
   if (!crs.name.empty()) h += "comment crs " + one_line(crs.name) + "\n";
-  h += "element vertex " + std::to_string(mesh.vertices.size()) +
+  h += "element vertex " + std::to_string(vertices) +
        "\nproperty double x\nproperty double y\nproperty double z\n"
        "element face " +
-       std::to_string(mesh.triangles.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
-  out.text(h);
-  if (ascii) {
-    out.flush();
-    check_triangles(mesh);
-    write_items(stream, mesh.vertices.size(), 3 * 25 + 3, [&](uint64_t v, char* p) {
-      return put(put_xyz(p, mesh.vertices[v]), "\n");
-    });
-    write_items(stream, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
-      return put(put_indices(put(p, "3"), mesh.triangles[t], 0), "\n");
-    });
-    return;
-  }
+       std::to_string(triangles) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+  return h;
+}
+
+void write_vertices(std::span<const Point3> vertices, const WriteOptions& options, std::ostream& out) {
+  if (options.format == MeshFormat::Obj)
+    return write_items(out, vertices.size(), 3 * 25 + 3,
+                       [&](uint64_t v, char* p) { return put(put_xyz(put(p, "v "), vertices[v]), "\n"); });
+  if (options.ascii)
+    return write_items(out, vertices.size(), 3 * 25 + 3,
+                       [&](uint64_t v, char* p) { return put(put_xyz(p, vertices[v]), "\n"); });
   // Point3 is three packed doubles, the vertex element's layout: the array goes out as it is.
   static_assert(sizeof(Point3) == 3 * sizeof(double));
-  out.text(reinterpret_cast<const char*>(mesh.vertices.data()), mesh.vertices.size() * sizeof(Point3));
+  out.write(reinterpret_cast<const char*>(vertices.data()), std::streamsize(vertices.size() * sizeof(Point3)));
+}
+
+void write_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& out) {
+  check_triangles(mesh);
+  if (options.format == MeshFormat::Obj)
+    return write_items(out, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
+      return put(put_indices(put(p, "f"), mesh.triangles[t], 1), "\n");  // OBJ counts from 1
+    });
+  if (options.ascii)
+    return write_items(out, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
+      return put(put_indices(put(p, "3"), mesh.triangles[t], 0), "\n");
+    });
   // Faces are 13 bytes each (a count byte and three indices), packed on all cores into one block.
   const size_t n = mesh.triangles.size();
-  check_triangles(mesh);
   // In blocks of 4 MiB reused: a 65 MB array for 5M faces cost more in page faults than its packing.
   constexpr size_t kFacesPerBlock = (size_t(4) << 20) / 13;
   std::vector<char> faces(std::min(n, kFacesPerBlock) * 13);
@@ -126,7 +129,7 @@ void write_ply(const Mesh& mesh, const Crs& crs, bool ascii, Sink& out, std::ost
         std::memcpy(f + 1, mesh.triangles[first + t].data(), 12);
       }
     });
-    out.text(faces.data(), count * 13);
+    out.write(faces.data(), std::streamsize(count * 13));
   }
 }
 
@@ -214,11 +217,33 @@ MeshFormat parse_format(const std::string& name) {
   throw UsageError("unknown output format '" + name + "' (use obj, ply, wkt, landxml or 2dm)");
 }
 
+bool vertices_first(const WriteOptions& options) {
+  return options.format == MeshFormat::Obj || options.format == MeshFormat::Ply;
+}
+
+std::string mesh_head(const Crs& crs, const WriteOptions& options, uint64_t vertices, uint64_t triangles) {
+  return options.format == MeshFormat::Obj ? obj_head(crs) : ply_head(crs, options.ascii, vertices, triangles);
+}
+
+void write_mesh_vertices(std::span<const Point3> vertices, const WriteOptions& options, std::ostream& out) {
+  write_vertices(vertices, options, out);
+}
+
+void write_mesh_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& out) {
+  write_faces(mesh, options, out);
+}
+
 void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, std::ostream& out) {
+  if (vertices_first(options)) {
+    out << mesh_head(crs, options, mesh.vertices.size(), mesh.triangles.size());
+    write_vertices({mesh.vertices.data(), mesh.vertices.size()}, options, out);
+    write_faces(mesh, options, out);
+    return;
+  }
   Sink sink(out);
   switch (options.format) {
-    case MeshFormat::Obj: write_obj(mesh, crs, sink, out); break;
-    case MeshFormat::Ply: write_ply(mesh, crs, options.ascii, sink, out); break;
+    case MeshFormat::Obj:
+    case MeshFormat::Ply: break;
     case MeshFormat::Wkt: write_wkt(mesh, options.wkt_multipolygon, sink, out); break;
     case MeshFormat::LandXml: write_landxml(mesh, crs, output_timestamp(), out); return;
     case MeshFormat::Sms2dm: write_2dm(mesh, crs, out); return;
@@ -228,9 +253,7 @@ void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, s
 
 void write_mesh_file(const Mesh& mesh, const Crs& crs, const WriteOptions& options, const std::string& path) {
   write_file_atomically(path, [&](std::ostream& out) { write_mesh(mesh, crs, options, out); });
-  if (path == "-" || crs.wkt.empty()) return;
-  const std::string prj = std::filesystem::path(path).replace_extension(".prj").string();
-  write_file_atomically(prj, [&](std::ostream& out) { out << crs.wkt; });
+  write_prj_beside(path, crs);
 }
 
 }  // namespace cdtgpu

@@ -1,6 +1,7 @@
 // TIN writers. Coordinates are written with the shortest text that reads back to the same double.
 #pragma once
 #include <ostream>
+#include <span>
 #include <string>
 
 #include "core/model.hpp"
@@ -28,6 +29,14 @@ void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, s
 // Writes to path through a temporary file in the same folder and renames it, so a failed run leaves no
 // half-written file; "-" writes to stdout. Also writes path's .prj when the CRS has a WKT.
 void write_mesh_file(const Mesh& mesh, const Crs& crs, const WriteOptions& options, const std::string& path);
+
+// OBJ and PLY files in their three parts, for a file begun before its triangles exist (io/mesh_file_ahead):
+// the text before the vertices (PLY's header, which names both counts), the vertices, the faces. write_mesh
+// writes the same bytes in one go. vertices_first: false for WKT, LandXML and 2DM.
+bool vertices_first(const WriteOptions& options);
+std::string mesh_head(const Crs& crs, const WriteOptions& options, uint64_t vertices, uint64_t triangles);
+void write_mesh_vertices(std::span<const Point3> vertices, const WriteOptions& options, std::ostream& out);
+void write_mesh_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& out);
 
 // Reads a mesh written by write_mesh (OBJ, PLY ascii/binary, WKT TIN Z / MULTIPOLYGON Z) for verify.
 Mesh read_mesh_file(const std::string& path);

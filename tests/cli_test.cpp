@@ -1,4 +1,5 @@
 // End to end: the cdtgpu binary on real files, one test per output format and per bad-input case.
+#include <cmath>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -475,6 +476,48 @@ TEST_F(Cli, UnknownOutputFormatIsAUsageError) {
   Result r = run("triangulate " + path("dem.csv") + " -o " + path("out.stl"));
   EXPECT_EQ(r.code, 2) << r.err;
   EXPECT_EQ(files_matching("out"), 0u);
+}
+
+// OBJ and PLY files are begun while the triangulation runs (io/mesh_file_ahead: the vertices first, the faces
+// and PLY's header at the end); their bytes are those written in one go (to stdout), and where the vertices or
+// the header's length turn out otherwise (crossings add vertices; 8 points on a circle have 6 triangles, not
+// the 11 whose digits PLY's header was given) the file is written again, or not begun (a boundary may drop
+// vertices). OBJ names no counts.
+TEST_F(Cli, AMeshFileBegunAheadHasTheBytesWrittenInOneGo) {
+  write_terrain();
+  write("cross.wkt", "LINESTRING (500010 6000010, 500180 6000170)\nLINESTRING (500010 6000170, 500180 6000010)\n");
+  std::string octagon;
+  for (int k = 0; k < 8; ++k)
+    octagon += std::to_string(100 * std::cos(k * M_PI / 4)) + " " + std::to_string(100 * std::sin(k * M_PI / 4)) +
+               " 1\n";
+  write("octagon.xyz", octagon);
+  write("ring.wkt", "POLYGON ((500050 6000050, 500150 6000050, 500150 6000150, 500050 6000150, 500050 6000050))\n");
+  struct Case {
+    std::string inputs, expect;  // expect: what the -v log says of the file begun ahead
+  };
+  const std::vector<Case> cases = {
+      {path("dem.csv") + " " + path("lines.wkt"), "finished"},
+      {path("dem.csv") + " " + path("cross.wkt"), "written again"},
+      {path("octagon.xyz") + " --crs none", "written again"},
+      {path("dem.csv") + " " + path("ring.wkt") + ":role=boundary", ""},
+  };
+  for (const Case& c : cases)
+    for (const std::string format : {"ply", "ply --ascii", "obj"}) {
+      const std::string name = format.substr(0, 3);
+      const std::string what = c.inputs + " / " + format;
+      Result r = run("-v triangulate " + c.inputs + " --backend cgal -o " + path("ahead." + name) +
+                     (format.size() > 3 ? " --ascii" : ""));
+      ASSERT_EQ(r.code, 0) << what << ": " << r.err;
+      const bool header_only = c.inputs.find("octagon") != std::string::npos && name == "obj";
+      if (c.expect.empty())
+        EXPECT_EQ(r.err.find("written ahead"), std::string::npos) << what;
+      else
+        EXPECT_NE(r.err.find(header_only ? "finished" : c.expect), std::string::npos) << what << ": " << r.err;
+      r = run("triangulate " + c.inputs + " --backend cgal -q --format " + format + " -o -", path("one." + name));
+      ASSERT_EQ(r.code, 0) << what << ": " << r.err;
+      EXPECT_TRUE(slurp(path("ahead." + name)) == slurp(path("one." + name))) << what;
+      EXPECT_EQ(files_matching("ahead." + name + ".tmp"), 0u) << what;
+    }
 }
 
 TEST_F(Cli, FailedRunKeepsTheOldOutput) {
