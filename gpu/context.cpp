@@ -355,21 +355,34 @@ void store_pipeline_cache(const Context& c) {
 namespace {
 
 void release(Context& c) {
+  // Steps in -v: a single run closes its device beside the writing, and waits for it before it exits.
+  auto t = std::chrono::steady_clock::now();
+  auto step = [&t](const char* what) {
+    const auto now = std::chrono::steady_clock::now();
+    spdlog::debug("gpu close: {}: {:.1f} ms", what, std::chrono::duration<double, std::milli>(now - t).count());
+    t = now;
+  };
   if (c.device) {
     vkDeviceWaitIdle(c.device);
     c.staging.reset();
     c.temp_pool.reset();
+    step("staging");
     save_cache(c);
+    step("pipeline cache");
     if (c.pool) vkDestroyCommandPool(c.device, c.pool, nullptr);
     if (c.copy_pool) vkDestroyCommandPool(c.device, c.copy_pool, nullptr);
     vkDestroyDevice(c.device, nullptr);
+    step("device");
   }
   if (c.messenger) {
     auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
         vkGetInstanceProcAddr(c.instance, "vkDestroyDebugUtilsMessengerEXT"));
     if (destroy) destroy(c.instance, c.messenger, nullptr);
   }
-  if (c.instance) vkDestroyInstance(c.instance, nullptr);
+  if (c.instance) {
+    vkDestroyInstance(c.instance, nullptr);
+    step("instance");
+  }
   c.instance = VK_NULL_HANDLE;
   c.messenger = VK_NULL_HANDLE;
   c.device = VK_NULL_HANDLE;
