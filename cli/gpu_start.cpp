@@ -82,6 +82,10 @@ uint64_t estimate_input_points(const std::vector<std::string>& paths) {
   return total;
 }
 
+namespace {
+constexpr uint64_t kDevicePoolFrom = 32'000'000;
+}  // namespace
+
 GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points) {
   pending_ = std::async(std::launch::async, [this, device, hardware_only, expected_points] {
     using Clock = std::chrono::steady_clock;
@@ -96,6 +100,9 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
     // the reading. Tiled inputs bring their own (gpu/tile_triangulator): at most 1 GiB for their merge.
     const bool one_piece = expected_points <= gpu::max_tile_points_of_any_device();
     options.staging_bytes = std::min<uint64_t>(expected_points * 27, one_piece ? UINT64_MAX : uint64_t(1) << 30);
+    // And the device memory of its buffers, where their allocation between the stages costs more than the
+    // reading takes to hide it (~30 ms a GB on the H200 machine): the run's peak, ~260 bytes a point at 10^8.
+    if (one_piece && expected_points >= kDevicePoolFrom) options.device_pool_bytes = expected_points * 260;
     options.staging_ms = &staging_ms;
     auto t = Clock::now();
     r->ctx = gpu::create_context(options);

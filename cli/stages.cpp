@@ -193,7 +193,9 @@ void vertices_may_go(Job& job) {
 // 36 bytes a vertex of a tiled run's peak, beside the resolved copy the tiles read. Their counts are in the stats.
 void drop_prepared(Job& job) {
   if (prepared_read_later(job)) return;
-  if (!job.prepared.vertices.empty()) vertices_may_go(job);
+  // A mesh file begun from them frees them once written: the triangulation may be done first (at 10^8 points
+  // the vertex section takes 2.3-2.6 s at the disk's pace, the GPU's run 1.8-1.9 s).
+  if (job.mesh_ahead) job.mesh_ahead->free_after_writing(std::move(job.prepared.vertices));
   free_storage(job.prepared.vertices);
   free_storage(job.prepared.constraints);
   free_storage(job.prepared.constraint_line);

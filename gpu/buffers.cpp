@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstring>
 #include <functional>
+#include <optional>
 #include <utility>
 
 #include "core/parallel.hpp"
@@ -40,12 +41,7 @@ uint32_t memory_type(const Context& ctx, uint32_t type_bits, VkMemoryPropertyFla
 
 // Raw buffer + memory; `host` makes it host-visible and coherent (staging); `addressed` gives it a device
 // address.
-Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, bool host, bool addressed = false) {
-  MemoryClock clock;
-  Buffer b;
-  b.device = ctx.device;
-  b.size = bytes;
-  b.name = name;
+VkBuffer new_buffer(const Context& ctx, VkDeviceSize bytes, bool host, bool addressed) {
   VkBufferCreateInfo bi{};
   bi.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO;
   bi.size = bytes ? bytes : 4;
@@ -59,7 +55,18 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
   bi.sharingMode = shared ? VK_SHARING_MODE_CONCURRENT : VK_SHARING_MODE_EXCLUSIVE;
   bi.queueFamilyIndexCount = shared ? 2 : 0;
   bi.pQueueFamilyIndices = shared ? families : nullptr;
-  VK_CHECK(vkCreateBuffer(ctx.device, &bi, nullptr, &b.buffer));
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VK_CHECK(vkCreateBuffer(ctx.device, &bi, nullptr, &buffer));
+  return buffer;
+}
+
+Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, bool host, bool addressed = false) {
+  MemoryClock clock;
+  Buffer b;
+  b.device = ctx.device;
+  b.size = bytes;
+  b.name = name;
+  b.buffer = new_buffer(ctx, bytes, host, addressed);
   VkMemoryRequirements req;
   vkGetBufferMemoryRequirements(ctx.device, b.buffer, &req);
   VkMemoryAllocateFlagsInfo flags{};
@@ -88,11 +95,19 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
     b.budget = ctx.memory_budget;
     b.charged = req.size;
   }
-  VkResult r = vkAllocateMemory(ctx.device, &ai, nullptr, &b.memory);
-  if (r != VK_SUCCESS)
-    vk_fail(r, ("vkAllocateMemory for buffer '" + name + "' of " + std::to_string(bytes) + " bytes").c_str(),
-            __FILE__, __LINE__);
-  VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, b.memory, 0));
+  std::optional<DeviceMemoryPool::Range> pooled;
+  if (!host && ctx.memory_pool) pooled = ctx.memory_pool->take(req);
+  if (pooled) {
+    b.pool = ctx.memory_pool;
+    b.range = *pooled;
+    VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, pooled->memory, pooled->offset));
+  } else {
+    VkResult r = vkAllocateMemory(ctx.device, &ai, nullptr, &b.memory);
+    if (r != VK_SUCCESS)
+      vk_fail(r, ("vkAllocateMemory for buffer '" + name + "' of " + std::to_string(bytes) + " bytes").c_str(),
+              __FILE__, __LINE__);
+    VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, b.memory, 0));
+  }
   if (addressed) {
     VkBufferDeviceAddressInfo info{};
     info.sType = VK_STRUCTURE_TYPE_BUFFER_DEVICE_ADDRESS_INFO;
@@ -100,9 +115,21 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
     b.address = vkGetBufferDeviceAddress(ctx.device, &info);
   }
   if (bytes >= kLoggedBytes)  // -v: where the tiles' allocation time goes (issue 29)
-    spdlog::debug("{} buffer '{}': {:.0f} MB allocated in {:.1f} ms", host ? "host" : "device", name, bytes / 1e6,
+    spdlog::debug("{} buffer '{}': {:.0f} MB {} in {:.1f} ms", host ? "host" : "device", name, bytes / 1e6,
+                  pooled ? "taken from the pool" : "allocated",
                   std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - clock.t0).count());
   return b;
+}
+
+// Gives a buffer's memory back: to the pool it came from, or to the driver.
+void free_memory(Buffer& b) {
+  if (b.pool) {
+    b.pool->give(b.range);
+    b.pool.reset();
+  } else if (b.memory) {
+    vkFreeMemory(b.device, b.memory, nullptr);
+  }
+  b.memory = VK_NULL_HANDLE;
 }
 
 void full_barrier(VkCommandBuffer cmd) {
@@ -181,11 +208,13 @@ Buffer::Buffer(Buffer&& o) noexcept { *this = std::move(o); }
 Buffer& Buffer::operator=(Buffer&& o) noexcept {
   if (this == &o) return *this;
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
-  if (memory) vkFreeMemory(device, memory, nullptr);
+  free_memory(*this);
   if (budget) budget->used.fetch_sub(charged);
   device = o.device;
   budget = std::move(o.budget);
   charged = std::exchange(o.charged, 0);
+  pool = std::move(o.pool);
+  range = o.range;
   buffer = std::exchange(o.buffer, VK_NULL_HANDLE);
   memory = std::exchange(o.memory, VK_NULL_HANDLE);
   size = std::exchange(o.size, 0);
@@ -196,12 +225,35 @@ Buffer& Buffer::operator=(Buffer&& o) noexcept {
 
 double memory_ms() { return double(memory_ns.load()) * 1e-6; }
 
+std::shared_ptr<DeviceMemoryPool> make_device_pool(const Context& ctx, uint64_t bytes) {
+  VkBuffer probe = new_buffer(ctx, 4, false, ctx.info.buffer_address);  // the memory type make() would pick
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(ctx.device, probe, &req);
+  vkDestroyBuffer(ctx.device, probe, nullptr);
+  const uint32_t type = memory_type(ctx, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, 0);
+  VkPhysicalDeviceMaintenance3Properties m3{};
+  m3.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES;
+  VkPhysicalDeviceProperties2 p2{};
+  p2.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2;
+  p2.pNext = &m3;
+  vkGetPhysicalDeviceProperties2(ctx.physical, &p2);
+  // Blocks of 8 GiB at most: each holds a few of the largest buffers (3-4 GB at 10^8 points). At most three
+  // quarters of the device's memory: the estimate of the input may be high.
+  const uint64_t block = std::min<uint64_t>(uint64_t(8) << 30, m3.maxMemoryAllocationSize);
+  uint64_t heap = 0;
+  for (size_t h = 0; h < ctx.info.heap_sizes.size(); ++h)
+    if (ctx.info.heap_device_local[h]) heap = std::max(heap, ctx.info.heap_sizes[h]);
+  return std::make_shared<DeviceMemoryPool>(ctx, std::min(bytes, heap / 4 * 3), block, type,
+                                            ctx.info.buffer_address);
+}
+
 Buffer::~Buffer() {
   MemoryClock clock;
+  const bool logged = (memory || pool) && size >= kLoggedBytes;
   if (buffer) vkDestroyBuffer(device, buffer, nullptr);
-  if (memory) vkFreeMemory(device, memory, nullptr);
+  free_memory(*this);
   if (budget) budget->used.fetch_sub(charged);
-  if (memory && size >= kLoggedBytes)
+  if (logged)
     spdlog::debug("buffer '{}': {:.0f} MB freed in {:.1f} ms", name, size / 1e6,
                   std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - clock.t0).count());
 }

@@ -17,6 +17,7 @@
 
 #include "core/touched.hpp"
 #include "gpu/context.hpp"
+#include "gpu/device_memory_pool.hpp"
 
 namespace cdtgpu::gpu {
 
@@ -31,6 +32,8 @@ struct Buffer {
   std::string name;
   std::shared_ptr<MemoryBudget> budget;  // device-local buffers: the context's budget, given back when freed
   VkDeviceSize charged = 0;
+  std::shared_ptr<DeviceMemoryPool> pool;      // memory taken from the context's pool (then `memory` is not its own)
+  DeviceMemoryPool::Range range;
 
   Buffer() = default;
   Buffer(Buffer&& o) noexcept;
@@ -46,6 +49,10 @@ void require_storage_range(const Context& ctx, VkDeviceSize bytes, const std::st
 Buffer create_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name = "buffer");
 // A buffer that every pass binds by its device address (Binding, Recorder::bind): no range limit.
 Buffer create_addressed_buffer(const Context& ctx, VkDeviceSize bytes, const std::string& name);
+
+// Device memory for the context's buffers to take first (Context::memory_pool), `bytes` in blocks the driver
+// allows, of the memory type and with the device addresses that device buffers need.
+std::shared_ptr<DeviceMemoryPool> make_device_pool(const Context& ctx, uint64_t bytes);
 
 // Milliseconds the process has spent allocating and freeing buffer memory (device and staging), all threads.
 double memory_ms();

@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "gpu/buffers.hpp"
+#include "gpu/device_memory_pool.hpp"
 #include "gpu/check.hpp"
 #include "gpu/pipeline_cache.hpp"
 
@@ -366,6 +367,8 @@ void release(Context& c) {
     vkDeviceWaitIdle(c.device);
     c.staging.reset();
     c.temp_pool.reset();
+    if (c.memory_pool) c.memory_pool->free_blocks();  // buffers still holding it give their ranges to nothing
+    c.memory_pool.reset();
     step("staging");
     save_cache(c);
     step("pipeline cache");
@@ -422,6 +425,7 @@ Context& Context::operator=(Context&& o) noexcept {
   pipeline_cache_loaded = o.pipeline_cache_loaded;
   pipeline_cache_hash = o.pipeline_cache_hash;
   memory_budget = std::exchange(o.memory_budget, std::make_shared<MemoryBudget>());
+  memory_pool = std::move(o.memory_pool);
   return *this;
 }
 
@@ -537,6 +541,16 @@ Context create_context(const ContextOptions& options) {
         *options.staging_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     });
 
+  std::future<void> pool;
+  if (options.device_pool_bytes && !ctx.memory_budget->limit)  // the cap counts each buffer as the driver would
+    pool = std::async(std::launch::async, [&ctx, &options] {
+      try {
+        ctx.memory_pool = make_device_pool(ctx, options.device_pool_bytes);
+      } catch (const std::exception& e) {  // the buffers then take memory of their own, as without a pool
+        spdlog::debug("no device memory pool: {}", e.what());
+      }
+    });
+
   VkCommandPoolCreateInfo pi{};
   pi.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO;
   pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
@@ -566,6 +580,10 @@ Context create_context(const ContextOptions& options) {
   if (staging.valid()) {
     staging.get();
     step("staging memory (after the cache)");
+  }
+  if (pool.valid()) {
+    pool.get();
+    step("device memory pool (after the staging)");
   }
   return ctx;
 }

@@ -17,6 +17,8 @@
 
 namespace cdtgpu::gpu {
 
+class DeviceMemoryPool;
+
 // One physical device as the loader reports it.
 struct DeviceInfo {
   uint32_t index = 0;                 // position in vkEnumeratePhysicalDevices
@@ -55,6 +57,9 @@ struct ContextOptions {
   // of its own beside the command pool and the pipeline cache; its milliseconds into *staging_ms when given.
   uint64_t staging_bytes = 0;
   double* staging_ms = nullptr;
+  // Device memory made ahead for the run's buffers (gpu/device_memory_pool.hpp), on a thread of its own beside
+  // the staging; 0: none. None under CDTGPU_DEVICE_MEMORY_LIMIT either.
+  uint64_t device_pool_bytes = 0;
 };
 
 // Lists every physical device the loader sees (the first call creates and destroys an instance of its own; later
@@ -128,6 +133,8 @@ struct Context {
   mutable std::shared_ptr<void> temp_pool;
   // Device-local bytes its buffers hold, and the cap (shared: a buffer gives its bytes back when it is freed).
   std::shared_ptr<MemoryBudget> memory_budget = std::make_shared<MemoryBudget>();
+  // Where device buffers take their memory first (ContextOptions::device_pool_bytes); null: none.
+  std::shared_ptr<DeviceMemoryPool> memory_pool;
 };
 
 // Saves the context's pipeline cache to its file when the run compiled something new (destroying the context

@@ -31,6 +31,12 @@ MeshFileAhead::MeshFileAhead(const std::string& path, const Crs& crs, const Writ
         file_->write_at(head_bytes_, [&](std::ostream& out) { write_mesh_vertices(v, options_, out); });
     vertices_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     spdlog::debug("{}: {} vertices written ahead in {:.1f} ms", path_, vertices_, vertices_ms_);
+    Points done;  // freed here, on this thread, if its owner has let it go
+    {
+      std::lock_guard lock(mutex_);
+      vertices_done_ = true;
+      done = std::move(storage_);
+    }
     return end;
   });
 }
@@ -39,6 +45,13 @@ MeshFileAhead::~MeshFileAhead() { wait(); }  // file_ then goes, uncommitted: re
 
 void MeshFileAhead::wait() {
   if (written_.valid()) written_.wait();
+}
+
+void MeshFileAhead::free_after_writing(Points&& storage) {
+  Points now;  // freed at once where the vertices are written already (or were never begun)
+  std::lock_guard lock(mutex_);
+  if (vertices_done_ || !written_.valid()) now = std::move(storage);
+  else storage_ = std::move(storage);
 }
 
 bool MeshFileAhead::finish(const Mesh& mesh, bool same_vertices) {

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <future>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include "core/model.hpp"
@@ -30,6 +31,8 @@ class MeshFileAhead {
 
   // The vertices' storage is read no more: it may be freed (moving its owner is fine before).
   void wait();
+  // The vertices' storage, freed once they are written (on the writing thread) instead of waited for.
+  void free_after_writing(Points&& storage);
 
   // Adds `mesh`'s faces and renames the file into place (with its .prj) when `same_vertices` (the caller's
   // word that mesh.vertices are the vertices begun with), their count agrees, and PLY's header has the length
@@ -45,7 +48,10 @@ class MeshFileAhead {
   size_t head_bytes_ = 0;
   double vertices_ms_ = 0;
   std::unique_ptr<ReplacingFile> file_;
-  std::future<uint64_t> written_;  // the vertex section's end
+  std::mutex mutex_;
+  bool vertices_done_ = false;
+  Points storage_;                 // free_after_writing's, until then
+  std::future<uint64_t> written_;  // the vertex section's end; last: waited for before the rest goes
 };
 
 }  // namespace cdtgpu

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "core/verify.hpp"
 #include "core/workloads.hpp"
 #include "gpu/cdt_pipeline.hpp"
+#include "gpu/device_memory_pool.hpp"
 #include "io/readers.hpp"
 #include "gpu_test_context.hpp"
 
@@ -108,6 +110,50 @@ TEST(GpuPipeline, KatoombaSample) {
   gpu::GpuCdtStats s = expect_equal_to_cgal("katoomba", in);
   EXPECT_GT(s.gpu_total_ms, 0);
   EXPECT_GT(s.peak_device_bytes, 0u);
+}
+
+// A device memory pool's bookkeeping: first fit at the alignment asked, ranges merged with both neighbours.
+TEST(DeviceMemoryPool, FreeRangesFitAlignAndMerge) {
+  gpu::FreeRanges r(1000);
+  EXPECT_EQ(r.take(100, 1), std::optional<uint64_t>(0));
+  EXPECT_EQ(r.take(10, 64), std::optional<uint64_t>(128));  // 100..128 stays free
+  EXPECT_EQ(r.take(20, 4), std::optional<uint64_t>(100));   // the gap left by the alignment, first fit
+  EXPECT_EQ(r.take(900, 1), std::nullopt);
+  EXPECT_EQ(r.free_bytes(), 1000u - 130u);
+  r.give(0, 100);
+  r.give(128, 10);  // merged with 120..128 and 138..1000
+  EXPECT_EQ(r.take(900, 1), std::nullopt) << "0..100 and 120..1000 are apart";
+  r.give(100, 20);  // and now with 0..100 too
+  EXPECT_EQ(r.free_bytes(), 1000u);
+  EXPECT_EQ(r.take(1000, 1), std::optional<uint64_t>(0));
+}
+
+// Buffers taking their memory from a pool made ahead (ContextOptions::device_pool_bytes, as `cdtgpu triangulate`
+// does for inputs of 10^8 points): CGAL's bytes, every range given back once the buffers go. A pool too small
+// for the larger buffers leaves them memory of their own.
+TEST(GpuPipeline, BuffersFromADeviceMemoryPoolGiveTheSameResult) {
+  const InputSet in = workload(20000, 5000, 0.5, 3);
+  const PreparedInput p = prepare(in);
+  const CdtResult ref = triangulate_cgal(p);
+  for (uint64_t pool_bytes : {uint64_t(1) << 30, uint64_t(3) << 20}) {
+    gpu::ContextOptions o;
+    o.validation = true;
+    o.device_pool_bytes = pool_bytes;
+    gpu::Context c = gpu::create_context(o);
+    ASSERT_TRUE(c.memory_pool) << pool_bytes;
+    const uint64_t made = c.memory_pool->bytes();
+    EXPECT_EQ(made, pool_bytes);
+    {
+      gpu::GpuCdt cdt(c);
+      const CdtResult got = cdt.triangulate(p);
+      EXPECT_TRUE(got.mesh.vertices == ref.mesh.vertices) << pool_bytes;
+      EXPECT_TRUE(got.mesh.triangles == ref.mesh.triangles) << pool_bytes;
+      EXPECT_GT(c.memory_pool->ranges_taken(), 10u) << pool_bytes;
+    }
+    c.temp_pool.reset();  // the context's small scratch buffers (Recorder::temp) stay with it otherwise
+    EXPECT_EQ(c.memory_pool->free_bytes(), made) << pool_bytes;
+    for (const std::string& m : c.messages()) ADD_FAILURE() << m;
+  }
 }
 
 TEST(GpuPipeline, BenchWorkloads) {

@@ -1,0 +1,66 @@
+// Device memory made in a few large blocks before a run and handed out to its buffers (gpu/buffers' make). A
+// run of 10^8 points makes ~35 device buffers, 32 GB, each when its stage begins; the driver took ~1 s for them
+// on the H200 machine, between the GPU's stages. Made beside the start's staging (ContextOptions::
+// device_pool_bytes), the blocks cost about as much, but while the input is read and prepared. First fit over
+// each block's free ranges, merged as buffers give them back; a buffer that fits nowhere gets memory of its own.
+#pragma once
+#include <vulkan/vulkan.h>
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <mutex>
+#include <optional>
+#include <vector>
+
+namespace cdtgpu::gpu {
+
+struct Context;
+
+// The bookkeeping of one block: free ranges by offset, first fit, merged with their neighbours when given back.
+class FreeRanges {
+ public:
+  explicit FreeRanges(uint64_t size);
+  // The offset of `bytes` at a multiple of `alignment` (a power of two), or none.
+  std::optional<uint64_t> take(uint64_t bytes, uint64_t alignment);
+  void give(uint64_t offset, uint64_t bytes);
+  uint64_t free_bytes() const;
+
+ private:
+  std::map<uint64_t, uint64_t> free_;  // offset -> size
+};
+
+class DeviceMemoryPool {
+ public:
+  struct Range {
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    uint32_t block = 0;
+    uint64_t offset = 0, bytes = 0;
+  };
+  // Blocks of up to `block_bytes` (the driver's largest allocation or less) until `bytes` are made, of memory
+  // type `type`, with device addresses where `addressed`; fewer where the device runs out.
+  DeviceMemoryPool(const Context& ctx, uint64_t bytes, uint64_t block_bytes, uint32_t type, bool addressed);
+  ~DeviceMemoryPool() { free_blocks(); }
+  DeviceMemoryPool(const DeviceMemoryPool&) = delete;
+  DeviceMemoryPool& operator=(const DeviceMemoryPool&) = delete;
+
+  // Memory for a buffer with these requirements, or none (another type, or no room).
+  std::optional<Range> take(const VkMemoryRequirements& req);
+  void give(const Range& r);
+  // The blocks' memory back to the driver (before the device goes; buffers still out must not be used).
+  void free_blocks();
+  uint64_t bytes() const { return bytes_; }
+  uint64_t free_bytes();
+  uint64_t ranges_taken() const { return taken_; }  // how many buffers took memory here so far
+
+ private:
+  VkDevice device_ = VK_NULL_HANDLE;
+  uint32_t type_ = 0;
+  uint64_t bytes_ = 0;
+  std::atomic<uint64_t> taken_{0};
+  std::mutex mutex_;
+  std::vector<VkDeviceMemory> blocks_;
+  std::vector<FreeRanges> free_;
+};
+
+}  // namespace cdtgpu::gpu
