@@ -86,8 +86,8 @@ namespace {
 constexpr uint64_t kDevicePoolFrom = 32'000'000;
 }  // namespace
 
-GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points) {
-  pending_ = std::async(std::launch::async, [this, device, hardware_only, expected_points] {
+GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points, bool device_pool) {
+  pending_ = std::async(std::launch::async, [this, device, hardware_only, expected_points, device_pool] {
     using Clock = std::chrono::steady_clock;
     auto ms = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
     auto r = std::make_unique<Ready>();
@@ -102,7 +102,8 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
     options.staging_bytes = std::min<uint64_t>(expected_points * 27, one_piece ? UINT64_MAX : uint64_t(1) << 30);
     // And the device memory of its buffers, where their allocation between the stages costs more than the
     // reading takes to hide it (~30 ms a GB on the H200 machine): the run's peak, ~260 bytes a point at 10^8.
-    if (one_piece && expected_points >= kDevicePoolFrom) options.device_pool_bytes = expected_points * 260;
+    if (device_pool && one_piece && expected_points >= kDevicePoolFrom)
+      options.device_pool_bytes = expected_points * 260;
     options.staging_ms = &staging_ms;
     auto t = Clock::now();
     r->ctx = gpu::create_context(options);
@@ -213,7 +214,7 @@ const gpu::Context& GpuStart::context() {
 GpuStart& GpuStarts::start(const std::string& device, bool hardware_only, uint64_t expected_points) {
   std::lock_guard lock(mutex_);
   std::unique_ptr<GpuStart>& s = starts_[{device, hardware_only}];
-  if (!s) s = std::make_unique<GpuStart>(device, hardware_only, expected_points);
+  if (!s) s = std::make_unique<GpuStart>(device, hardware_only, expected_points, device_pool);
   return *s;
 }
 

@@ -45,7 +45,8 @@ class GpuStart {
   // Starts creating the context and every pipeline now. hardware_only: refuse a CPU Vulkan driver.
   // expected_points (the estimate of the input): the start also allocates the staging memory that the
   // triangulation's upload and download will need, ~24 bytes a point, off the critical path.
-  GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points = 0);
+  // device_pool: device memory for a large one-piece run made ahead too (gpu/device_memory_pool.hpp).
+  GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points = 0, bool device_pool = false);
   ~GpuStart();
   // Waits for the start; rethrows its DeviceError (on every call: a failed start is not tried again).
   gpu::GpuCdt& cdt();
@@ -95,6 +96,9 @@ class GpuStarts {
   // The fewest input points for which `--backend auto` uses the GPU in this process: auto_min_points(), or
   // batch_auto_min_points() for a batch of many jobs.
   uint64_t auto_min_points = cdtgpu::auto_min_points();
+  // Whether a start for a large one-piece input makes its device memory ahead: not under MPI, whose ranks may
+  // share a device and run tiles only.
+  bool device_pool = true;
   // The start for this device and rule: started now with `expected_points`, or the one started before.
   GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points);
   // GpuStart::leave_for_exit for each.

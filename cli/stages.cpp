@@ -536,6 +536,7 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
   // An MPI worker runs tiles only, each in staging of its own: the start's staging (up to 1 GiB, pinned) would
   // serve a whole run it never makes.
   const bool worker = options.ranks && options.ranks->rank != 0;
+  if (options.ranks) gpus.device_pool = false;
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= gpus.auto_min_points))
     job.start = &gpus.start(options.device, hardware_only(options), worker ? 0 : estimate);
 }
