@@ -49,10 +49,4 @@ void write_grid_file(const Raster& raster, const Crs& crs, const std::string& pa
     write_ascii_grid_file(raster, crs, path);
 }
 
-void write_prj_beside(const std::string& path, const Crs& crs) {
-  if (path == "-" || crs.wkt.empty()) return;
-  const std::string prj = std::filesystem::path(path).replace_extension(".prj").string();
-  write_file_atomically(prj, [&](std::ostream& out) { out << crs.wkt; });
-}
-
 }  // namespace cdtgpu

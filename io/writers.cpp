@@ -251,6 +251,12 @@ void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, s
   sink.flush();
 }
 
+void write_prj_beside(const std::string& path, const Crs& crs) {
+  if (path == "-" || crs.wkt.empty()) return;
+  const std::string prj = std::filesystem::path(path).replace_extension(".prj").string();
+  write_file_atomically(prj, [&](std::ostream& out) { out << crs.wkt; });
+}
+
 void write_mesh_file(const Mesh& mesh, const Crs& crs, const WriteOptions& options, const std::string& path) {
   write_file_atomically(path, [&](std::ostream& out) { write_mesh(mesh, crs, options, out); });
   write_prj_beside(path, crs);
