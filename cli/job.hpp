@@ -74,7 +74,8 @@ struct Job {
   Crs crs;
   PreparedInput prepared;
   // begin_mesh_file: the output's vertex section being written from prepared.vertices' storage, which stays
-  // until mesh_ahead->wait() (stages.cpp: vertices_may_go). Declared after `prepared`: gone before it.
+  // until mesh_ahead->wait() (stages.cpp: vertices_may_go) or goes to mesh_ahead->free_after_writing
+  // (drop_prepared). Declared after `prepared`: gone before it.
   std::unique_ptr<MeshFileAhead> mesh_ahead;
 
   // choose_backend

@@ -369,7 +369,7 @@ void release(Context& c) {
     c.temp_pool.reset();
     if (c.memory_pool) c.memory_pool->free_blocks();  // buffers still holding it give their ranges to nothing
     c.memory_pool.reset();
-    step("staging");
+    step("staging and device memory pool");
     save_cache(c);
     step("pipeline cache");
     if (c.pool) vkDestroyCommandPool(c.device, c.pool, nullptr);

@@ -311,6 +311,7 @@ ReplacingFile::ReplacingFile(const std::string& path, const std::string& target,
     disarm_temp(slot_);
     fail(path, "cannot create " + tmp_, err);
   }
+  temp_ = true;
   // The new file keeps the old one's permissions (umask applies to a new one only).
   if (exists && ::fchmod(fd_, mode & 07777) != 0) {
     const int err = errno;
@@ -329,9 +330,8 @@ std::unique_ptr<ReplacingFile> ReplacingFile::open(const std::string& path) {
 ReplacingFile::~ReplacingFile() { drop(); }
 
 void ReplacingFile::drop() {
-  if (fd_ < 0) return;
-  ::close(fd_);
-  fd_ = -1;
+  if (fd_ >= 0) ::close(std::exchange(fd_, -1));
+  if (!std::exchange(temp_, false)) return;
   ::unlink(tmp_.c_str());
   disarm_temp(slot_);
 }
@@ -362,8 +362,7 @@ void ReplacingFile::commit() {
   const int fd = std::exchange(fd_, -1);
   if (::close(fd) != 0 && errno != EINTR) {
     const int err = errno;
-    ::unlink(tmp_.c_str());
-    disarm_temp(slot_);
+    drop();
     fail(path_, "write failed (close)", err);
   }
   // The replaced file's pages and blocks are freed when the last reference to it goes, inside the rename
@@ -372,10 +371,10 @@ void ReplacingFile::commit() {
   if (::rename(tmp_.c_str(), target_.c_str()) != 0) {
     const int err = errno;
     if (replaced >= 0) ::close(replaced);
-    ::unlink(tmp_.c_str());
-    disarm_temp(slot_);
+    drop();
     fail(path_, "cannot rename " + tmp_ + " into place", err);
   }
+  temp_ = false;  // renamed: the path's file now
   disarm_temp(slot_);
   if (replaced >= 0) free_replaced(replaced);
 }

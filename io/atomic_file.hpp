@@ -44,6 +44,7 @@ class ReplacingFile {
   void drop();
   std::string path_, target_, tmp_;
   bool exists_ = false;
+  bool temp_ = false;  // the temporary file is there and ours to remove
   int fd_ = -1, slot_ = -1;
   double written_ms_ = 0;
 };

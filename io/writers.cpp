@@ -93,7 +93,9 @@ std::string ply_head(const Crs& crs, bool ascii, uint64_t vertices, uint64_t tri
   return h;
 }
 
-void write_vertices(std::span<const Point3> vertices, const WriteOptions& options, std::ostream& out) {
+}  // namespace
+
+void write_mesh_vertices(std::span<const Point3> vertices, const WriteOptions& options, std::ostream& out) {
   if (options.format == MeshFormat::Obj)
     return write_items(out, vertices.size(), 3 * 25 + 3,
                        [&](uint64_t v, char* p) { return put(put_xyz(put(p, "v "), vertices[v]), "\n"); });
@@ -105,7 +107,7 @@ void write_vertices(std::span<const Point3> vertices, const WriteOptions& option
   out.write(reinterpret_cast<const char*>(vertices.data()), std::streamsize(vertices.size() * sizeof(Point3)));
 }
 
-void write_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& out) {
+void write_mesh_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& out) {
   check_triangles(mesh);
   if (options.format == MeshFormat::Obj)
     return write_items(out, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
@@ -132,6 +134,8 @@ void write_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& ou
     out.write(faces.data(), std::streamsize(count * 13));
   }
 }
+
+namespace {
 
 void write_wkt(const Mesh& mesh, bool multipolygon, Sink& out, std::ostream& stream) {
   out.text(multipolygon ? "MULTIPOLYGON Z " : "TIN Z ");
@@ -225,19 +229,11 @@ std::string mesh_head(const Crs& crs, const WriteOptions& options, uint64_t vert
   return options.format == MeshFormat::Obj ? obj_head(crs) : ply_head(crs, options.ascii, vertices, triangles);
 }
 
-void write_mesh_vertices(std::span<const Point3> vertices, const WriteOptions& options, std::ostream& out) {
-  write_vertices(vertices, options, out);
-}
-
-void write_mesh_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& out) {
-  write_faces(mesh, options, out);
-}
-
 void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, std::ostream& out) {
   if (vertices_first(options)) {
     out << mesh_head(crs, options, mesh.vertices.size(), mesh.triangles.size());
-    write_vertices({mesh.vertices.data(), mesh.vertices.size()}, options, out);
-    write_faces(mesh, options, out);
+    write_mesh_vertices({mesh.vertices.data(), mesh.vertices.size()}, options, out);
+    write_mesh_faces(mesh, options, out);
     return;
   }
   Sink sink(out);
