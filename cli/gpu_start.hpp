@@ -96,8 +96,8 @@ class GpuStarts {
   // The fewest input points for which `--backend auto` uses the GPU in this process: auto_min_points(), or
   // batch_auto_min_points() for a batch of many jobs.
   uint64_t auto_min_points = cdtgpu::auto_min_points();
-  // Whether a start for a large one-piece input makes its device memory ahead: not under MPI, whose ranks may
-  // share a device and run tiles only.
+  // Whether a start for a large one-piece input makes its device memory ahead: not where another MPI rank may
+  // take the same GPU (TriangulateOptions::devices_shared).
   bool device_pool = true;
   // The start for this device and rule: started now with `expected_points`, or the one started before.
   GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points);

@@ -50,6 +50,9 @@ struct TriangulateOptions {
   std::string tiles_out;         // the mesh as one file per tile plus index.geojson (io/tiles_dir.hpp); empty: none
   std::string devices;           // GPUs for tiled runs (gpu/devices.hpp); empty: all hardware GPUs when tiled
   const RankTiles* ranks = nullptr;  // MPI ranks: rank 0 hands tiles to the others (cli/mpi.hpp); null: one process
+  // Another process of the run may take the same GPUs (MPI ranks beyond one a GPU, or GPUs picked by hand under
+  // MPI): no device memory made ahead (gpu/device_memory_pool.hpp), which would leave the other little.
+  bool devices_shared = false;
   const TilesDirSharing* tiles_sharing = nullptr;  // --tiles-out's files written by every rank; null: here
 };
 

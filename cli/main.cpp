@@ -98,10 +98,12 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
       options.ranks = mpi.rank_tiles();
       options.input.read.share = mpi.read_share();
       options.tiles_sharing = mpi.tiles_dir();
+      options.devices_shared = mpi.ranks() > 1;
       // Ranks of one host take a GPU each (their local rank's), unless --device or --devices says otherwise.
       if (mpi.ranks() > 1 && options.backend != "cgal" && options.device.empty() && options.devices.empty()) {
         const std::vector<size_t> gpus = gpu::select_devices(gpu::list_devices(), "all");
         options.device = options.devices = std::to_string(gpus[size_t(mpi.local_rank()) % gpus.size()]);
+        options.devices_shared = size_t(mpi.local_ranks()) > gpus.size();
       }
       return run_triangulate(options);
     }

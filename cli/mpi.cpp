@@ -382,6 +382,7 @@ MpiSession::MpiSession(int* argc, char*** argv) {
       MPI_Comm_rank(here, &local_rank);
       MPI_Comm_free(&here);
     }
+    local_ranks_ = local;
     // The readers: the first rank of each host, whose share is the host's (its cores and disks are the other
     // ranks' too: on one host rank 0 read 100M LAS points alone in 0.37 s, half of them and the other half
     // received in 0.63 s), or every rank with CDTGPU_READ_SHARES=ranks. Rank 0 is the first of its host.

@@ -36,6 +36,7 @@ class MpiSession {
   std::string host() const { return host_; }
   // This rank's place among the ranks of its host (the launcher's word), for picking a GPU of its own.
   int local_rank() const { return local_rank_; }
+  int local_ranks() const { return local_ranks_; }  // the ranks of this host, this one included
   // Rank 0's workers, and a worker's side (core/tile_workers.hpp); null for one process.
   const RankTiles* rank_tiles() const { return tiles_.ranks > 1 ? &tiles_ : nullptr; }
   // The inputs' reading shared among the readers (io/read_share.hpp): the first rank of each host, or every rank
@@ -63,6 +64,7 @@ class MpiSession {
   std::atomic<bool> others_done_{false};
   std::string host_, refusal_, cpu_note_;
   int local_rank_ = 0;
+  int local_ranks_ = 1;
   bool initialised_ = false;
   std::shared_ptr<void> readers_;  // the readers' communicator (cli/mpi.cpp), freed before MPI_Finalize
 };

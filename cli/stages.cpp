@@ -389,7 +389,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       for (;; ++retries) {
         try {
           staged = ahead && ahead->tiles ? std::move(ahead->tiles)
-                                         : std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts()));
+                                         : std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts(), nullptr, !options.devices_shared));
           gpu::GpuTiles& tiles = *staged;
           const unsigned ramp = gpu::tile_ramp(devices.cdts(), tile_here);
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
@@ -536,7 +536,7 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
   // An MPI worker runs tiles only, each in staging of its own: the start's staging (up to 1 GiB, pinned) would
   // serve a whole run it never makes.
   const bool worker = options.ranks && options.ranks->rank != 0;
-  if (options.ranks) gpus.device_pool = false;
+  if (options.devices_shared) gpus.device_pool = false;
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= gpus.auto_min_points))
     job.start = &gpus.start(options.device, hardware_only(options), worker ? 0 : estimate);
 }
@@ -601,7 +601,8 @@ std::shared_ptr<TilesAhead> open_tile_devices(const Job& job, gpu::GpuCdt& cdt, 
   ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(job.options.devices, cdt.context(), cdt));
   uint64_t tile = gpu_tile_points(cdt.context(), n, m);
   if (m < 0) tile = std::min(tile, ahead->devices->max_tile_points());
-  ahead->tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts()));
+  // No device memory pools where another rank may take the same GPU (as GpuStarts::device_pool).
+  ahead->tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts(), nullptr, !job.options.devices_shared));
   if (tiled_on_any_device(n, m)) ahead->tiles->reserve(tile_staging_points(n, tile));
   spdlog::debug("gpu start: {} tile device(s) opened {}, their staging begun for tiles of {} points",
                 ahead->devices->cdts().size(), when, tile);

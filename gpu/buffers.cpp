@@ -96,9 +96,10 @@ Buffer make(const Context& ctx, VkDeviceSize bytes, const std::string& name, boo
     b.charged = req.size;
   }
   std::optional<DeviceMemoryPool::Range> pooled;
-  if (!host && ctx.memory_pool) pooled = ctx.memory_pool->take(req);
+  const std::shared_ptr<DeviceMemoryPool> pool = host ? nullptr : ctx.memory_pool.load();
+  if (pool) pooled = pool->take(req);
   if (pooled) {
-    b.pool = ctx.memory_pool;
+    b.pool = pool;
     b.range = *pooled;
     VK_CHECK(vkBindBufferMemory(ctx.device, b.buffer, pooled->memory, pooled->offset));
   } else {

@@ -367,8 +367,8 @@ void release(Context& c) {
     vkDeviceWaitIdle(c.device);
     c.staging.reset();
     c.temp_pool.reset();
-    if (c.memory_pool) c.memory_pool->free_blocks();  // buffers still holding it give their ranges to nothing
-    c.memory_pool.reset();
+    // Buffers still holding it give their ranges to nothing.
+    if (const auto pool = c.memory_pool.exchange(nullptr)) pool->free_blocks();
     step("staging and device memory pool");
     save_cache(c);
     step("pipeline cache");
@@ -425,7 +425,7 @@ Context& Context::operator=(Context&& o) noexcept {
   pipeline_cache_loaded = o.pipeline_cache_loaded;
   pipeline_cache_hash = o.pipeline_cache_hash;
   memory_budget = std::exchange(o.memory_budget, std::make_shared<MemoryBudget>());
-  memory_pool = std::move(o.memory_pool);
+  memory_pool.store(o.memory_pool.exchange(nullptr));
   return *this;
 }
 
@@ -545,7 +545,7 @@ Context create_context(const ContextOptions& options) {
   if (options.device_pool_bytes && !ctx.memory_budget->limit)  // the cap counts each buffer as the driver would
     pool = std::async(std::launch::async, [&ctx, &options] {
       try {
-        ctx.memory_pool = make_device_pool(ctx, options.device_pool_bytes);
+        ctx.memory_pool.store(make_device_pool(ctx, options.device_pool_bytes));
       } catch (const std::exception& e) {  // the buffers then take memory of their own, as without a pool
         spdlog::debug("no device memory pool: {}", e.what());
       }

@@ -133,8 +133,9 @@ struct Context {
   mutable std::shared_ptr<void> temp_pool;
   // Device-local bytes its buffers hold, and the cap (shared: a buffer gives its bytes back when it is freed).
   std::shared_ptr<MemoryBudget> memory_budget = std::make_shared<MemoryBudget>();
-  // Where device buffers take their memory first (ContextOptions::device_pool_bytes); null: none.
-  std::shared_ptr<DeviceMemoryPool> memory_pool;
+  // Where device buffers take their memory first (ContextOptions::device_pool_bytes, or a tiled run's
+  // TileDevicePools made later, beside other threads' buffers); null: none.
+  mutable std::atomic<std::shared_ptr<DeviceMemoryPool>> memory_pool;
 };
 
 // Saves the context's pipeline cache to its file when the run compiled something new (destroying the context

@@ -50,8 +50,8 @@ namespace {
 // Runs work(cdt, stats) on a free device: its stats added to `sum`, a DeviceError given the call's name.
 class OnDevice {
  public:
-  OnDevice(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from)
-      : cdts_(std::move(cdts)), sum_(sum), warm_up_from_(warm_up_from), pool_(cdts_.size()),
+  OnDevice(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from, uint64_t pools_from)
+      : cdts_(std::move(cdts)), sum_(sum), warm_up_from_(warm_up_from), pools_from_(pools_from), pool_(cdts_.size()),
         slots_(kSlotsPerDevice * cdts_.size()) {
     for (size_t i = 0; i < kSlotsPerDevice * cdts_.size(); ++i) staging_.push_back(std::make_unique<HostStaging>());
     for (size_t d = 0; d < cdts_.size(); ++d) copying_.push_back(std::make_unique<std::mutex>());
@@ -65,10 +65,12 @@ class OnDevice {
   //
   // The first reserve also warms each device up (GpuCdt::warm_up_tiles) in its first slot, unless a tile has
   // begun by then: the device's buffers for tiles are made while the host resolves and plans. Asked again for
-  // no more than before (the plan's own call after the CLI's), it does nothing.
+  // no more than before (the plan's own call after the CLI's), it does nothing. For tiles of pools_from points
+  // or more, each device's memory pool is made beside its first slot's pinning, before that slot is given out.
   void reserve(uint64_t vertices) {
     if (vertices <= reserved_vertices_) return;
     const bool warm = reserved_vertices_ == 0 && vertices >= warm_up_from_;  // the first reserve
+    const bool pools = vertices >= pools_from_;
     reserved_vertices_ = vertices;
     allocating_.clear();  // joins an earlier reserve's threads
     const uint64_t bytes = GpuCdt::staging_bytes(vertices);
@@ -76,9 +78,12 @@ class OnDevice {
     filled_ = std::vector<std::promise<void>>(staging_.size());
     for (size_t slot = 0; slot < staging_.size(); ++slot) reserved_[slot] = filled_[slot].get_future().share();
     for (size_t d = 0; d < devices; ++d)
-      allocating_.emplace_back([this, d, devices, bytes, vertices, warm] {
+      allocating_.emplace_back([this, d, devices, bytes, vertices, warm, pools] {
+        std::future<void> pooled;
+        if (pools) pooled = std::async(std::launch::async, [this, d, vertices] { make_pool(d, vertices); });
         for (size_t slot = d; slot < staging_.size(); slot += devices) try {
             staging_[slot]->fit(cdts_[d]->context(), bytes);
+            if (pooled.valid()) pooled.get();  // make_pool throws nothing
             if (warm && slot == d) warm_up(d, *staging_[slot], vertices);
             filled_[slot].set_value();
           } catch (...) {
@@ -101,6 +106,24 @@ class OnDevice {
     } catch (const std::exception& e) {
       cdts_[d]->drop_kept();
       spdlog::debug("device {}: no warm-up for tiles of {} points: {}", d, vertices, e.what());
+    }
+  }
+
+  // Device d's memory pool for tiles of `vertices` (Context::memory_pool), unless it has one (an earlier run's,
+  // or a start's) or runs under a cap that counts the driver's allocations; a failure only logged (the buffers
+  // then take memory of their own).
+  void make_pool(size_t d, uint64_t vertices) {
+    const Context& ctx = cdts_[d]->context();
+    if (ctx.memory_pool.load() || ctx.memory_budget->limit) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      std::shared_ptr<DeviceMemoryPool> none, made = make_device_pool(ctx, vertices * kTileBytesPerPoint);
+      const uint64_t bytes = made->bytes();
+      if (ctx.memory_pool.compare_exchange_strong(none, std::move(made)))
+        spdlog::debug("device {}: {:.1f} GB of device memory made ahead for tiles of {} points in {:.0f} ms", d,
+                      bytes / 1e9, vertices, ms_since(t0));
+    } catch (const std::exception& e) {
+      spdlog::debug("device {}: no device memory pool for tiles of {} points: {}", d, vertices, e.what());
     }
   }
 
@@ -196,6 +219,8 @@ class OnDevice {
 
  private:
   static constexpr size_t kSlotsPerDevice = 2;
+  // A tile's device memory at its peak, buffers on the shelf included: ~232 bytes a point at 125M (29 GB).
+  static constexpr uint64_t kTileBytesPerPoint = 260;
 
   // e again, named by its tile (and device); still TooLarge where smaller tiles may fit.
   [[noreturn]] void rethrow_named(const DeviceError& e, std::string_view what, size_t vertices, size_t segments,
@@ -224,6 +249,7 @@ class OnDevice {
   const std::chrono::steady_clock::time_point epoch_ = std::chrono::steady_clock::now();  // the -v timeline's
   GpuCdtStats* sum_;
   const uint64_t warm_up_from_;
+  const uint64_t pools_from_;
   std::atomic<size_t> warm_ups_{0};
   DevicePool pool_;   // the devices not running a call
   DevicePool slots_;  // the staging buffers not holding a tile; slot i is device i % devices'
@@ -249,13 +275,19 @@ unsigned tile_ramp(const std::vector<const GpuCdt*>& cdts, uint64_t tile_points)
   return tile_points >= warm_up_from(cdts) ? 2 : 0;
 }
 
-GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum) {
-  const uint64_t from = warm_up_from(cdts);
-  return gpu_tiles(std::move(cdts), sum, from);
+uint64_t device_pools_from(const std::vector<const GpuCdt*>& cdts) {
+  for (const GpuCdt* c : cdts)
+    if (c->context().info.type == "cpu") return UINT64_MAX;
+  return 8'000'000;
 }
 
-GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from) {
-  auto on = std::make_shared<OnDevice>(std::move(cdts), sum, warm_up_from);
+GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, bool device_pools) {
+  const uint64_t warm = warm_up_from(cdts), pools = device_pools ? device_pools_from(cdts) : UINT64_MAX;
+  return gpu_tiles(std::move(cdts), sum, warm, pools);
+}
+
+GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from, uint64_t pools_from) {
+  auto on = std::make_shared<OnDevice>(std::move(cdts), sum, warm_up_from, pools_from);
   GpuTiles g;
   // A tile is a resolved graph already: no resolve stage, no copies.
   g.triangulate = [on](const Points& vertices, const std::vector<Edge>& segments, std::string_view what) {

@@ -40,8 +40,14 @@ uint64_t warm_up_from(const std::vector<const GpuCdt*>& cdts);
 // on 2 x H200 a run took 3315 ms with it against 3585 without (the devices start on half a tile's copies
 // and end on half a tile's bookkeeping); on one, 5388 against 5428.
 unsigned tile_ramp(const std::vector<const GpuCdt*>& cdts, uint64_t tile_points);
-GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum = nullptr);
-GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from);
+// Tiles from which each device's buffers take their memory from a pool made with the first reserve, beside its
+// staging (gpu/device_memory_pool.hpp; ~260 bytes a point): 8M points on hardware GPUs, where the driver's
+// allocations and frees of every tile's buffers, several GB each, held the devices (and contended between two).
+// Never on a CPU device, whose allocations cost nothing.
+uint64_t device_pools_from(const std::vector<const GpuCdt*>& cdts);
+// With the rules above; device_pools false: none (MPI ranks, which may share a device).
+GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum = nullptr, bool device_pools = true);
+GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from, uint64_t pools_from);
 
 // The devices a tiled run spreads over, each with a context and a GpuCdt: borrowed (a device started already)
 // or opened here, all at once (gpu/devices.hpp).

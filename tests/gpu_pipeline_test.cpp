@@ -140,18 +140,18 @@ TEST(GpuPipeline, BuffersFromADeviceMemoryPoolGiveTheSameResult) {
     o.validation = true;
     o.device_pool_bytes = pool_bytes;
     gpu::Context c = gpu::create_context(o);
-    ASSERT_TRUE(c.memory_pool) << pool_bytes;
-    const uint64_t made = c.memory_pool->bytes();
+    ASSERT_TRUE(c.memory_pool.load()) << pool_bytes;
+    const uint64_t made = c.memory_pool.load()->bytes();
     EXPECT_EQ(made, pool_bytes);
     {
       gpu::GpuCdt cdt(c);
       const CdtResult got = cdt.triangulate(p);
       EXPECT_TRUE(got.mesh.vertices == ref.mesh.vertices) << pool_bytes;
       EXPECT_TRUE(got.mesh.triangles == ref.mesh.triangles) << pool_bytes;
-      EXPECT_GT(c.memory_pool->ranges_taken(), 10u) << pool_bytes;
+      EXPECT_GT(c.memory_pool.load()->ranges_taken(), 10u) << pool_bytes;
     }
     c.temp_pool.reset();  // the context's small scratch buffers (Recorder::temp) stay with it otherwise
-    EXPECT_EQ(c.memory_pool->free_bytes(), made) << pool_bytes;
+    EXPECT_EQ(c.memory_pool.load()->free_bytes(), made) << pool_bytes;
     for (const std::string& m : c.messages()) ADD_FAILURE() << m;
   }
 }

@@ -60,9 +60,9 @@ TEST(GpuTiles, TwoDevicesGiveTheSingleRunsBytes) {
     }
 }
 
-// Devices warmed up for the tiles before the resolve (as cdtgpu triangulate reserves them), forced here on the
-// test's device: every device warmed up once, the single run's bytes, and a second run (buffers kept, no
-// second warm-up) the same.
+// Devices warmed up for the tiles before the resolve (as cdtgpu triangulate reserves them), each with a device
+// memory pool, both forced here on the test's device: every device warmed up once, its buffers taken from its
+// pool, the single run's bytes, and a second run (buffers kept, no second warm-up or pool) the same.
 TEST(GpuTiles, WarmedUpDevicesGiveTheSingleRunsBytes) {
   InputSet in = uniform_points(12000, 5);
   add_dt_edge_constraints(in, 3000, 0.5, 5);
@@ -71,7 +71,7 @@ TEST(GpuTiles, WarmedUpDevicesGiveTheSingleRunsBytes) {
   const size_t d = test_device();
   const auto ctxs = gpu::create_contexts({d, d}, gpu::ContextOptions{});
   const gpu::GpuCdt a(*ctxs[0]), b(*ctxs[1]);
-  gpu::GpuTiles tiles = gpu::gpu_tiles({&a, &b}, nullptr, /*warm_up_from=*/0);
+  gpu::GpuTiles tiles = gpu::gpu_tiles({&a, &b}, nullptr, /*warm_up_from=*/0, /*pools_from=*/0);
   for (int run = 0; run < 2; ++run) {
     TileOptions opt;
     opt.max_tile_points = 2000;
@@ -87,9 +87,17 @@ TEST(GpuTiles, WarmedUpDevicesGiveTheSingleRunsBytes) {
     EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << "run " << run;
     EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << "run " << run;
   }
-  // The default: never on a CPU device, 100M points on hardware GPUs; the ramp where they warm up.
+  std::vector<std::shared_ptr<gpu::DeviceMemoryPool>> pools;
+  for (const auto& c : ctxs) pools.push_back(c->memory_pool.load());
+  for (size_t i = 0; i < pools.size(); ++i) {
+    ASSERT_TRUE(pools[i]) << "device " << i;
+    EXPECT_GE(pools[i]->bytes(), tile_staging_points(p.vertices.size(), 2000) * 260) << "device " << i;
+    EXPECT_GT(pools[i]->ranges_taken(), 10u) << "device " << i;
+  }
+  // The default: never on a CPU device, 100M points on hardware GPUs (pools from 8M); the ramp where they warm up.
   const bool cpu = a.context().info.type == "cpu";
   EXPECT_EQ(gpu::warm_up_from({&a}), cpu ? UINT64_MAX : uint64_t(100'000'000));
+  EXPECT_EQ(gpu::device_pools_from({&a}), cpu ? UINT64_MAX : uint64_t(8'000'000));
   EXPECT_EQ(gpu::tile_ramp({&a}, 134'000'000), cpu ? 0u : 2u);
   EXPECT_EQ(gpu::tile_ramp({&a}, 20'000'000), 0u);
 }
