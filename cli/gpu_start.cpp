@@ -86,8 +86,9 @@ namespace {
 constexpr uint64_t kDevicePoolFrom = 32'000'000;
 }  // namespace
 
-GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points, bool device_pool) {
-  pending_ = std::async(std::launch::async, [this, device, hardware_only, expected_points, device_pool] {
+GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points, bool device_pool,
+                   bool tiled) {
+  pending_ = std::async(std::launch::async, [this, device, hardware_only, expected_points, device_pool, tiled] {
     using Clock = std::chrono::steady_clock;
     auto ms = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
     auto r = std::make_unique<Ready>();
@@ -98,7 +99,9 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
     // For any input the device may take in one piece: grown by the copies instead, it was pinned twice more
     // on the run's path (2 then 3 GB at 100M points, 1.5 s on the H200 machine), where now it is pinned beside
     // the reading. Tiled inputs bring their own (gpu/tile_triangulator): at most 1 GiB for their merge.
-    const bool one_piece = expected_points <= gpu::max_tile_points_of_any_device();
+    // Tiles of --max-tile-points made these for a piece that never came: 3 GB of staging and 32 GB of device
+    // memory at 100M points in tiles of 20M, which the tiles then waited for (0.7-1.1 s, session 57).
+    const bool one_piece = !tiled && expected_points <= gpu::max_tile_points_of_any_device();
     options.staging_bytes = std::min<uint64_t>(expected_points * 27, one_piece ? UINT64_MAX : uint64_t(1) << 30);
     // And the device memory of its buffers, where their allocation between the stages costs more than the
     // reading takes to hide it (~30 ms a GB on the H200 machine): the run's peak, ~260 bytes a point at 10^8.
@@ -211,10 +214,10 @@ const gpu::Context& GpuStart::context() {
   return ready_->ctx;
 }
 
-GpuStart& GpuStarts::start(const std::string& device, bool hardware_only, uint64_t expected_points) {
+GpuStart& GpuStarts::start(const std::string& device, bool hardware_only, uint64_t expected_points, bool tiled) {
   std::lock_guard lock(mutex_);
   std::unique_ptr<GpuStart>& s = starts_[{device, hardware_only}];
-  if (!s) s = std::make_unique<GpuStart>(device, hardware_only, expected_points, device_pool);
+  if (!s) s = std::make_unique<GpuStart>(device, hardware_only, expected_points, device_pool, tiled);
   return *s;
 }
 

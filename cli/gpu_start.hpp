@@ -45,8 +45,10 @@ class GpuStart {
   // Starts creating the context and every pipeline now. hardware_only: refuse a CPU Vulkan driver.
   // expected_points (the estimate of the input): the start also allocates the staging memory that the
   // triangulation's upload and download will need, ~24 bytes a point, off the critical path.
-  // device_pool: device memory for a large one-piece run made ahead too (gpu/device_memory_pool.hpp).
-  GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points = 0, bool device_pool = false);
+  // device_pool: device memory for a large one-piece run made ahead too (gpu/device_memory_pool.hpp). tiled: the
+  // run is tiled whatever the devices take (--max-tile-points): staging for its merge only, no device memory.
+  GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points = 0, bool device_pool = false,
+           bool tiled = false);
   ~GpuStart();
   // Waits for the start; rethrows its DeviceError (on every call: a failed start is not tried again).
   gpu::GpuCdt& cdt();
@@ -99,8 +101,9 @@ class GpuStarts {
   // Whether a start for a large one-piece input makes its device memory ahead: not where another MPI rank may
   // take the same GPU (TriangulateOptions::devices_shared).
   bool device_pool = true;
-  // The start for this device and rule: started now with `expected_points`, or the one started before.
-  GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points);
+  // The start for this device and rule: started now with `expected_points` (and `tiled`, GpuStart's), or the one
+  // started before.
+  GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points, bool tiled = false);
   // GpuStart::leave_for_exit for each.
   void leave_for_exit();
   // GpuStart::close_in_background for each.

@@ -538,7 +538,8 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
   const bool worker = options.ranks && options.ranks->rank != 0;
   if (options.devices_shared) gpus.device_pool = false;
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= gpus.auto_min_points))
-    job.start = &gpus.start(options.device, hardware_only(options), worker ? 0 : estimate);
+    job.start = &gpus.start(options.device, hardware_only(options), worker ? 0 : estimate,
+                            tiled_on_any_device(estimate, options.max_tile_points));
 }
 
 
@@ -587,7 +588,7 @@ void choose_backend(Job& job, GpuStarts& gpus) {
                            (min_points == auto_min_points() ? ": the CPU is faster than the GPU's start-up"
                                                             : ": the CPU is faster than the GPU on jobs this small");
     else if (!job.start)
-      job.start = &gpus.start(options.device, hardware_only(options), n);
+      job.start = &gpus.start(options.device, hardware_only(options), n, tiled_on_any_device(n, options.max_tile_points));
   }
 }
 
