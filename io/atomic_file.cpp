@@ -12,6 +12,7 @@
 
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -82,6 +83,33 @@ int arm_temp(const std::string& tmp) {
 
 void disarm_temp(int slot) {
   if (slot >= 0) g_temp_armed[slot] = 0;
+}
+
+// ---- temporary files of killed runs ----
+// A run's temporary file is locked (flock) from its creation to its rename, on any host that shares the folder
+// (NFS takes flock as a POSIX lock). One that nobody locks is what a run killed by SIGKILL (or the OOM killer)
+// left: removed before the same output is written again, and said so. At 10^9 points such a file is tens of GB.
+void remove_stale_temps(const std::string& target, const std::string& own) {
+  const fs::path t(target);
+  const std::string prefix = t.filename().string() + ".tmp-";
+  std::error_code ec;
+  for (fs::directory_iterator it(t.parent_path().empty() ? fs::path(".") : t.parent_path(), ec), end;
+       !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    if (name.find_first_not_of("0123456789", prefix.size()) != std::string::npos) continue;
+    const std::string p = it->path().string();
+    if (p == own) continue;
+    const int fd = ::open(p.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) continue;
+    struct stat held {}, named {};
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &held) == 0 && S_ISREG(held.st_mode) &&
+        ::lstat(p.c_str(), &named) == 0 && named.st_ino == held.st_ino && named.st_dev == held.st_dev &&
+        ::unlink(p.c_str()) == 0)
+      spdlog::info("removed {} ({} bytes), the temporary file of an earlier run that was killed while writing {}",
+                   p, uint64_t(held.st_size), target);
+    ::close(fd);
+  }
 }
 
 // ---- a checked stream over a file descriptor ----
@@ -304,6 +332,7 @@ void free_replaced(int fd) {
 
 ReplacingFile::ReplacingFile(const std::string& path, const std::string& target, bool exists, unsigned mode)
     : path_(path), target_(target), tmp_(target + ".tmp-" + std::to_string(::getpid())), exists_(exists) {
+  remove_stale_temps(target_, tmp_);
   slot_ = arm_temp(tmp_);
   fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd_ < 0) {
@@ -312,6 +341,9 @@ ReplacingFile::ReplacingFile(const std::string& path, const std::string& target,
     fail(path, "cannot create " + tmp_, err);
   }
   temp_ = true;
+  // Ours until the rename: another run's remove_stale_temps leaves a locked file alone. Where the file system
+  // takes no locks, the other run's flock fails too and removes nothing.
+  (void)::flock(fd_, LOCK_EX | LOCK_NB);
   // The new file keeps the old one's permissions (umask applies to a new one only).
   if (exists && ::fchmod(fd_, mode & 07777) != 0) {
     const int err = errno;
@@ -360,6 +392,13 @@ void ReplacingFile::commit() {
   spdlog::debug("{}: written in {:.1f} ms, synced in {:.1f} ms", path_, written_ms_,
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   const int fd = std::exchange(fd_, -1);
+  const int lock = ::dup(fd);  // the lock stays with the file until it is renamed
+  struct LockHeld {
+    int fd;
+    ~LockHeld() {
+      if (fd >= 0) ::close(fd);
+    }
+  } held{lock};
   if (::close(fd) != 0 && errno != EINTR) {
     const int err = errno;
     drop();

@@ -2,7 +2,9 @@
 // links, FIFOs, stdout), outputs that are inputs, interrupted runs, damaged shapefiles, unknown z fields and
 // lon/lat data across the antimeridian. Each test failed on the code before the fix it pins down.
 #include <gtest/gtest.h>
+#include <fcntl.h>
 #include <shapefil.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
@@ -292,8 +294,35 @@ TEST_F(Reliability, SigkillWhileWritingKeepsTheOldOutput) {
   ASSERT_TRUE(seen);
   EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
   EXPECT_EQ(slurp(path("old.ply")), "the old output\n");
-  // SIGKILL cannot be caught: the stale old.ply.tmp-PID stays (documented in docs/rules.md).
-  EXPECT_LE(files_containing(".tmp-"), 1u);
+  // SIGKILL cannot be caught: the stale old.ply.tmp-PID stays (documented in docs/rules.md)...
+  EXPECT_EQ(files_containing(".tmp-"), 1u);
+  // ... until the same output is written again: nothing locks it any more, so that run removes it and says so.
+  write_points();
+  const Result r = run("triangulate " + path("p.xyz") + " --backend cgal --crs none -o " + path("old.ply"));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("the temporary file of an earlier run that was killed"), std::string::npos) << r.err;
+  EXPECT_EQ(files_containing(".tmp-"), 0u);
+}
+
+// A temporary file that a run still holds (locked, as every run holds its own until the rename) is another
+// run's, perhaps on another host sharing the folder: left alone. Once nothing holds it, it goes.
+TEST_F(Reliability, ATemporaryFileStillHeldIsLeftAlone) {
+  write_points();
+  const std::string tmp = path("t.obj.tmp-4000001");  // a pid no run here has
+  write("t.obj.tmp-4000001", "a run's partial output\n");
+  write("t.obj.tmp-x1", "not a temporary file of ours\n");
+  const int fd = ::open(tmp.c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  Result r = run(tri(path("p.xyz")) + "-o " + path("t.obj"));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(slurp(tmp), "a run's partial output\n");
+  ::close(fd);
+  r = run(tri(path("p.xyz")) + "-o " + path("t.obj"));
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(tmp));
+  EXPECT_TRUE(fs::exists(path("t.obj.tmp-x1")));
+  EXPECT_EQ(files_containing(".tmp-"), 1u);
 }
 
 // ---- damaged shapefiles ----
