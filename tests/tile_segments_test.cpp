@@ -59,10 +59,11 @@ TEST(TileSegments, SlabsGetEverySegmentTheirClosedXRangeMeets) {
       EXPECT_EQ(std::vector<uint32_t>(got.begin(), got.end()), expected) << max_points << ", slab " << t;
     }
     EXPECT_GT(on_cut, 0u) << "some segment ends on a cut";
-    if (max_points == 20)
+    if (max_points == 20) {
       EXPECT_TRUE(std::any_of(plan.tiles.begin(), plan.tiles.end(),
                               [&](uint32_t t) { return plan.nodes[t].rect.x0 == plan.nodes[t].rect.x1; }))
           << "a slab of no width";
+    }
   }
 }
 
