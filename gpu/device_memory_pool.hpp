@@ -1,8 +1,10 @@
 // Device memory made in a few large blocks before a run and handed out to its buffers (gpu/buffers' make). A
 // run of 10^8 points makes ~35 device buffers, 32 GB, each when its stage begins; the driver took ~1 s for them
 // on the H200 machine, between the GPU's stages. Made beside the start's staging (ContextOptions::
-// device_pool_bytes), the blocks cost about as much, but while the input is read and prepared. First fit over
-// each block's free ranges, merged as buffers give them back; a buffer that fits nowhere gets memory of its own.
+// device_pool_bytes), the blocks cost about as much, but while the input is read and prepared. Best fit over
+// the blocks' free ranges, merged as buffers give them back (first fit left a tiles' pool of 33 GB so cut up that
+// it grew to 63 GB for a 29 GB peak); where a buffer fits nowhere the pool grows by a
+// block, and only where the device has no room for one does the buffer get memory of its own.
 #pragma once
 #include <vulkan/vulkan.h>
 
@@ -17,11 +19,13 @@ namespace cdtgpu::gpu {
 
 struct Context;
 
-// The bookkeeping of one block: free ranges by offset, first fit, merged with their neighbours when given back.
+// The bookkeeping of one block: free ranges by offset, best fit, merged with their neighbours when given back.
 class FreeRanges {
  public:
   explicit FreeRanges(uint64_t size);
-  // The offset of `bytes` at a multiple of `alignment` (a power of two), or none.
+  // What the best fit for `bytes` at a multiple of `alignment` (a power of two) would leave of its range, or none.
+  std::optional<uint64_t> fit(uint64_t bytes, uint64_t alignment) const;
+  // The offset of that best fit (the range that `bytes` leaves least of; the lowest of equals), or none.
   std::optional<uint64_t> take(uint64_t bytes, uint64_t alignment);
   void give(uint64_t offset, uint64_t bytes);
   uint64_t free_bytes() const;
@@ -44,19 +48,24 @@ class DeviceMemoryPool {
   DeviceMemoryPool(const DeviceMemoryPool&) = delete;
   DeviceMemoryPool& operator=(const DeviceMemoryPool&) = delete;
 
-  // Memory for a buffer with these requirements, or none (another type, or no room).
+  // Memory for a buffer with these requirements, from the blocks or a block added for it (a block's size, at
+  // most the pool's, at least the buffer's); none for another memory type, or where the device has no room.
   std::optional<Range> take(const VkMemoryRequirements& req);
   void give(const Range& r);
   // The blocks' memory back to the driver (before the device goes; buffers still out must not be used).
   void free_blocks();
-  uint64_t bytes() const { return bytes_; }
+  uint64_t bytes() const { return bytes_.load(); }
   uint64_t free_bytes();
   uint64_t ranges_taken() const { return taken_; }  // how many buffers took memory here so far
 
  private:
+  bool add_block(uint64_t size);  // mutex_ held (or in the constructor)
   VkDevice device_ = VK_NULL_HANDLE;
   uint32_t type_ = 0;
-  uint64_t bytes_ = 0;
+  uint64_t block_bytes_ = 0;
+  bool addressed_ = false;
+  bool closed_ = false;  // free_blocks() ran: no more blocks
+  std::atomic<uint64_t> bytes_{0};  // grows under mutex_; read by bytes() without it
   std::atomic<uint64_t> taken_{0};
   std::mutex mutex_;
   std::vector<VkDeviceMemory> blocks_;

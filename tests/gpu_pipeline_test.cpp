@@ -112,12 +112,12 @@ TEST(GpuPipeline, KatoombaSample) {
   EXPECT_GT(s.peak_device_bytes, 0u);
 }
 
-// A device memory pool's bookkeeping: first fit at the alignment asked, ranges merged with both neighbours.
+// A device memory pool's bookkeeping: best fit at the alignment asked, ranges merged with both neighbours.
 TEST(DeviceMemoryPool, FreeRangesFitAlignAndMerge) {
   gpu::FreeRanges r(1000);
   EXPECT_EQ(r.take(100, 1), std::optional<uint64_t>(0));
   EXPECT_EQ(r.take(10, 64), std::optional<uint64_t>(128));  // 100..128 stays free
-  EXPECT_EQ(r.take(20, 4), std::optional<uint64_t>(100));   // the gap left by the alignment, first fit
+  EXPECT_EQ(r.take(20, 4), std::optional<uint64_t>(100));   // the gap left by the alignment, the best fit
   EXPECT_EQ(r.take(900, 1), std::nullopt);
   EXPECT_EQ(r.free_bytes(), 1000u - 130u);
   r.give(0, 100);
@@ -126,11 +126,19 @@ TEST(DeviceMemoryPool, FreeRangesFitAlignAndMerge) {
   r.give(100, 20);  // and now with 0..100 too
   EXPECT_EQ(r.free_bytes(), 1000u);
   EXPECT_EQ(r.take(1000, 1), std::optional<uint64_t>(0));
+  // The range a buffer leaves least of, not the first that fits: 0..100 would leave 60, 110..160 leaves 10.
+  gpu::FreeRanges b(1000);
+  for (uint64_t n : {100, 10, 50, 10}) b.take(n, 1);
+  b.give(0, 100);
+  b.give(110, 50);
+  EXPECT_EQ(b.fit(40, 1), std::optional<uint64_t>(10));
+  EXPECT_EQ(b.take(40, 1), std::optional<uint64_t>(110));
+  EXPECT_EQ(b.take(100, 1), std::optional<uint64_t>(0)) << "the exact fit";
 }
 
 // Buffers taking their memory from a pool made ahead (ContextOptions::device_pool_bytes, as `cdtgpu triangulate`
 // does for inputs of 10^8 points): CGAL's bytes, every range given back once the buffers go. A pool too small
-// for the larger buffers leaves them memory of their own.
+// for the run grows by blocks as its buffers need them.
 TEST(GpuPipeline, BuffersFromADeviceMemoryPoolGiveTheSameResult) {
   const InputSet in = workload(20000, 5000, 0.5, 3);
   const PreparedInput p = prepare(in);
@@ -151,7 +159,12 @@ TEST(GpuPipeline, BuffersFromADeviceMemoryPoolGiveTheSameResult) {
       EXPECT_GT(c.memory_pool.load()->ranges_taken(), 10u) << pool_bytes;
     }
     c.temp_pool.reset();  // the context's small scratch buffers (Recorder::temp) stay with it otherwise
-    EXPECT_EQ(c.memory_pool.load()->free_bytes(), made) << pool_bytes;
+    const uint64_t grown = c.memory_pool.load()->bytes();
+    if (pool_bytes < (uint64_t(1) << 30))
+      EXPECT_GT(grown, made) << "a pool of " << pool_bytes << " bytes is less than a 20K run takes";
+    else
+      EXPECT_EQ(grown, made);
+    EXPECT_EQ(c.memory_pool.load()->free_bytes(), grown) << pool_bytes;
     for (const std::string& m : c.messages()) ADD_FAILURE() << m;
   }
 }
