@@ -18,6 +18,8 @@
 #include <thread>
 
 #include <nlohmann/json.hpp>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
@@ -763,6 +765,28 @@ TEST_F(Cli, TiledSampleIsTheUntiledSample) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(slurp(path("tiled.ply")) == slurp(path("single.ply")));
   EXPECT_GE(nlohmann::json::parse(slurp(path("t.json")))["counts"]["tiles"].get<int>(), 8);
+}
+
+// The folder of new tiles that a killed run left (`tiles.tmp-<pid>`, nobody holding it) goes when the folder is
+// written again; one that a run holds (locked, as every run holds its own until the rename) stays.
+TEST_F(Cli, AKilledRunsTilesFolderGoesAndAHeldOneStays) {
+  write_terrain();
+  for (const char* d : {"tiles.tmp-4000003", "tiles.tmp-4000004", "tiles.tmp-x"}) {
+    fs::create_directories(path(d));
+    write(std::string(d) + "/tile_0001.ply", "a partial tile\n");
+  }
+  const int fd = ::open(path("tiles.tmp-4000004").c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  const Result r = run("triangulate " + path("dem.csv") + " " + path("lines.wkt") +
+                       " --backend cgal --max-tile-points 60 --tiles-out " + path("tiles"));
+  ::close(fd);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(path("tiles/index.geojson")));
+  EXPECT_FALSE(fs::exists(path("tiles.tmp-4000003"))) << r.err;
+  EXPECT_NE(r.err.find("the tiles of an earlier run that was killed"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(path("tiles.tmp-4000004/tile_0001.ply"))) << "held by a run: left alone";
+  EXPECT_TRUE(fs::exists(path("tiles.tmp-x/tile_0001.ply"))) << "not a name of ours";
 }
 
 // --tiles-out: the union of the tile files is the mesh of -o, each triangle in exactly one file; verify accepts
