@@ -389,7 +389,8 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       for (;; ++retries) {
         try {
           staged = ahead && ahead->tiles ? std::move(ahead->tiles)
-                                         : std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts(), nullptr, !options.devices_shared));
+                                         : std::make_shared<gpu::GpuTiles>(
+                                               gpu::gpu_tiles(devices.cdts(), nullptr, !options.devices_shared));
           gpu::GpuTiles& tiles = *staged;
           const unsigned ramp = gpu::tile_ramp(devices.cdts(), tile_here);
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
@@ -588,7 +589,8 @@ void choose_backend(Job& job, GpuStarts& gpus) {
                            (min_points == auto_min_points() ? ": the CPU is faster than the GPU's start-up"
                                                             : ": the CPU is faster than the GPU on jobs this small");
     else if (!job.start)
-      job.start = &gpus.start(options.device, hardware_only(options), n, tiled_on_any_device(n, options.max_tile_points));
+      job.start =
+          &gpus.start(options.device, hardware_only(options), n, tiled_on_any_device(n, options.max_tile_points));
   }
 }
 
@@ -603,7 +605,8 @@ std::shared_ptr<TilesAhead> open_tile_devices(const Job& job, gpu::GpuCdt& cdt, 
   uint64_t tile = gpu_tile_points(cdt.context(), n, m);
   if (m < 0) tile = std::min(tile, ahead->devices->max_tile_points());
   // No device memory pools where another rank may take the same GPU (as GpuStarts::device_pool).
-  ahead->tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts(), nullptr, !job.options.devices_shared));
+  ahead->tiles =
+      std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts(), nullptr, !job.options.devices_shared));
   if (tiled_on_any_device(n, m)) ahead->tiles->reserve(tile_staging_points(n, tile));
   spdlog::debug("gpu start: {} tile device(s) opened {}, their staging begun for tiles of {} points",
                 ahead->devices->cdts().size(), when, tile);

@@ -133,8 +133,8 @@ struct Context {
   mutable std::shared_ptr<void> temp_pool;
   // Device-local bytes its buffers hold, and the cap (shared: a buffer gives its bytes back when it is freed).
   std::shared_ptr<MemoryBudget> memory_budget = std::make_shared<MemoryBudget>();
-  // Where device buffers take their memory first (ContextOptions::device_pool_bytes, or a tiled run's
-  // TileDevicePools made later, beside other threads' buffers); null: none.
+  // Where device buffers take their memory first (ContextOptions::device_pool_bytes, or made later by a tiled
+  // run's first reserve, gpu/tile_triangulator, while other threads make buffers: hence atomic); null: none.
   mutable std::atomic<std::shared_ptr<DeviceMemoryPool>> memory_pool;
 };
 

@@ -14,34 +14,36 @@ FreeRanges::FreeRanges(uint64_t size) {
 }
 
 namespace {
-// The range of `free` that `bytes` at `alignment` leaves least of (the lowest of equals), or end.
+// The range of `free` that `bytes` at `alignment` leaves least of (the lowest of equals; end where none fits),
+// the offset it would take there, and what it would leave.
 template <class Map>
 auto best_fit(Map& free, uint64_t bytes, uint64_t alignment) {
-  auto best = free.end();
-  uint64_t least = 0;
+  struct Fit {
+    decltype(free.end()) range;
+    uint64_t at, left;
+  } best{free.end(), 0, 0};
   for (auto it = free.begin(); it != free.end(); ++it) {
     const uint64_t at = (it->first + alignment - 1) / alignment * alignment, end = it->first + it->second;
     if (at + bytes > end) continue;
-    if (best == free.end() || end - (at + bytes) < least) best = it, least = end - (at + bytes);
+    if (best.range == free.end() || end - (at + bytes) < best.left) best = {it, at, end - (at + bytes)};
   }
-  return std::pair{best, least};
+  return best;
 }
 }  // namespace
 
 std::optional<uint64_t> FreeRanges::fit(uint64_t bytes, uint64_t alignment) const {
-  const auto [it, least] = best_fit(free_, std::max<uint64_t>(bytes, 1), alignment);
-  return it == free_.end() ? std::nullopt : std::optional<uint64_t>(least);
+  const auto best = best_fit(free_, std::max<uint64_t>(bytes, 1), alignment);
+  return best.range == free_.end() ? std::nullopt : std::optional<uint64_t>(best.left);
 }
 
 std::optional<uint64_t> FreeRanges::take(uint64_t bytes, uint64_t alignment) {
   bytes = std::max<uint64_t>(bytes, 1);
-  const auto it = best_fit(free_, bytes, alignment).first;
+  const auto [it, at, left] = best_fit(free_, bytes, alignment);
   if (it == free_.end()) return std::nullopt;
-  const uint64_t start = it->first, end = it->first + it->second;
-  const uint64_t at = (start + alignment - 1) / alignment * alignment;
+  const uint64_t start = it->first;
   free_.erase(it);
   if (at > start) free_[start] = at - start;
-  if (at + bytes < end) free_[at + bytes] = end - (at + bytes);
+  if (left) free_[at + bytes] = left;
   return at;
 }
 
@@ -74,8 +76,9 @@ DeviceMemoryPool::DeviceMemoryPool(const Context& ctx, uint64_t bytes, uint64_t 
   const auto t0 = std::chrono::steady_clock::now();
   while (bytes_.load() < bytes && block_bytes && add_block(std::min(block_bytes, bytes - bytes_.load()))) {
   }
-  spdlog::debug("device memory pool: {:.0f} MB in {} block(s) made in {:.1f} ms", bytes_.load() / 1e6, blocks_.size(),
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  spdlog::debug("device memory pool: {:.0f} MB in {} block(s) made in {:.1f} ms", bytes_.load() / 1e6,
+                blocks_.size(), ms);
 }
 
 bool DeviceMemoryPool::add_block(uint64_t size) {

@@ -286,7 +286,8 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, bool devic
   return gpu_tiles(std::move(cdts), sum, warm, pools);
 }
 
-GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from, uint64_t pools_from) {
+GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t warm_up_from,
+                   uint64_t pools_from) {
   auto on = std::make_shared<OnDevice>(std::move(cdts), sum, warm_up_from, pools_from);
   GpuTiles g;
   // A tile is a resolved graph already: no resolve stage, no copies.

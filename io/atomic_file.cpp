@@ -85,33 +85,6 @@ void disarm_temp(int slot) {
   if (slot >= 0) g_temp_armed[slot] = 0;
 }
 
-// ---- temporary files of killed runs ----
-// A run's temporary file is locked (flock) from its creation to its rename, on any host that shares the folder
-// (NFS takes flock as a POSIX lock). One that nobody locks is what a run killed by SIGKILL (or the OOM killer)
-// left: removed before the same output is written again, and said so. At 10^9 points such a file is tens of GB.
-void remove_stale_temps(const std::string& target, const std::string& own) {
-  const fs::path t(target);
-  const std::string prefix = t.filename().string() + ".tmp-";
-  std::error_code ec;
-  for (fs::directory_iterator it(t.parent_path().empty() ? fs::path(".") : t.parent_path(), ec), end;
-       !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
-    if (name.find_first_not_of("0123456789", prefix.size()) != std::string::npos) continue;
-    const std::string p = it->path().string();
-    if (p == own) continue;
-    const int fd = ::open(p.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) continue;
-    struct stat held {}, named {};
-    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &held) == 0 && S_ISREG(held.st_mode) &&
-        ::lstat(p.c_str(), &named) == 0 && named.st_ino == held.st_ino && named.st_dev == held.st_dev &&
-        ::unlink(p.c_str()) == 0)
-      spdlog::info("removed {} ({} bytes), the temporary file of an earlier run that was killed while writing {}",
-                   p, uint64_t(held.st_size), target);
-    ::close(fd);
-  }
-}
-
 // ---- a checked stream over a file descriptor ----
 
 struct WriteError {
@@ -332,7 +305,7 @@ void free_replaced(int fd) {
 
 ReplacingFile::ReplacingFile(const std::string& path, const std::string& target, bool exists, unsigned mode)
     : path_(path), target_(target), tmp_(target + ".tmp-" + std::to_string(::getpid())), exists_(exists) {
-  remove_stale_temps(target_, tmp_);
+  remove_killed_runs_temps(target_, tmp_, false, "the temporary file");
   slot_ = arm_temp(tmp_);
   fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd_ < 0) {
@@ -341,7 +314,7 @@ ReplacingFile::ReplacingFile(const std::string& path, const std::string& target,
     fail(path, "cannot create " + tmp_, err);
   }
   temp_ = true;
-  // Ours until the rename: another run's remove_stale_temps leaves a locked file alone. Where the file system
+  // Ours until the rename: another run's remove_killed_runs_temps leaves a locked file alone. Where the file system
   // takes no locks, the other run's flock fails too and removes nothing.
   (void)::flock(fd_, LOCK_EX | LOCK_NB);
   // The new file keeps the old one's permissions (umask applies to a new one only).
@@ -416,6 +389,39 @@ void ReplacingFile::commit() {
   temp_ = false;  // renamed: the path's file now
   disarm_temp(slot_);
   if (replaced >= 0) free_replaced(replaced);
+}
+
+// A run's temporary file or folder is locked (flock) from its creation to its rename, on any host that shares the
+// folder (NFS takes flock on a file as a POSIX lock). One that nobody locks is what a run killed by SIGKILL (or
+// the OOM killer) left: at 10^9 points tens of GB.
+void remove_killed_runs_temps(const std::string& target, const std::string& own, bool folders,
+                              const std::string& what) {
+  const fs::path t(target);
+  const std::string prefix = t.filename().string() + ".tmp-";
+  std::error_code ec;
+  for (fs::directory_iterator it(t.parent_path().empty() ? fs::path(".") : t.parent_path(), ec), end;
+       !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    if (name.find_first_not_of("0123456789", prefix.size()) != std::string::npos) continue;
+    if (name == fs::path(own).filename().string()) continue;
+    const std::string p = it->path().string();
+    const int fd = ::open(p.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) continue;
+    struct stat held {}, named {};
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &held) == 0 && ::lstat(p.c_str(), &named) == 0 &&
+        named.st_ino == held.st_ino && named.st_dev == held.st_dev) {
+      std::error_code failed;
+      if (!folders && S_ISREG(held.st_mode) && ::unlink(p.c_str()) == 0)
+        spdlog::info("removed {} ({} bytes), {} of an earlier run that was killed while writing {}", p,
+                     uint64_t(held.st_size), what, target);
+      else if (folders && S_ISDIR(held.st_mode))
+        if (const auto n = fs::remove_all(p, failed); !failed)
+          spdlog::info("removed {} ({} files and folders), {} of an earlier run that was killed while writing {}",
+                       p, n, what, target);
+    }
+    ::close(fd);
+  }
 }
 
 bool is_special_output(const std::string& path) {

@@ -49,6 +49,13 @@ class ReplacingFile {
   double written_ms_ = 0;
 };
 
+// Removes what runs killed while writing `target` left beside it: the files (or, with `folders`, the folders)
+// named `<target>.tmp-` and digits, other than `own`, that no process holds locked (each run locks its own until
+// it renames it into place; where the file system takes no locks, nothing is removed). Each removal is said
+// (info), named by `what`.
+void remove_killed_runs_temps(const std::string& target, const std::string& own, bool folders,
+                              const std::string& what);
+
 // True for "-" and for paths written in place (see above): a sidecar beside such a path (a .prj) makes no
 // sense.
 bool is_special_output(const std::string& path);

@@ -1,7 +1,6 @@
 #include "io/tiles_dir.hpp"
 
 #include <fcntl.h>
-#include <spdlog/spdlog.h>
 #include <sys/file.h>
 #include <unistd.h>
 
@@ -34,32 +33,9 @@ void fail_for_tests(int rank) {
     throw std::runtime_error("write failed (CDTGPU_MPI_TEST_FAIL_TILE_WRITE)");
 }
 
-// A killed run's folder of new tiles (`DIR.tmp-<pid>`) that no run holds, removed before DIR is written again:
-// each run locks its own from its creation to its rename, as io/atomic_file does its temporary files. (A file
-// system that takes no lock on a folder, such as NFS, leaves both unlocked: nothing is removed there.)
-void remove_stale_folders(const fs::path& clean, const fs::path& own) {
-  const std::string prefix = clean.filename().string() + ".tmp-";
-  std::error_code ec;
-  for (fs::directory_iterator it(clean.parent_path().empty() ? fs::path(".") : clean.parent_path(), ec), end;
-       !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
-    if (name.find_first_not_of("0123456789", prefix.size()) != std::string::npos) continue;
-    if (it->path().filename() == own.filename()) continue;
-    const int fd = ::open(it->path().c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
-    if (fd < 0) continue;
-    std::error_code removed;
-    if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {
-      const auto files = fs::remove_all(it->path(), removed);
-      if (!removed)
-        spdlog::info("removed {} ({} files and folders), the tiles of an earlier run that was killed while writing {}",
-                     it->path().string(), files, clean.string());
-    }
-    ::close(fd);
-  }
-}
-
-// The lock on a run's own folder of new tiles (remove_stale_folders).
+// The lock on a run's own folder of new tiles, until it is renamed into place: a killed run's, which nobody
+// locks, the next run removes (remove_killed_runs_temps). A file system that takes no lock on a folder, such as
+// NFS, leaves both unlocked: nothing is removed there.
 struct FolderHeld {
   int fd;
   explicit FolderHeld(const fs::path& p) : fd(::open(p.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC)) {
@@ -84,7 +60,7 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
   if (fs::exists(clean, ec) && !fs::is_directory(clean, ec))
     throw UsageError("--tiles-out " + dir + ": exists and is not a folder");
   const fs::path fresh = clean.string() + ".tmp-" + std::to_string(::getpid());
-  remove_stale_folders(clean, fresh);
+  remove_killed_runs_temps(clean.string(), fresh.string(), true, "the tiles");
   fs::remove_all(fresh, ec);
   fs::create_directories(fresh);
   const FolderHeld held(fresh);
