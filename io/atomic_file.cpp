@@ -395,9 +395,9 @@ void ReplacingFile::commit() {
 // folder (NFS takes flock on a file as a POSIX lock). One that nobody locks is what a run killed by SIGKILL (or
 // the OOM killer) left: at 10^9 points tens of GB.
 void remove_killed_runs_temps(const std::string& target, const std::string& own, bool folders,
-                              const std::string& what) {
+                              const std::string& what, const std::string& tag) {
   const fs::path t(target);
-  const std::string prefix = t.filename().string() + ".tmp-";
+  const std::string prefix = t.filename().string() + tag;
   std::error_code ec;
   for (fs::directory_iterator it(t.parent_path().empty() ? fs::path(".") : t.parent_path(), ec), end;
        !ec && it != end; it.increment(ec)) {

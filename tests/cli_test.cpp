@@ -789,6 +789,28 @@ TEST_F(Cli, AKilledRunsTilesFolderGoesAndAHeldOneStays) {
   EXPECT_TRUE(fs::exists(path("tiles.tmp-x/tile_0001.ply"))) << "not a name of ours";
 }
 
+// A run killed between --tiles-out's two renames leaves the tiles it replaced as DIR.old-<pid> (and maybe no DIR):
+// a run that fails leaves them (maybe the only copy), one that puts its own tiles in place removes them.
+TEST_F(Cli, TheTilesAKilledRunReplacedGoOnceNewTilesAreInPlace) {
+  write_terrain();
+  for (const char* d : {"tiles.old-4000005", "tiles.old-x"}) {
+    fs::create_directories(path(d));
+    write(std::string(d) + "/tile_0001.ply", "an old tile\n");
+  }
+  write("bad.csv", "x,y,z\n1,2,3\n1,oops,3\n");
+  Result r = run("triangulate " + path("bad.csv") + " --backend cgal --max-tile-points 60 --tiles-out " +
+                 path("tiles"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_TRUE(fs::exists(path("tiles.old-4000005/tile_0001.ply"))) << "a failed run leaves them";
+  r = run("triangulate " + path("dem.csv") + " " + path("lines.wkt") +
+          " --backend cgal --max-tile-points 60 --tiles-out " + path("tiles"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(path("tiles/index.geojson")));
+  EXPECT_FALSE(fs::exists(path("tiles.old-4000005"))) << r.err;
+  EXPECT_NE(r.err.find("the tiles it replaced of an earlier run that was killed"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(path("tiles.old-x/tile_0001.ply"))) << "not a name of ours";
+}
+
 // --tiles-out: the union of the tile files is the mesh of -o, each triangle in exactly one file; verify accepts
 // the folder and refuses it with a file missing or a triangle in two files.
 TEST_F(Cli, TilesOutFolderIsTheMeshInPieces) {
