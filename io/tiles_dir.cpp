@@ -107,8 +107,8 @@ void write_tiles_dir(const std::vector<MeshPiece>& pieces, const Crs& crs, const
     if (fs::exists(clean, ec)) fs::rename(clean, old);
     fs::rename(fresh, clean);
     fs::remove_all(old, ec);
-    // A run killed between its renames or before the last removal left its previous tiles as DIR.old-<pid>, which
-    // nobody locks; ours replace them now (had this run failed, they would have stayed: maybe the only copy).
+    // A run killed between its renames or before the last removal left its previous tiles as DIR.old-<pid>,
+    // which nobody locks; ours replace them now (had this run failed, they would stay: maybe the only copy).
     remove_killed_runs_temps(clean.string(), old.string(), true, "the tiles it replaced", ".old-");
   } catch (...) {
     fs::remove_all(fresh, ec);

@@ -789,8 +789,8 @@ TEST_F(Cli, AKilledRunsTilesFolderGoesAndAHeldOneStays) {
   EXPECT_TRUE(fs::exists(path("tiles.tmp-x/tile_0001.ply"))) << "not a name of ours";
 }
 
-// A run killed between --tiles-out's two renames leaves the tiles it replaced as DIR.old-<pid> (and maybe no DIR):
-// a run that fails leaves them (maybe the only copy), one that puts its own tiles in place removes them.
+// A run killed between --tiles-out's two renames leaves the tiles it replaced as DIR.old-<pid> (and maybe no
+// DIR): a run that fails leaves them (maybe the only copy), one that puts its own tiles in place removes them.
 TEST_F(Cli, TheTilesAKilledRunReplacedGoOnceNewTilesAreInPlace) {
   write_terrain();
   for (const char* d : {"tiles.old-4000005", "tiles.old-x"}) {
@@ -807,7 +807,8 @@ TEST_F(Cli, TheTilesAKilledRunReplacedGoOnceNewTilesAreInPlace) {
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(fs::exists(path("tiles/index.geojson")));
   EXPECT_FALSE(fs::exists(path("tiles.old-4000005"))) << r.err;
-  EXPECT_NE(r.err.find("the tiles it replaced of an earlier run that was killed"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the tiles it replaced of an earlier run that was killed"), std::string::npos)
+      << r.err;
   EXPECT_TRUE(fs::exists(path("tiles.old-x/tile_0001.ply"))) << "not a name of ours";
 }
 
