@@ -87,13 +87,15 @@ constexpr uint64_t kDevicePoolFrom = 32'000'000;
 }  // namespace
 
 GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points, bool device_pool,
-                   bool tiled) {
-  pending_ = std::async(std::launch::async, [this, device, hardware_only, expected_points, device_pool, tiled] {
+                   bool tiled, int nth_gpu, int processes_on_host) {
+  pending_ = std::async(std::launch::async, [=, this] {
     using Clock = std::chrono::steady_clock;
     auto ms = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
     auto r = std::make_unique<Ready>();
     gpu::ContextOptions options;
     options.device = device;
+    options.nth_gpu = nth_gpu;
+    options.processes_on_host = processes_on_host;
     options.hardware_only = hardware_only;
     // The download of ~2n triangles of 12 bytes is the largest copy; an eighth more for the estimate's error.
     // For any input the device may take in one piece: grown by the copies instead, it was pinned twice more
@@ -217,7 +219,9 @@ const gpu::Context& GpuStart::context() {
 GpuStart& GpuStarts::start(const std::string& device, bool hardware_only, uint64_t expected_points, bool tiled) {
   std::lock_guard lock(mutex_);
   std::unique_ptr<GpuStart>& s = starts_[{device, hardware_only}];
-  if (!s) s = std::make_unique<GpuStart>(device, hardware_only, expected_points, device_pool, tiled);
+  if (!s)
+    s = std::make_unique<GpuStart>(device, hardware_only, expected_points, device_pool, tiled, nth_gpu,
+                                   processes_on_host);
   return *s;
 }
 

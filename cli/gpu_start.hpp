@@ -47,8 +47,9 @@ class GpuStart {
   // triangulation's upload and download will need, ~24 bytes a point, off the critical path.
   // device_pool: device memory for a large one-piece run made ahead too (gpu/device_memory_pool.hpp). tiled: the
   // run is tiled whatever the devices take (--max-tile-points): staging for its merge only, no device memory.
+  // nth_gpu, processes_on_host: an MPI rank's own GPU (gpu::ContextOptions').
   GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points = 0, bool device_pool = false,
-           bool tiled = false);
+           bool tiled = false, int nth_gpu = -1, int processes_on_host = 1);
   ~GpuStart();
   // Waits for the start; rethrows its DeviceError (on every call: a failed start is not tried again).
   gpu::GpuCdt& cdt();
@@ -101,6 +102,9 @@ class GpuStarts {
   // Whether a start for a large one-piece input makes its device memory ahead: not where another MPI rank may
   // take the same GPU (TriangulateOptions::devices_shared).
   bool device_pool = true;
+  // An MPI rank's own GPU, for starts whose device is "" (TriangulateOptions::rank_gpu, host_ranks).
+  int nth_gpu = -1;
+  int processes_on_host = 1;
   // The start for this device and rule: started now with `expected_points` (and `tiled`, GpuStart's), or the one
   // started before.
   GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points, bool tiled = false);

@@ -84,6 +84,7 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
     return code == 0 ? 0 : 2;
   }
   if (verbose) spdlog::set_level(spdlog::level::debug);
+  if (mpi.ranks() > 1) spdlog::debug("MPI_Init_thread: {:.1f} ms", mpi.init_ms());
   // Rank 0 tells the story; with -v every rank does, each line naming its rank.
   if (quiet || (mpi.rank() != 0 && !verbose)) spdlog::set_level(spdlog::level::warn);
   if (mpi.ranks() > 1 && !*t) {
@@ -101,9 +102,9 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
       options.devices_shared = mpi.ranks() > 1;
       // Ranks of one host take a GPU each (their local rank's), unless --device or --devices says otherwise.
       if (mpi.ranks() > 1 && options.backend != "cgal" && options.device.empty() && options.devices.empty()) {
-        const std::vector<size_t> gpus = gpu::select_devices(gpu::list_devices(), "all");
-        options.device = options.devices = std::to_string(gpus[size_t(mpi.local_rank()) % gpus.size()]);
-        options.devices_shared = size_t(mpi.local_ranks()) > gpus.size();
+        options.rank_gpu = mpi.local_rank();
+        options.host_ranks = mpi.local_ranks();
+        options.devices_shared = false;  // the device's start finds out (gpu::Context::shared)
       }
       return run_triangulate(options);
     }

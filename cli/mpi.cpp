@@ -362,7 +362,9 @@ MpiSession::MpiSession(int* argc, char*** argv) {
     // Rank 0 hands out tiles from a thread a tile and a worker answers from a thread a tile: MPI must take calls
     // from several threads at once. The mesh's writer thread calls MPI too (--tiles-out's files shared).
     int provided = 0;
+    const auto t0 = std::chrono::steady_clock::now();
     MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided);
+    init_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     initialised_ = true;
     MPI_Comm_rank(MPI_COMM_WORLD, &tiles_.rank);
     MPI_Comm_size(MPI_COMM_WORLD, &tiles_.ranks);
@@ -426,7 +428,11 @@ MpiSession::MpiSession(int* argc, char*** argv) {
 MpiSession::~MpiSession() {
 #ifdef CDTGPU_MPI
   readers_.reset();
-  if (initialised_) MPI_Finalize();
+  if (!initialised_) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  MPI_Finalize();
+  spdlog::debug("MPI_Finalize: {:.1f} ms",
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
 #endif
 }
 

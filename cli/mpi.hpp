@@ -56,6 +56,7 @@ class MpiSession {
   // A warning when the launcher bound this rank to far fewer CPUs than its share of the host's (Open MPI
   // binds each rank to one core when -n is 2 or less: every stage then ran 8-15x slower); empty otherwise.
   std::string cpu_note() const { return cpu_note_; }
+  double init_ms() const { return init_ms_; }  // MPI_Init_thread's time
 
  private:
   RankTiles tiles_;
@@ -65,6 +66,7 @@ class MpiSession {
   std::string host_, refusal_, cpu_note_;
   int local_rank_ = 0;
   int local_ranks_ = 1;
+  double init_ms_ = 0;
   bool initialised_ = false;
   std::shared_ptr<void> readers_;  // the readers' communicator (cli/mpi.cpp), freed before MPI_Finalize
 };

@@ -66,7 +66,10 @@ uint64_t point_count(const InputSet& in) {
   return n;
 }
 
-bool hardware_only(const TriangulateOptions& o) { return o.backend == "auto" && o.device.empty(); }
+// An MPI rank's GPU counts as picked (as the device index it stood for before the start chose it).
+bool hardware_only(const TriangulateOptions& o) {
+  return o.backend == "auto" && o.device.empty() && o.rank_gpu < 0;
+}
 
 // Why auto left the GPU for the CPU part-way (stats backend_reason, and a warning).
 std::string gpu_refused(const gpu::DeviceError& e) {
@@ -278,11 +281,13 @@ uint64_t gpu_tile_points(const gpu::Context& ctx, uint64_t vertices, int64_t max
 }
 
 // The devices a tiled GPU run spreads over (issue 29): those of --devices (default: every hardware GPU of the
-// host; the started device alone when it is lavapipe), the started device's context and pipelines reused.
-gpu::TileDevices tile_devices(const std::string& devices, const gpu::Context& started, const gpu::GpuCdt& cdt) {
+// host; the started device alone when it is lavapipe or an MPI rank's own), the started device's context and
+// pipelines reused.
+gpu::TileDevices tile_devices(const TriangulateOptions& options, const gpu::Context& started, const gpu::GpuCdt& cdt) {
+  const std::string& devices = options.devices;
   const bool hardware = started.info.type == "discrete" || started.info.type == "integrated";
   std::vector<size_t> picked = {started.info.index};
-  if (!devices.empty() || hardware)
+  if (options.rank_gpu < 0 && (!devices.empty() || hardware))
     picked = gpu::select_devices(gpu::list_devices(), devices.empty() ? "all" : devices);
   gpu::TileDevices d;
   const auto started_one = std::find(picked.begin(), picked.end(), size_t(started.info.index));
@@ -380,7 +385,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       std::shared_ptr<TilesAhead> ahead = timed(job, "gpu start: tile devices", [&] {
         auto made = std::static_pointer_cast<TilesAhead>(start.take_ahead());
         opened = made ? made->devices
-                      : std::make_shared<gpu::TileDevices>(tile_devices(options.devices, start.context(), cdt));
+                      : std::make_shared<gpu::TileDevices>(tile_devices(options, start.context(), cdt));
         return made;
       });
       record_tile_devices(job, *opened);
@@ -390,7 +395,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
         try {
           staged = ahead && ahead->tiles ? std::move(ahead->tiles)
                                          : std::make_shared<gpu::GpuTiles>(
-                                               gpu::gpu_tiles(devices.cdts(), nullptr, !options.devices_shared));
+                                               gpu::gpu_tiles(devices.cdts(), nullptr, !options.devices_shared && !start.context().shared));
           gpu::GpuTiles& tiles = *staged;
           const unsigned ramp = gpu::tile_ramp(devices.cdts(), tile_here);
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
@@ -538,6 +543,8 @@ void start_gpu_early(Job& job, GpuStarts& gpus) {
   // serve a whole run it never makes.
   const bool worker = options.ranks && options.ranks->rank != 0;
   if (options.devices_shared) gpus.device_pool = false;
+  gpus.nth_gpu = options.rank_gpu;
+  gpus.processes_on_host = options.host_ranks;
   if (options.backend == "gpu" || (options.backend == "auto" && estimate >= gpus.auto_min_points))
     job.start = &gpus.start(options.device, hardware_only(options), worker ? 0 : estimate,
                             tiled_on_any_device(estimate, options.max_tile_points));
@@ -601,12 +608,12 @@ std::shared_ptr<TilesAhead> open_tile_devices(const Job& job, gpu::GpuCdt& cdt, 
   const int64_t m = job.options.max_tile_points;
   configure_cdt(job, cdt);
   auto ahead = std::make_shared<TilesAhead>();
-  ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(job.options.devices, cdt.context(), cdt));
+  ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(job.options, cdt.context(), cdt));
   uint64_t tile = gpu_tile_points(cdt.context(), n, m);
   if (m < 0) tile = std::min(tile, ahead->devices->max_tile_points());
   // No device memory pools where another rank may take the same GPU (as GpuStarts::device_pool).
-  ahead->tiles =
-      std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts(), nullptr, !job.options.devices_shared));
+  const bool pools = !job.options.devices_shared && !cdt.context().shared;
+  ahead->tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts(), nullptr, pools));
   if (tiled_on_any_device(n, m)) ahead->tiles->reserve(tile_staging_points(n, tile));
   spdlog::debug("gpu start: {} tile device(s) opened {}, their staging begun for tiles of {} points",
                 ahead->devices->cdts().size(), when, tile);

@@ -18,6 +18,7 @@
 
 #include "gpu/buffers.hpp"
 #include "gpu/device_memory_pool.hpp"
+#include "gpu/devices.hpp"
 #include "gpu/check.hpp"
 #include "gpu/pipeline_cache.hpp"
 
@@ -472,7 +473,14 @@ Context create_context(const ContextOptions& options) {
   auto pds = physical_devices(ctx.instance);
   std::vector<DeviceInfo> infos;
   for (uint32_t i = 0; i < pds.size(); ++i) infos.push_back(query(pds[i], i));
-  size_t pick = pick_device(infos, options.device);
+  size_t pick = 0;
+  if (options.nth_gpu >= 0 && options.device.empty()) {
+    const std::vector<size_t> gpus = select_devices(infos, "all");
+    pick = gpus[size_t(options.nth_gpu) % gpus.size()];
+    ctx.shared = size_t(options.processes_on_host) > gpus.size();
+  } else {
+    pick = pick_device(infos, options.device);
+  }
   ctx.physical = pds[pick];
   ctx.info = infos[pick];
   vkGetPhysicalDeviceProperties(ctx.physical, &ctx.props);
@@ -542,7 +550,7 @@ Context create_context(const ContextOptions& options) {
     });
 
   std::future<void> pool;
-  if (options.device_pool_bytes && !ctx.memory_budget->limit)  // the cap counts each buffer as the driver would
+  if (options.device_pool_bytes && !ctx.memory_budget->limit && !ctx.shared)  // the cap counts each buffer as the driver would
     pool = std::async(std::launch::async, [&ctx, &options] {
       try {
         ctx.memory_pool.store(make_device_pool(ctx, options.device_pool_bytes));

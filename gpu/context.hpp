@@ -60,6 +60,13 @@ struct ContextOptions {
   // Device memory made ahead for the run's buffers (gpu/device_memory_pool.hpp), on a thread of its own beside
   // the staging; 0: none. None under CDTGPU_DEVICE_MEMORY_LIMIT either.
   uint64_t device_pool_bytes = 0;
+  // An MPI rank's own GPU, where `device` is empty: the (nth_gpu mod n)-th of the host's n GPUs as
+  // select_devices(..., "all") lists them; -1: pick_device's. Chosen here, from the start's own device list, so
+  // that the rank does not list them first (0.15-0.25 s on the 2 x H200 host, before its GPU started).
+  int nth_gpu = -1;
+  // The processes taking the host's GPUs that way: more than the GPUs, and they share some (Context::shared),
+  // so no device memory is made ahead.
+  int processes_on_host = 1;
 };
 
 // Lists every physical device the loader sees (the first call creates and destroys an instance of its own; later
@@ -102,6 +109,7 @@ struct Context {
   VkPhysicalDeviceProperties props{};
   VkPhysicalDeviceMemoryProperties memory{};
   DeviceInfo info;
+  bool shared = false;                  // other processes may take this GPU too (ContextOptions::nth_gpu)
   bool validation = false;              // the validation layer is active
   PFN_vkCmdPushDescriptorSetKHR cmd_push_descriptor_set = nullptr;
   // CDTGPU_SHADER_STATS=1 and VK_KHR_pipeline_executable_properties: create_pass prints each pipeline's
