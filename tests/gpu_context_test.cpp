@@ -10,6 +10,7 @@
 #include "gpu/buffers.hpp"
 #include "gpu/check.hpp"
 #include "gpu/context.hpp"
+#include "gpu/devices.hpp"
 #include "gpu/passes.hpp"
 #include "gpu/primitives.hpp"
 #include "gpu/profiler.hpp"
@@ -94,6 +95,34 @@ TEST(GpuContext, OverrideByIndexOrNameAndRefusal) {
   size_t p = pick_device(real, "");
   EXPECT_EQ(pick_device(real, real[p].name), p);
   EXPECT_EQ(pick_device(real, std::to_string(p)), p);
+}
+
+// An MPI rank's GPU (ContextOptions::nth_gpu): the host's nth in select_devices' order, wrapping; shared, and
+// then without device memory made ahead, when more processes than GPUs take them; --device still wins.
+TEST(GpuContext, ARanksGpuIsTheHostsNthAndSharedBeyondTheirCount) {
+  const std::vector<size_t> gpus = select_devices(list_devices(), "all");
+  const int n = int(gpus.size());
+  for (int nth : {0, n - 1, n, 2 * n + 1}) {
+    for (int processes : {n, n + 1}) {
+      ContextOptions o;
+      o.nth_gpu = nth;
+      o.processes_on_host = processes;
+      o.device_pool_bytes = 16 << 20;
+      Context ctx = create_context(o);
+      EXPECT_EQ(ctx.info.index, gpus[size_t(nth % n)]) << nth;
+      EXPECT_EQ(ctx.shared, processes > n) << processes;
+      if (!std::getenv("CDTGPU_DEVICE_MEMORY_LIMIT")) {
+        EXPECT_EQ(ctx.memory_pool.load() != nullptr, processes <= n) << processes;
+      }
+    }
+  }
+  ContextOptions o;
+  o.device = std::to_string(gpus.back());
+  o.nth_gpu = 0;
+  o.processes_on_host = n + 1;
+  const Context ctx = create_context(o);
+  EXPECT_EQ(ctx.info.index, gpus.back());
+  EXPECT_FALSE(ctx.shared);
 }
 
 TEST(GpuContext, ValidationRecordsMisuse) {
