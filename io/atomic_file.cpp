@@ -23,6 +23,7 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <mutex>
 #include <stdexcept>
 #include <streambuf>
@@ -394,31 +395,79 @@ void ReplacingFile::commit() {
 // A run's temporary file or folder is locked (flock) from its creation to its rename, on any host that shares the
 // folder (NFS takes flock on a file as a POSIX lock). One that nobody locks is what a run killed by SIGKILL (or
 // the OOM killer) left: at 10^9 points tens of GB.
+namespace {
+
+// The names in a folder that may be killed runs' leftovers (NAME.tmp-DIGITS, NAME.old-DIGITS), read once a folder a
+// process: read for each file written, a batch of 400 tiny jobs writing into a folder of 10K files took 5.6-5.9 s
+// against 0.9 in an empty one. What a run killed after that read leaves, a later process removes.
+class Leftovers {
+ public:
+  // A copy of the folder's candidates, read now if this process has not read them yet.
+  std::vector<std::string> in(const fs::path& folder) {
+    std::lock_guard lock(mutex_);
+    auto [it, read_now] = by_folder_.try_emplace(folder.string());
+    if (read_now) {
+      std::error_code ec;
+      for (fs::directory_iterator d(folder, ec), end; !ec && d != end; d.increment(ec))
+        if (std::string name = d->path().filename().string(); maybe_leftover(name)) it->second.push_back(name);
+    }
+    return it->second;
+  }
+  // One gone (removed here, or by another process): not tried again.
+  void gone(const fs::path& folder, const std::string& name) {
+    std::lock_guard lock(mutex_);
+    std::erase(by_folder_[folder.string()], name);
+  }
+
+ private:
+  static bool maybe_leftover(const std::string& name) {
+    const size_t dash = name.rfind('-');
+    if (dash == std::string::npos || dash < 4 || dash + 1 == name.size()) return false;
+    if (name.find_first_not_of("0123456789", dash + 1) != std::string::npos) return false;
+    const std::string tag = name.substr(dash - 4, 5);
+    return tag == ".tmp-" || tag == ".old-";
+  }
+  std::mutex mutex_;
+  std::map<std::string, std::vector<std::string>> by_folder_;
+};
+
+Leftovers& leftovers() {
+  static Leftovers l;
+  return l;
+}
+
+}  // namespace
+
 void remove_killed_runs_temps(const std::string& target, const std::string& own, bool folders,
                               const std::string& what, const std::string& tag) {
   const fs::path t(target);
+  const fs::path folder = t.parent_path().empty() ? fs::path(".") : t.parent_path();
   const std::string prefix = t.filename().string() + tag;
-  std::error_code ec;
-  for (fs::directory_iterator it(t.parent_path().empty() ? fs::path(".") : t.parent_path(), ec), end;
-       !ec && it != end; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
+  for (const std::string& name : leftovers().in(folder)) {
     if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
     if (name.find_first_not_of("0123456789", prefix.size()) != std::string::npos) continue;
     if (name == fs::path(own).filename().string()) continue;
-    const std::string p = it->path().string();
+    const std::string p = (folder / name).string();
     const int fd = ::open(p.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) continue;
+    if (fd < 0) {
+      if (errno == ENOENT) leftovers().gone(folder, name);
+      continue;
+    }
     struct stat held {}, named {};
     if (::flock(fd, LOCK_EX | LOCK_NB) == 0 && ::fstat(fd, &held) == 0 && ::lstat(p.c_str(), &named) == 0 &&
         named.st_ino == held.st_ino && named.st_dev == held.st_dev) {
       std::error_code failed;
-      if (!folders && S_ISREG(held.st_mode) && ::unlink(p.c_str()) == 0)
+      if (!folders && S_ISREG(held.st_mode) && ::unlink(p.c_str()) == 0) {
+        leftovers().gone(folder, name);
         spdlog::info("removed {} ({} bytes), {} of an earlier run that was killed while writing {}", p,
                      uint64_t(held.st_size), what, target);
-      else if (folders && S_ISDIR(held.st_mode))
-        if (const auto n = fs::remove_all(p, failed); !failed)
+      } else if (folders && S_ISDIR(held.st_mode)) {
+        if (const auto n = fs::remove_all(p, failed); !failed) {
+          leftovers().gone(folder, name);
           spdlog::info("removed {} ({} files and folders), {} of an earlier run that was killed while writing {}",
                        p, n, what, target);
+        }
+      }
     }
     ::close(fd);
   }

@@ -789,6 +789,30 @@ TEST_F(Cli, AKilledRunsTilesFolderGoesAndAHeldOneStays) {
   EXPECT_TRUE(fs::exists(path("tiles.tmp-x/tile_0001.ply"))) << "not a name of ours";
 }
 
+// A batch reads an output folder's names once (io/atomic_file, remove_killed_runs_temps): every job's target
+// still loses what killed runs left beside it, a held one stays, and a file removed is not tried again.
+TEST_F(Cli, ABatchRemovesKilledRunsTempsBesideEachOfItsOutputs) {
+  write_terrain();
+  for (const char* f : {"a.ply.tmp-4000021", "b.ply.tmp-4000022", "b.ply.tmp-4000023", "b.ply.tmp-x"})
+    write(f, "a partial output\n");
+  const int fd = ::open(path("b.ply.tmp-4000023").c_str(), O_RDONLY | O_CLOEXEC);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX), 0);
+  const std::string in = path("dem.csv") + " " + path("lines.wkt") + " --backend cgal -o ";
+  write("jobs.txt", in + path("a.ply") + "\n" + in + path("b.ply") + "\n" + in + path("b.ply") + "\n");
+  const Result r = run("batch " + path("jobs.txt"));
+  ::close(fd);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::exists(path("a.ply")) && fs::exists(path("b.ply")));
+  EXPECT_FALSE(fs::exists(path("a.ply.tmp-4000021"))) << r.err;
+  EXPECT_FALSE(fs::exists(path("b.ply.tmp-4000022"))) << r.err;
+  EXPECT_TRUE(fs::exists(path("b.ply.tmp-4000023"))) << "held by a run: left alone";
+  EXPECT_TRUE(fs::exists(path("b.ply.tmp-x"))) << "not a name of ours";
+  const std::string said = "b.ply.tmp-4000022 (";
+  ASSERT_NE(r.err.find(said), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(said, r.err.find(said) + 1), std::string::npos) << "said once: " << r.err;
+}
+
 // A run killed between --tiles-out's two renames leaves the tiles it replaced as DIR.old-<pid> (and maybe no
 // DIR): a run that fails leaves them (maybe the only copy), one that puts its own tiles in place removes them.
 TEST_F(Cli, TheTilesAKilledRunReplacedGoOnceNewTilesAreInPlace) {
