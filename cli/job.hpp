@@ -54,7 +54,8 @@ struct TriangulateOptions {
   // MPI): no device memory made ahead (gpu/device_memory_pool.hpp), which would leave the other little.
   bool devices_shared = false;
   // An MPI rank's GPU when neither --device nor --devices says: the host's (rank_gpu mod n)-th, chosen by the
-  // device's start (gpu::ContextOptions::nth_gpu), shared when host_ranks exceed the host's GPUs. -1: not a rank.
+  // device's start (gpu::ContextOptions::nth_gpu), shared when host_ranks exceed the host's GPUs. -1: not a
+  // rank.
   int rank_gpu = -1;
   int host_ranks = 1;
   const TilesDirSharing* tiles_sharing = nullptr;  // --tiles-out's files written by every rank; null: here

@@ -283,7 +283,8 @@ uint64_t gpu_tile_points(const gpu::Context& ctx, uint64_t vertices, int64_t max
 // The devices a tiled GPU run spreads over (issue 29): those of --devices (default: every hardware GPU of the
 // host; the started device alone when it is lavapipe or an MPI rank's own), the started device's context and
 // pipelines reused.
-gpu::TileDevices tile_devices(const TriangulateOptions& options, const gpu::Context& started, const gpu::GpuCdt& cdt) {
+gpu::TileDevices tile_devices(const TriangulateOptions& options, const gpu::Context& started,
+                              const gpu::GpuCdt& cdt) {
   const std::string& devices = options.devices;
   const bool hardware = started.info.type == "discrete" || started.info.type == "integrated";
   std::vector<size_t> picked = {started.info.index};
@@ -393,9 +394,10 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       if (options.max_tile_points < 0) tile_here = std::min(tile_here, devices.max_tile_points());
       for (;; ++retries) {
         try {
-          staged = ahead && ahead->tiles ? std::move(ahead->tiles)
-                                         : std::make_shared<gpu::GpuTiles>(
-                                               gpu::gpu_tiles(devices.cdts(), nullptr, !options.devices_shared && !start.context().shared));
+          const bool pools = !options.devices_shared && !start.context().shared;
+          staged = ahead && ahead->tiles
+                       ? std::move(ahead->tiles)
+                       : std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts(), nullptr, pools));
           gpu::GpuTiles& tiles = *staged;
           const unsigned ramp = gpu::tile_ramp(devices.cdts(), tile_here);
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));

@@ -550,7 +550,8 @@ Context create_context(const ContextOptions& options) {
     });
 
   std::future<void> pool;
-  if (options.device_pool_bytes && !ctx.memory_budget->limit && !ctx.shared)  // the cap counts each buffer as the driver would
+  // Not under a cap, which counts each buffer as the driver would, nor on a GPU other processes take too.
+  if (options.device_pool_bytes && !ctx.memory_budget->limit && !ctx.shared)
     pool = std::async(std::launch::async, [&ctx, &options] {
       try {
         ctx.memory_pool.store(make_device_pool(ctx, options.device_pool_bytes));

@@ -61,8 +61,8 @@ struct ContextOptions {
   // the staging; 0: none. None under CDTGPU_DEVICE_MEMORY_LIMIT either.
   uint64_t device_pool_bytes = 0;
   // An MPI rank's own GPU, where `device` is empty: the (nth_gpu mod n)-th of the host's n GPUs as
-  // select_devices(..., "all") lists them; -1: pick_device's. Chosen here, from the start's own device list, so
-  // that the rank does not list them first (0.15-0.25 s on the 2 x H200 host, before its GPU started).
+  // select_devices(..., "all") lists them; -1: pick_device's. Chosen here, from the start's own device list,
+  // so that the rank does not list them first (0.15-0.25 s on the 2 x H200 host, before its GPU started).
   int nth_gpu = -1;
   // The processes taking the host's GPUs that way: more than the GPUs, and they share some (Context::shared),
   // so no device memory is made ahead.

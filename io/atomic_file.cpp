@@ -392,14 +392,12 @@ void ReplacingFile::commit() {
   if (replaced >= 0) free_replaced(replaced);
 }
 
-// A run's temporary file or folder is locked (flock) from its creation to its rename, on any host that shares the
-// folder (NFS takes flock on a file as a POSIX lock). One that nobody locks is what a run killed by SIGKILL (or
-// the OOM killer) left: at 10^9 points tens of GB.
 namespace {
 
-// The names in a folder that may be killed runs' leftovers (NAME.tmp-DIGITS, NAME.old-DIGITS), read once a folder a
-// process: read for each file written, a batch of 400 tiny jobs writing into a folder of 10K files took 5.6-5.9 s
-// against 0.9 in an empty one. What a run killed after that read leaves, a later process removes.
+// The names in a folder that may be killed runs' leftovers (NAME.tmp-DIGITS, NAME.old-DIGITS), read once a
+// folder a process: read for each file written, a batch of 400 tiny jobs writing into a folder of 10K files
+// took 5.6-5.9 s against 0.9 in an empty one. What a run killed after that read leaves, a later process
+// removes.
 class Leftovers {
  public:
   // A copy of the folder's candidates, read now if this process has not read them yet.
@@ -409,7 +407,8 @@ class Leftovers {
     if (read_now) {
       std::error_code ec;
       for (fs::directory_iterator d(folder, ec), end; !ec && d != end; d.increment(ec))
-        if (std::string name = d->path().filename().string(); maybe_leftover(name)) it->second.push_back(name);
+        if (std::string name = d->path().filename().string(); maybe_leftover(name))
+          it->second.push_back(name);
     }
     return it->second;
   }
@@ -438,6 +437,9 @@ Leftovers& leftovers() {
 
 }  // namespace
 
+// A run's temporary file or folder is locked (flock) from its creation to its rename, on any host that shares the
+// folder (NFS takes flock on a file as a POSIX lock). One that nobody locks is what a run killed by SIGKILL (or
+// the OOM killer) left: at 10^9 points tens of GB.
 void remove_killed_runs_temps(const std::string& target, const std::string& own, bool folders,
                               const std::string& what, const std::string& tag) {
   const fs::path t(target);

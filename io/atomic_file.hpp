@@ -52,8 +52,8 @@ class ReplacingFile {
 // Removes what runs killed while writing `target` left beside it: the files (or, with `folders`, the folders)
 // named `<target>` + `tag` + digits (".tmp-" and a pid), other than `own`, that no process holds locked (each
 // run locks its own until it renames it into place; where the file system takes no locks, nothing is
-// removed). Each removal is said (info), named by `what`. A folder's names are read once a process: what a run
-// killed later leaves there, a later process removes.
+// removed). Each removal is said (info), named by `what`. A folder's names are read once a process: what a
+// run killed later leaves there, a later process removes.
 void remove_killed_runs_temps(const std::string& target, const std::string& own, bool folders,
                               const std::string& what, const std::string& tag = ".tmp-");
 
