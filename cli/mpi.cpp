@@ -1,6 +1,7 @@
 #include "cli/mpi.hpp"
 
 #include "core/parallel.hpp"
+#include "core/timing.hpp"
 #include "core/touched.hpp"
 
 #include <sched.h>
@@ -364,7 +365,7 @@ MpiSession::MpiSession(int* argc, char*** argv) {
     int provided = 0;
     const auto t0 = std::chrono::steady_clock::now();
     MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided);
-    init_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    init_ms_ = ms_since(t0);
     initialised_ = true;
     MPI_Comm_rank(MPI_COMM_WORLD, &tiles_.rank);
     MPI_Comm_size(MPI_COMM_WORLD, &tiles_.ranks);
@@ -431,8 +432,7 @@ MpiSession::~MpiSession() {
   if (!initialised_) return;
   const auto t0 = std::chrono::steady_clock::now();
   MPI_Finalize();
-  spdlog::debug("MPI_Finalize: {:.1f} ms",
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  spdlog::debug("MPI_Finalize: {:.1f} ms", ms_since(t0));
 #endif
 }
 

@@ -300,6 +300,12 @@ gpu::TileDevices tile_devices(const TriangulateOptions& options, const gpu::Cont
   return d;
 }
 
+// Device memory pools for the tiles, unless another rank may take the same GPU (as GpuStarts::device_pool):
+// GPUs named under MPI, or a rank's own GPU that its start found shared.
+bool tile_pools(const TriangulateOptions& options, const gpu::Context& started) {
+  return !options.devices_shared && !started.shared;
+}
+
 void record_tile_devices(Job& job, const gpu::TileDevices& d) {
   job.stats.counts["tile_devices"] = d.cdts().size();
   if (d.cdts().size() > 1 || d.cdts().front() != &job.start->cdt()) {
@@ -394,7 +400,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       if (options.max_tile_points < 0) tile_here = std::min(tile_here, devices.max_tile_points());
       for (;; ++retries) {
         try {
-          const bool pools = !options.devices_shared && !start.context().shared;
+          const bool pools = tile_pools(options, start.context());
           staged = ahead && ahead->tiles
                        ? std::move(ahead->tiles)
                        : std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts(), nullptr, pools));
@@ -613,9 +619,8 @@ std::shared_ptr<TilesAhead> open_tile_devices(const Job& job, gpu::GpuCdt& cdt, 
   ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(job.options, cdt.context(), cdt));
   uint64_t tile = gpu_tile_points(cdt.context(), n, m);
   if (m < 0) tile = std::min(tile, ahead->devices->max_tile_points());
-  // No device memory pools where another rank may take the same GPU (as GpuStarts::device_pool).
-  const bool pools = !job.options.devices_shared && !cdt.context().shared;
-  ahead->tiles = std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(ahead->devices->cdts(), nullptr, pools));
+  ahead->tiles = std::make_shared<gpu::GpuTiles>(
+      gpu::gpu_tiles(ahead->devices->cdts(), nullptr, tile_pools(job.options, cdt.context())));
   if (tiled_on_any_device(n, m)) ahead->tiles->reserve(tile_staging_points(n, tile));
   spdlog::debug("gpu start: {} tile device(s) opened {}, their staging begun for tiles of {} points",
                 ahead->devices->cdts().size(), when, tile);
