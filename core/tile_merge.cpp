@@ -23,6 +23,7 @@
 #include "core/compact.hpp"
 #include "core/half_edges.hpp"
 #include "core/parallel.hpp"
+#include "core/timing.hpp"
 #include "core/touched.hpp"
 
 namespace cdtgpu {
@@ -183,18 +184,34 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
   // The merge's adjacency from its canonical order (core/half_edges) and its border edges listed under their
   // smaller end, each with its final side: a sort of every half-edge instead took 0.1-0.2 s at 1B points on 64
   // cores, serial work after the tiles.
+  auto t = std::chrono::steady_clock::now();
+  std::string steps;  // -v: where the time goes
+  auto step = [&](const char* what) {
+    steps += fmt::format(", {} {:.1f}", what, ms_since(t));
+    t = std::chrono::steady_clock::now();
+  };
   const HalfEdges e = half_edges(m, V);
+  step("adjacency");
   // sides[from[v] .. from[v + 1]): the border edges whose smaller end is v, as (larger end) << 1 | forward, where
   // forward says the final side is left of (smaller, larger).
-  std::vector<uint32_t> from(size_t(V) + 1, 0);
-  for (const Edge& b : border) ++from[std::min(b[0], b[1]) + 1];
+  // Built on all cores (on one it was serial work after the tiles, as long as the border): a vertex's entries
+  // land in any order, which the lookup does not mind (an edge is listed once).
+  BigArray<uint32_t> from(size_t(V) + 1, 0);
+  each(border.size(), [&](size_t i) {
+    shared(from[std::min(border[i][0], border[i][1]) + 1]).fetch_add(1, std::memory_order_relaxed);
+  });
   prefix_sums(from);
-  std::vector<uint64_t> sides(border.size());
+  BigArray<uint64_t> sides(border.size());
   {
-    std::vector<uint32_t> at(from.begin(), from.end() - 1);
-    for (const Edge& b : border)
-      sides[at[std::min(b[0], b[1])]++] = uint64_t(std::max(b[0], b[1])) << 1 | (b[0] < b[1]);
+    BigArray<uint32_t> at(V);
+    each(at.size(), [&](size_t v) { at[v] = from[v]; });
+    each(border.size(), [&](size_t i) {
+      const Edge& b = border[i];
+      const uint32_t k = shared(at[std::min(b[0], b[1])]).fetch_add(1, std::memory_order_relaxed);
+      sides[k] = uint64_t(std::max(b[0], b[1])) << 1 | (b[0] < b[1]);
+    });
   }
+  step("border table");
   // 0: a -> b is no border edge; else 1 + its forward bit.
   auto border_side = [&](uint32_t a, uint32_t b) -> int {
     const uint32_t lo = std::min(a, b), hi = std::max(a, b);
@@ -238,15 +255,17 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
     side[g] = s;
     if (!s) unite(uint32_t(h / 3), g / 3);
   });
+  step("parts");
   // Each part beside a border edge takes that edge's side: 1 final, 2 outside; a part with both is an error.
-  std::vector<uint8_t> mark(m.size(), 0);
+  BigArray<uint8_t> mark(m.size(), 0);
   each(halves, [&](size_t h) {
     if (const int s = side[h]) {
       const bool forward = from_of(m, uint32_t(h)) < to_of(m, uint32_t(h));
       shared(mark[root(uint32_t(h / 3))]).fetch_or(forward == (s == 2) ? 1 : 2, std::memory_order_relaxed);
     }
   });
-  return compact_as<Triangles>(
+  step("sides");
+  Triangles kept = compact_as<Triangles>(
       m.size(),
       [&](size_t t) {
         const uint8_t mk = mark[root(uint32_t(t))];
@@ -258,6 +277,10 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
         if (mark[root(uint32_t(t))] != 1) *at++ = m[t];
         return at;
       });
+  step("kept");
+  spdlog::debug("the merge's triangles outside the final region ({} of {}; {} border edges), ms: {}", kept.size(),
+                m.size(), border.size(), steps.substr(2));
+  return kept;
 }
 
 }  // namespace cdtgpu

@@ -30,6 +30,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "core/big_array.hpp"
 #include "core/canonical.hpp"
 #include "core/compact.hpp"
 #include "core/host_memory.hpp"
@@ -486,33 +487,42 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   segments_from[ids.size()] = uint32_t(segments.size());
   step("segments found");
   // The border edges and the split segments' pieces between merge vertices, in local ids, listed under their
-  // smaller end and merged there with that vertex's segments: the merge's segments come out sorted and unique.
-  // Appended and sorted whole, they took ~0.6 s of a 4.5M-vertex merge's input on 2 cores.
+  // smaller end (extra[extra_from[i] ..], their larger ends, sorted) and merged there with that vertex's segments:
+  // the merge's segments come out sorted and unique. Appended and sorted whole, they took ~0.6 s of a
+  // 4.5M-vertex merge's input on 2 cores; a sort of their keys alone (smaller << 32 | larger) was most of this
+  // step on 32 threads. Listed on all cores instead, a vertex's few sorted in place; repeats are dropped below.
   std::vector<Edge> local_border(border.size());
   tbb::parallel_for(size_t(0), border.size(), [&](size_t i) {
     local_border[i] = {local_of[border[i][0]], local_of[border[i][1]]};
   });
-  // As keys smaller << 32 | larger, sorted (a sort of these alone, not of every merge segment); extra_from[i]
-  // is where vertex i's begin.
-  std::vector<uint64_t> extra;
-  auto key = [](const Edge& e) { return uint64_t(std::min(e[0], e[1])) << 32 | std::max(e[0], e[1]); };
+  std::vector<Edge> pieces;
   for (const Edge& e : split_segments.pieces)
-    if (!in_final[e[0]] && !in_final[e[1]]) extra.push_back(key({local_of[e[0]], local_of[e[1]]}));
-  const size_t pieces = extra.size();
-  extra.resize(pieces + border.size());
-  tbb::parallel_for(size_t(0), border.size(), [&](size_t i) { extra[pieces + i] = key(local_border[i]); });
-  tbb::parallel_sort(extra.begin(), extra.end());
-  extra.erase(std::unique(extra.begin(), extra.end()), extra.end());
-  step("border and pieces");
-  std::vector<uint32_t> extra_from(ids.size() + 1);
-  each(extra.size() + 1, [&](size_t k) {
-    const uint64_t lo = k == 0 ? 0 : (extra[k - 1] >> 32) + 1, hi = k == extra.size() ? ids.size() : extra[k] >> 32;
-    for (uint64_t i = lo; i <= hi; ++i) extra_from[i] = uint32_t(k);
+    if (!in_final[e[0]] && !in_final[e[1]]) pieces.push_back({local_of[e[0]], local_of[e[1]]});
+  const size_t extras = pieces.size() + border.size();
+  auto extra_edge = [&](size_t k) -> const Edge& {
+    return k < pieces.size() ? pieces[k] : local_border[k - pieces.size()];
+  };
+  BigArray<uint32_t> extra_from(ids.size() + 1, 0);
+  each(extras, [&](size_t k) {
+    const Edge& e = extra_edge(k);
+    shared(extra_from[std::min(e[0], e[1]) + 1]).fetch_add(1, std::memory_order_relaxed);
   });
+  prefix_sums(extra_from);
+  BigArray<uint32_t> extra(extras);
+  {
+    BigArray<uint32_t> at(ids.size());
+    each(ids.size(), [&](size_t i) { at[i] = extra_from[i]; });
+    each(extras, [&](size_t k) {
+      const Edge& e = extra_edge(k);
+      extra[shared(at[std::min(e[0], e[1])]).fetch_add(1, std::memory_order_relaxed)] = std::max(e[0], e[1]);
+    });
+  }
+  each(ids.size(), [&](size_t i) { std::sort(extra.begin() + extra_from[i], extra.begin() + extra_from[i + 1]); });
+  step("border and pieces");
   // Merge vertex i's segments to larger ends, each once, in order: its own (sorted already) and the extra ones.
   auto each_segment_of = [&](size_t i, auto&& f) {
-    const uint64_t* x = extra.data() + extra_from[i];
-    const uint64_t* const x1 = extra.data() + extra_from[i + 1];
+    const uint32_t* x = extra.begin() + extra_from[i];
+    const uint32_t* const x1 = extra.begin() + extra_from[i + 1];
     uint64_t last = ~uint64_t(0);
     auto put = [&](uint32_t to) {
       if (to != last) f(to);
@@ -521,10 +531,10 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
     for (size_t j = segments_from[i]; j < segments_from[i + 1] && segments[j][0] == ids[i]; ++j) {
       if (in_final[segments[j][1]] || !not_split(segments[j])) continue;
       const uint32_t to = local_of[segments[j][1]];
-      for (; x != x1 && uint32_t(*x) < to; ++x) put(uint32_t(*x));
+      for (; x != x1 && *x < to; ++x) put(*x);
       put(to);
     }
-    for (; x != x1; ++x) put(uint32_t(*x));
+    for (; x != x1; ++x) put(*x);
   };
   std::vector<Edge> merge_segments = compact<Edge>(
       ids.size(),
@@ -713,6 +723,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     spdlog::debug("tiles, level {}: {} segments split at {} vertices", level, split_segments.split.size(),
                   split_segments.splits);
   }
+  const double taken_ms = ms_since(t_merge_input);
   const MergeJob m = merge_job(v, segments, border, split_segments, in_final, plan.slabs, std::move(slab_ids));
   s.tiles += tiles;
   s.levels += 1;
@@ -720,8 +731,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   s.merge_input_ms += ms_since(t_merge_input);
   s.tiles_ms += ms_since(t_tiles);
 
-  spdlog::debug("tiles, level {}: tiles done at {:.0f} ms, the merge's input ({} vertices) at {:.0f} ms", level,
-                tiles_wall_ms, m.ids.size(), ms_since(t_tiles));
+  spdlog::debug("tiles, level {}: tiles done at {:.0f} ms, their results taken in {:.0f} ms, the merge's input ({} "
+                "vertices) at {:.0f} ms",
+                level, tiles_wall_ms, taken_ms, m.ids.size(), ms_since(t_tiles));
   // Tiled again while that shrinks it; the last level is one call (its time is merge_ms).
   const bool again =
       m.ids.size() > options.max_tile_points && double(m.ids.size()) <= options.retile_share * double(n);
