@@ -100,11 +100,13 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
     // The download of ~2n triangles of 12 bytes is the largest copy; an eighth more for the estimate's error.
     // For any input the device may take in one piece: grown by the copies instead, it was pinned twice more
     // on the run's path (2 then 3 GB at 100M points, 1.5 s on the H200 machine), where now it is pinned beside
-    // the reading. Tiled inputs bring their own (gpu/tile_triangulator): at most 1 GiB for their merge.
-    // Tiles of --max-tile-points made these for a piece that never came: 3 GB of staging and 32 GB of device
-    // memory at 100M points in tiles of 20M, which the tiles then waited for (0.7-1.1 s, session 57).
+    // the reading. Tiled inputs bring their own (gpu/tile_triangulator), for their merge too: the 1 GiB pinned
+    // here for it made the tile devices open ~0.4 s later (100M points in tiles of 20M on the 2 x H200 host),
+    // and their staging and memory pools then ended after prepare. Tiles of --max-tile-points made these for a
+    // piece that never came: 3 GB of staging and 32 GB of device memory at 100M points in tiles of 20M, which
+    // the tiles then waited for (0.7-1.1 s, session 57).
     const bool one_piece = !tiled && expected_points <= gpu::max_tile_points_of_any_device();
-    options.staging_bytes = std::min<uint64_t>(expected_points * 27, one_piece ? UINT64_MAX : uint64_t(1) << 30);
+    options.staging_bytes = one_piece ? expected_points * 27 : 0;
     // And the device memory of its buffers, where their allocation between the stages costs more than the
     // reading takes to hide it (~30 ms a GB on the H200 machine): the run's peak, ~260 bytes a point at 10^8.
     if (device_pool && one_piece && expected_points >= kDevicePoolFrom)

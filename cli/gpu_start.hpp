@@ -46,7 +46,7 @@ class GpuStart {
   // expected_points (the estimate of the input): the start also allocates the staging memory that the
   // triangulation's upload and download will need, ~24 bytes a point, off the critical path.
   // device_pool: device memory for a large one-piece run made ahead too (gpu/device_memory_pool.hpp). tiled: the
-  // run is tiled whatever the devices take (--max-tile-points): staging for its merge only, no device memory.
+  // run is tiled whatever the devices take (--max-tile-points): neither (its tiles and merge bring their own).
   // nth_gpu, processes_on_host: an MPI rank's own GPU (gpu::ContextOptions').
   GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points = 0, bool device_pool = false,
            bool tiled = false, int nth_gpu = -1, int processes_on_host = 1);

@@ -304,6 +304,11 @@ void HostStaging::fit(const Context& ctx, VkDeviceSize bytes) {
   VK_CHECK(vkMapMemory(ctx.device, buffer.memory, 0, VK_WHOLE_SIZE, 0, &mapped));
 }
 
+StagingLent::StagingLent(const Context& ctx, HostStaging& staging)
+    : ctx_(ctx), own_(std::exchange(ctx.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))) {}
+
+StagingLent::~StagingLent() { ctx_.staging = std::move(own_); }
+
 void copy_from_staging(const Context& ctx, const HostStaging& staging, const Buffer& dst, VkDeviceSize bytes,
                        Queue on, VkDeviceSize staging_offset) {
   check_range(dst, bytes, 0, "copy from staging");

@@ -70,6 +70,20 @@ struct HostStaging {
   // At least `bytes` long (regrown by an eighth at least; the old contents are lost).
   void fit(const Context& ctx, VkDeviceSize bytes);
 };
+// upload() and download() on `ctx` go through `staging` instead of the context's own buffer while this lives
+// (a GPU tile's slot, lent to the calls made in it; gpu/cdt_pipeline, gpu/tile_triangulator). The caller holds
+// the device: nothing else copies on it meanwhile.
+class StagingLent {
+ public:
+  StagingLent(const Context& ctx, HostStaging& staging);
+  ~StagingLent();
+  StagingLent(const StagingLent&) = delete;
+  StagingLent& operator=(const StagingLent&) = delete;
+
+ private:
+  const Context& ctx_;
+  std::shared_ptr<void> own_;
+};
 // Where a copy runs: the compute queue (the caller holds the device), or the context's copy queue beside it
 // (Context::copy_queue; the compute queue where there is none). Callers on the copy queue take turns.
 enum class Queue { compute, copy };

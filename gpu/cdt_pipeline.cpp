@@ -326,11 +326,7 @@ uint32_t GpuCdt::run_staged(TileUpload up, uint32_t n, std::span<const Edge> seg
   const auto t_all = Clock::now();
   // The device's other copies of this call (the build's uploads, the border) go through `staging` as well, once
   // the points have left it: a pinned buffer per tile in flight and none more for the context.
-  struct Restore {
-    const Context& ctx;
-    std::shared_ptr<void> own;
-    ~Restore() { ctx.staging = std::move(own); }
-  } restore{ctx_, std::exchange(ctx_.staging, std::shared_ptr<void>(std::shared_ptr<void>(), &staging))};
+  const StagingLent lent(ctx_, staging);
   cache_.grow_by = kept_.grow_by = 0.125;  // this GpuCdt takes tiles: sizes a few % apart
   cache_.first_room = kept_.first_room = 1.0 / 16;
   {

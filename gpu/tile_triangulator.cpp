@@ -199,14 +199,22 @@ class OnDevice {
     return f();
   }
 
+  // A call in a slot (a merge, or a tile without a finalizer): its copies go through the slot's staging, pinned
+  // beside the plan, so a tiled run's context pins none of its own (1 GiB for the merge, which held back the
+  // tile devices' start: cli/gpu_start). The slot first, then its device, as for a staged tile.
   template <class Work>
   auto operator()(std::string_view what, size_t vertices, size_t segments, Work&& work) {
     // Isolated: a thread waiting inside the pipeline's own parallel loops must not pick up another tile,
     // which would wait for a device it holds.
     return tbb::this_task_arena::isolate([&] {
-      const size_t d = pool_.take();
+      const size_t slot = slots_.take_spread(cdts_.size());
+      const DevicePool::Held held_slot{slots_, slot};
+      const size_t d = slot % cdts_.size();
+      pool_.take(d);
       const DevicePool::Held held{pool_, d};
       try {
+        if (const auto reserved = reserved_[slot]; reserved.valid()) reserved.get();
+        const StagingLent lent(cdts_[d]->context(), *staging_[slot]);
         GpuCdtStats one;
         auto result = work(*cdts_[d], one);
         if (sum_) add_up(one);
