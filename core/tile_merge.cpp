@@ -261,7 +261,11 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
   each(halves, [&](size_t h) {
     if (const int s = side[h]) {
       const bool forward = from_of(m, uint32_t(h)) < to_of(m, uint32_t(h));
-      shared(mark[root(uint32_t(h / 3))]).fetch_or(forward == (s == 2) ? 1 : 2, std::memory_order_relaxed);
+      // Read first: nearly every border half-edge meets one of a few large parts, whose mark all cores would
+      // otherwise write at once.
+      const uint8_t bit = forward == (s == 2) ? 1 : 2;
+      const std::atomic_ref<uint8_t> mk = shared(mark[root(uint32_t(h / 3))]);
+      if (!(mk.load(std::memory_order_relaxed) & bit)) mk.fetch_or(bit, std::memory_order_relaxed);
     }
   });
   step("sides");

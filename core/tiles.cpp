@@ -471,7 +471,7 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   // (tile_segments checks), so each merge vertex's are found from the last one's by a galloping search, not by a
   // pass over every segment (250M at 1B points).
   constexpr size_t kIdBlock = 1 << 12;
-  std::vector<uint32_t> segments_from(ids.size() + 1);  // merge vertex i's segments: from [i] up to [i + 1]
+  RawVector<uint32_t> segments_from(ids.size() + 1);  // merge vertex i's segments: from [i] up to [i + 1]
   tbb::parallel_for(size_t(0), (ids.size() + kIdBlock - 1) / kIdBlock, [&](size_t blk) {
     const size_t end = std::min(ids.size(), (blk + 1) * kIdBlock);
     auto first_end_below = [&](uint32_t id) { return [id](const Edge& e) { return e[0] < id; }; };
@@ -491,10 +491,9 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   // the merge's segments come out sorted and unique. Appended and sorted whole, they took ~0.6 s of a
   // 4.5M-vertex merge's input on 2 cores; a sort of their keys alone (smaller << 32 | larger) was most of this
   // step on 32 threads. Listed on all cores instead, a vertex's few sorted in place; repeats are dropped below.
-  std::vector<Edge> local_border(border.size());
-  tbb::parallel_for(size_t(0), border.size(), [&](size_t i) {
-    local_border[i] = {local_of[border[i][0]], local_of[border[i][1]]};
-  });
+  std::vector<Edge> local_border;
+  assign_on_all_cores(local_border, border.size(), 0,
+                      [&](size_t i) { return Edge{local_of[border[i][0]], local_of[border[i][1]]}; });
   std::vector<Edge> pieces;
   for (const Edge& e : split_segments.pieces)
     if (!in_final[e[0]] && !in_final[e[1]]) pieces.push_back({local_of[e[0]], local_of[e[1]]});
@@ -551,6 +550,19 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   step("segments");
   spdlog::debug("the merge's input, ms: {}", steps.substr(2));
   return MergeJob{std::move(ids), std::move(merge_vertices), std::move(merge_segments), std::move(local_border)};
+}
+
+// The pieces piece(order[0]), piece(order[1]), ... one after another, written on all cores.
+template <class T, class Piece>
+std::vector<T> joined(const std::vector<size_t>& order, Piece&& piece) {
+  std::vector<size_t> at(order.size() + 1, 0);
+  for (size_t k = 0; k < order.size(); ++k) at[k + 1] = at[k] + piece(order[k]).size();
+  std::vector<T> out;
+  assign_on_all_cores(out, at.back(), 0, [&](size_t i) {
+    const size_t k = size_t(std::upper_bound(at.begin(), at.end(), i) - at.begin()) - 1;
+    return piece(order[k])[i - at[k]];
+  });
+  return out;
 }
 
 // tiled_cdt's triangles in canonical order: each tile's final ones and the merge's, merged by RunMerge
@@ -690,10 +702,14 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   // The merge's input (merge_job). What only the tiles read goes first (at 1B points + 250M segments: 6 GB of the
   // canonical order's peak).
   const auto t_merge_input = Clock::now();
-  free_storage_on_all_cores(plan.order);
-  free_storage_on_all_cores(tile_segments_of.ids);
+  // Freed beside the merge's input, long before the canonical order's peak (6 GB of it at 1B points + 250M
+  // segments).
+  std::future<void> tiles_input_freed =
+      std::async(std::launch::async, [order = std::move(plan.order), ids = std::move(tile_segments_of.ids)]() mutable {
+        free_storage_on_all_cores(order);
+        free_storage_on_all_cores(ids);
+      });
   std::vector<Triangles> runs(tiles);
-  std::vector<Edge> border;
   std::vector<std::array<uint32_t, 3>> split;
   uint64_t final_count = 0;
   for (size_t t = 0; t < tiles; ++t) {
@@ -704,15 +720,17 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     s.tile_final_thread_ms += results[t].final_ms;
     final_count += results[t].final_triangles.size();
     runs[t] = std::move(results[t].final_triangles);
-    border.insert(border.end(), results[t].border.begin(), results[t].border.end());
   }
-  std::vector<uint32_t> slab_ids;  // the slabs' merge vertices, in id order
+  // The tiles' borders, and the slabs' merge vertices in id order, joined on all cores: appended on one core,
+  // 6.2M border edges and 5.9M ids (100M points + 25M contour vertices in tiles of 20M) landed on fresh pages.
+  std::vector<size_t> in_order(tiles);
+  std::iota(in_order.begin(), in_order.end(), size_t(0));
+  const std::vector<Edge> border = joined<Edge>(in_order, [&](size_t t) -> const auto& { return results[t].border; });
+  std::vector<uint32_t> slab_ids;
   if (plan.slabs) {
-    std::vector<size_t> by_id(tiles);
-    std::iota(by_id.begin(), by_id.end(), size_t(0));
-    std::sort(by_id.begin(), by_id.end(),
+    std::sort(in_order.begin(), in_order.end(),
               [&](size_t a, size_t b) { return plan.nodes[plan.tiles[a]].lo < plan.nodes[plan.tiles[b]].lo; });
-    for (size_t t : by_id) slab_ids.insert(slab_ids.end(), results[t].merge_ids.begin(), results[t].merge_ids.end());
+    slab_ids = joined<uint32_t>(in_order, [&](size_t t) -> const auto& { return results[t].merge_ids; });
   }
   results.clear();
   // Segments the tiles split at vertices: the merge takes their pieces, as the resolve would have split them.

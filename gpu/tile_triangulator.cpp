@@ -56,17 +56,20 @@ class OnDevice {
     for (size_t i = 0; i < kSlotsPerDevice * cdts_.size(); ++i) staging_.push_back(std::make_unique<HostStaging>());
     for (size_t d = 0; d < cdts_.size(); ++d) copying_.push_back(std::make_unique<std::mutex>());
     reserved_.resize(staging_.size());
+    pools_made_.resize(cdts_.size());
   }
 
   // Every slot's staging buffer for tiles of `vertices`, each device's slots in turn on a thread of the
   // device's own: pinned memory takes ~0.3 ms per MB (1.0-1.7 s for a 3 GB slot at 1B points), which the
   // resolve and the plan hide. A tile waits only for its own slot: on two devices the first tiles waited
-  // 2.3-2.9 s for all four.
+  // 2.3-2.9 s for all four. Each slot is written once by its device as soon as it is pinned (a fill on the
+  // copy queue): the first tiles' uploads took 92-243 ms where later ones took 9-10 (tiles of 20M points on the
+  // 2 x H200 host), the second slot's pinning then beside them.
   //
   // The first reserve also warms each device up (GpuCdt::warm_up_tiles) in its first slot, unless a tile has
   // begun by then: the device's buffers for tiles are made while the host resolves and plans. Asked again for
   // no more than before (the plan's own call after the CLI's), it does nothing. For tiles of pools_from points
-  // or more, each device's memory pool is made beside its first slot's pinning, before that slot is given out.
+  // or more, each device's memory pool is made beside its slots' pinning; a tile waits for it too (pools_made_).
   void reserve(uint64_t vertices) {
     if (vertices <= reserved_vertices_) return;
     const bool warm = reserved_vertices_ == 0 && vertices >= warm_up_from_;  // the first reserve
@@ -77,19 +80,35 @@ class OnDevice {
     const size_t devices = cdts_.size();
     filled_ = std::vector<std::promise<void>>(staging_.size());
     for (size_t slot = 0; slot < staging_.size(); ++slot) reserved_[slot] = filled_[slot].get_future().share();
-    for (size_t d = 0; d < devices; ++d)
-      allocating_.emplace_back([this, d, devices, bytes, vertices, warm, pools] {
-        std::future<void> pooled;
-        if (pools) pooled = std::async(std::launch::async, [this, d, vertices] { make_pool(d, vertices); });
+    for (size_t d = 0; d < devices; ++d) {
+      pools_made_[d] = {};
+      if (pools)  // make_pool throws nothing
+        pools_made_[d] = std::async(std::launch::async, [this, d, vertices] { make_pool(d, vertices); }).share();
+      allocating_.emplace_back([this, d, devices, bytes, vertices, warm] {
+        const Context& ctx = cdts_[d]->context();
         for (size_t slot = d; slot < staging_.size(); slot += devices) try {
-            staging_[slot]->fit(cdts_[d]->context(), bytes);
-            if (pooled.valid()) pooled.get();  // make_pool throws nothing
-            if (warm && slot == d) warm_up(d, *staging_[slot], vertices);
+            const auto t0 = std::chrono::steady_clock::now();
+            staging_[slot]->fit(ctx, bytes);
+            const auto t1 = std::chrono::steady_clock::now();
+            on_copy_queue(d, [&] { fill(ctx, staging_[slot]->buffer, 0, Queue::copy); });
+            spdlog::debug("device {}: staging slot {} ({} MB) pinned in {:.0f} ms, written by the device in {:.0f} ms",
+                          d, slot / devices, bytes >> 20, ms(t1 - t0), ms_since(t1));
+            if (warm && slot == d) {
+              if (pools_made_[d].valid()) pools_made_[d].wait();
+              warm_up(d, *staging_[slot], vertices);
+            }
             filled_[slot].set_value();
           } catch (...) {
             filled_[slot].set_exception(std::current_exception());
           }
       });
+    }
+  }
+
+  // Slot `slot` of device d pinned and the device's memory pool made, by reserve(); its pinning's error rethrown.
+  void wait_reserved(size_t slot, size_t d) {
+    if (const auto reserved = reserved_[slot]; reserved.valid()) reserved.get();
+    if (const auto pool = pools_made_[d]; pool.valid()) pool.wait();
   }
 
   // Device d's warm-up, holding the device; a failure only logged (the tiles meet it again, with their names).
@@ -147,9 +166,9 @@ class OnDevice {
       const size_t slot = slots_.take_spread(cdts_.size());
       const DevicePool::Held held_slot{slots_, slot};
       const auto slot_taken = std::chrono::steady_clock::now();
-      if (const auto reserved = reserved_[slot]; reserved.valid()) reserved.get();  // rethrows its allocation's error
-      const auto t1 = std::chrono::steady_clock::now();
       const size_t d = slot % cdts_.size();
+      wait_reserved(slot, d);  // rethrows its allocation's error
+      const auto t1 = std::chrono::steady_clock::now();
       const GpuCdt& cdt = *cdts_[d];
       HostStaging& staging = *staging_[slot];
       try {
@@ -213,7 +232,7 @@ class OnDevice {
       pool_.take(d);
       const DevicePool::Held held{pool_, d};
       try {
-        if (const auto reserved = reserved_[slot]; reserved.valid()) reserved.get();
+        wait_reserved(slot, d);
         const StagingLent lent(cdts_[d]->context(), *staging_[slot]);
         GpuCdtStats one;
         auto result = work(*cdts_[d], one);
@@ -267,6 +286,7 @@ class OnDevice {
   std::atomic<bool> tiles_begun_{false};             // a tile has asked for a slot: no warm-up from now on
   std::vector<std::promise<void>> filled_;          // reserve()'s allocations, a slot each
   std::vector<std::shared_future<void>> reserved_;  // their futures, which a tile waits on
+  std::vector<std::shared_future<void>> pools_made_;  // a device's memory pool, made by reserve() (if valid)
   std::mutex sum_lock_;
   std::vector<std::jthread> allocating_;  // last: joined before the slots it fills are freed
 };
