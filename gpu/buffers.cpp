@@ -391,8 +391,8 @@ uint64_t BufferCache::bytes() const {
   return total;
 }
 
-void fill(const Context& ctx, const Buffer& dst, uint32_t value, Queue on) {
-  run_once(ctx, [&](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, dst.buffer, 0, VK_WHOLE_SIZE, value); }, on);
+void fill(const Context& ctx, const Buffer& dst, uint32_t value) {
+  run_once(ctx, [&](VkCommandBuffer cmd) { vkCmdFillBuffer(cmd, dst.buffer, 0, VK_WHOLE_SIZE, value); });
 }
 
 }  // namespace cdtgpu::gpu

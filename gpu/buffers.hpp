@@ -143,8 +143,8 @@ inline constexpr const char* kSlots4[] = {"slots x4 a", "slots x4 b", "slots x4 
 inline constexpr const char* kSlots8[] = {"slots x8 a", "slots x8 b"};
 inline constexpr const char* kSlots12[] = {"slots x12 a", "slots x12 b"};
 
-// Fills the whole buffer with a 32-bit pattern, synchronously (a host buffer too: the device writes it).
-void fill(const Context& ctx, const Buffer& dst, uint32_t value, Queue on = Queue::compute);
+// Fills the whole buffer with a 32-bit pattern, synchronously.
+void fill(const Context& ctx, const Buffer& dst, uint32_t value);
 
 // Creates a buffer holding `data`.
 template <class T>

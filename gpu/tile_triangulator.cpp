@@ -62,9 +62,10 @@ class OnDevice {
   // Every slot's staging buffer for tiles of `vertices`, each device's slots in turn on a thread of the
   // device's own: pinned memory takes ~0.3 ms per MB (1.0-1.7 s for a 3 GB slot at 1B points), which the
   // resolve and the plan hide. A tile waits only for its own slot: on two devices the first tiles waited
-  // 2.3-2.9 s for all four. Each slot is written once by its device as soon as it is pinned (a fill on the
-  // copy queue): the first tiles' uploads took 92-243 ms where later ones took 9-10 (tiles of 20M points on the
-  // 2 x H200 host), the second slot's pinning then beside them.
+  // 2.3-2.9 s for all four. A device's next slot is pinned without waiting for its memory pool (a tile waits for
+  // both): the first tiles' uploads took 92-243 ms where later ones took 9-10 (tiles of 20M points on the 2 x
+  // H200 host), the second slot's pinning then beside them. (Writing each slot once by its device when pinned
+  // did not make them faster: 220-244 ms again.)
   //
   // The first reserve also warms each device up (GpuCdt::warm_up_tiles) in its first slot, unless a tile has
   // begun by then: the device's buffers for tiles are made while the host resolves and plans. Asked again for
@@ -85,14 +86,8 @@ class OnDevice {
       if (pools)  // make_pool throws nothing
         pools_made_[d] = std::async(std::launch::async, [this, d, vertices] { make_pool(d, vertices); }).share();
       allocating_.emplace_back([this, d, devices, bytes, vertices, warm] {
-        const Context& ctx = cdts_[d]->context();
         for (size_t slot = d; slot < staging_.size(); slot += devices) try {
-            const auto t0 = std::chrono::steady_clock::now();
-            staging_[slot]->fit(ctx, bytes);
-            const auto t1 = std::chrono::steady_clock::now();
-            on_copy_queue(d, [&] { fill(ctx, staging_[slot]->buffer, 0, Queue::copy); });
-            spdlog::debug("device {}: staging slot {} ({} MB) pinned in {:.0f} ms, written by the device in {:.0f} ms",
-                          d, slot / devices, bytes >> 20, ms(t1 - t0), ms_since(t1));
+            staging_[slot]->fit(cdts_[d]->context(), bytes);
             if (warm && slot == d) {
               if (pools_made_[d].valid()) pools_made_[d].wait();
               warm_up(d, *staging_[slot], vertices);
