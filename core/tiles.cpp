@@ -489,8 +489,9 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   // The border edges and the split segments' pieces between merge vertices, in local ids, listed under their
   // smaller end (extra[extra_from[i] ..], their larger ends, sorted) and merged there with that vertex's segments:
   // the merge's segments come out sorted and unique. Appended and sorted whole, they took ~0.6 s of a
-  // 4.5M-vertex merge's input on 2 cores; a sort of their keys alone (smaller << 32 | larger) was most of this
-  // step on 32 threads. Listed on all cores instead, a vertex's few sorted in place; repeats are dropped below.
+  // 4.5M-vertex merge's input on 2 cores; with a sort of their keys alone (smaller << 32 | larger) this step took
+  // 76-101 ms of a 5.9M-vertex merge's on 32 threads, listed on all cores 24-27 (a vertex's few sorted in place;
+  // repeats are dropped below).
   std::vector<Edge> local_border;
   assign_on_all_cores(local_border, border.size(), 0,
                       [&](size_t i) { return Edge{local_of[border[i][0]], local_of[border[i][1]]}; });
@@ -699,11 +700,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   bookkeeping.get();  // its error, if any
 
   const double tiles_wall_ms = ms_since(t_tiles);
-  // The merge's input (merge_job). What only the tiles read goes first (at 1B points + 250M segments: 6 GB of the
-  // canonical order's peak).
+  // The merge's input (merge_job). What only the tiles read is freed beside it, long before the canonical order's
+  // peak (6 GB of it at 1B points + 250M segments).
   const auto t_merge_input = Clock::now();
-  // Freed beside the merge's input, long before the canonical order's peak (6 GB of it at 1B points + 250M
-  // segments).
   std::future<void> tiles_input_freed =
       std::async(std::launch::async, [order = std::move(plan.order), ids = std::move(tile_segments_of.ids)]() mutable {
         free_storage_on_all_cores(order);
@@ -721,8 +720,9 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     final_count += results[t].final_triangles.size();
     runs[t] = std::move(results[t].final_triangles);
   }
-  // The tiles' borders, and the slabs' merge vertices in id order, joined on all cores: appended on one core,
-  // 6.2M border edges and 5.9M ids (100M points + 25M contour vertices in tiles of 20M) landed on fresh pages.
+  // The tiles' borders, and the slabs' merge vertices in id order, joined on all cores: appended on one core (6.2M
+  // border edges and 5.9M ids at 100M points + 25M contour vertices in tiles of 20M), with the frees before them,
+  // taking the tiles' results took 85-148 ms on the 2 x H200 host, now 18-19.
   std::vector<size_t> in_order(tiles);
   std::iota(in_order.begin(), in_order.end(), size_t(0));
   const std::vector<Edge> border = joined<Edge>(in_order, [&](size_t t) -> const auto& { return results[t].border; });

@@ -63,9 +63,9 @@ class OnDevice {
   // device's own: pinned memory takes ~0.3 ms per MB (1.0-1.7 s for a 3 GB slot at 1B points), which the
   // resolve and the plan hide. A tile waits only for its own slot: on two devices the first tiles waited
   // 2.3-2.9 s for all four. A device's next slot is pinned without waiting for its memory pool (a tile waits for
-  // both): the first tiles' uploads took 92-243 ms where later ones took 9-10 (tiles of 20M points on the 2 x
-  // H200 host), the second slot's pinning then beside them. (Writing each slot once by its device when pinned
-  // did not make them faster: 220-244 ms again.)
+  // both), so that less pinning runs beside the first tiles' uploads: those take 128-244 ms against 9-10 for
+  // later ones (tiles of 20M points on the 2 x H200 host, beside the pools' allocation and the other slots'
+  // pinning; writing each slot once by its device when pinned did not make them faster).
   //
   // The first reserve also warms each device up (GpuCdt::warm_up_tiles) in its first slot, unless a tile has
   // begun by then: the device's buffers for tiles are made while the host resolves and plans. Asked again for
