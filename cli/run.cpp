@@ -33,8 +33,7 @@ int run_triangulate(const TriangulateOptions& options) {
   read_job(job);
   choose_backend(job, gpus);
   open_tiles_early(job);
-  prepare_job(job);
-  begin_mesh_file(job);
+  prepare_job(job, true);
   triangulate_job(job);
   if (options.ranks) {
     const uint64_t elsewhere = options.ranks->end();

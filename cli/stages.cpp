@@ -667,7 +667,7 @@ void serve_tiles(Job& job) {
 
 // The merge stays on the CPU even when the device is ready: on all 16 cores of the H100 machine it took 31-44 ms
 // for 2.5M points, the GPU's (gpu/dedupe, the same result) ~59 ms with its transfers.
-void prepare_job(Job& job) {
+void prepare_job(Job& job, bool mesh_file_ahead) {
   // Later stages read only the rings of boundary and hole inputs (region_rules): the rest of what was read
   // goes as soon as prepare has copied it. Kept to the end, it was a quarter of a large run's peak (80M
   // vertices in tiles: 3.0 of 13 GB).
@@ -680,7 +680,12 @@ void prepare_job(Job& job) {
     tbb::parallel_for(size_t(0), job.in.lines.size(), [&](size_t l) { free_storage(job.in.lines[l].points); });
     free_storage(job.in.lines);
   };
-  job.prepared = timed(job, "prepare", [&] { return prepare(job.in, {}, drop_input); });
+  VerticesAhead ahead;
+  if (mesh_file_ahead) {
+    ahead.made = [&](const Points& vertices) { begin_mesh_file(job, vertices); };
+    ahead.abandoned = [&] { job.mesh_ahead.reset(); };  // waits for its writing, then removes the file
+  }
+  job.prepared = timed(job, "prepare", [&] { return prepare(job.in, {}, drop_input, ahead); });
   spdlog::info("CRS: {}", job.crs.name);
 
   const Repairs& r = job.in.repairs;
@@ -714,10 +719,10 @@ void prepare_job(Job& job) {
   job.stats.crs_epsg = job.crs.epsg;
 }
 
-void begin_mesh_file(Job& job) {
+void begin_mesh_file(Job& job, const Points& vertices) {
   const TriangulateOptions& o = job.options;
   if (o.output.empty() || o.max_edge > 0 || has_region_inputs(job)) return;
-  job.mesh_ahead = std::make_unique<MeshFileAhead>(o.output, crs_for(job, o.output), job.write, job.prepared.vertices);
+  job.mesh_ahead = std::make_unique<MeshFileAhead>(o.output, crs_for(job, o.output), job.write, vertices);
   if (!job.mesh_ahead->begun()) job.mesh_ahead.reset();
 }
 

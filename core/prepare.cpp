@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <chrono>
 #include <atomic>
+#include <exception>
 #include <cmath>
 #include <execution>
 #include <limits>
@@ -150,7 +151,8 @@ RawVector<uint32_t> gather_and_merge(const InputSet& in, const std::vector<uint6
 
 }  // namespace
 
-PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::function<void()>& gathered) {
+PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::function<void()>& gathered,
+                      const VerticesAhead& ahead) {
   using Clock = std::chrono::steady_clock;
   auto t = Clock::now();
   auto phase = [&](const char* name) {
@@ -194,6 +196,19 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
     throw std::logic_error("prepare: the point merge returned " + std::to_string(vertex_of.size()) + " of " +
                            std::to_string(total) + " points");
   out.merged_duplicates = total - out.vertices.size();
+  // Declared after `out`: on a throw from here on, abandoned() runs before out's vertices go.
+  struct Abandon {
+    const VerticesAhead& ahead;
+    int exceptions = std::uncaught_exceptions();
+    bool shown = false;
+    ~Abandon() {
+      if (shown && std::uncaught_exceptions() > exceptions && ahead.abandoned) ahead.abandoned();
+    }
+  } abandon{ahead};
+  if (ahead.made) {
+    ahead.made(out.vertices);
+    abandon.shown = true;
+  }
 
   // Segments of every polyline, the closing edge of every ring included (counted per line above), written on
   // all cores (one thread took 7 s for 250M segments).

@@ -56,7 +56,15 @@ MergedInput merge_input(const InputSet& in, const std::function<void()>& scatter
 // called once every coordinate has been read out of `in`: from then on only the number of lines and their
 // sizes (taken before) are used, so the caller may free the points there, which keeps the input out of the
 // merge's peak (24 of ~80 bytes a point).
+//
+// `ahead.made`, if given, is shown the vertices as soon as they are final, before the segments are made (the CLI
+// begins writing the mesh file's vertex section there); if prepare throws after that, `ahead.abandoned` is called
+// before the vertices are freed.
+struct VerticesAhead {
+  std::function<void(const Points& vertices)> made;
+  std::function<void()> abandoned;
+};
 PreparedInput prepare(const InputSet& in, const PointMerger& merge = {},
-                      const std::function<void()>& gathered = {});
+                      const std::function<void()>& gathered = {}, const VerticesAhead& ahead = {});
 
 }  // namespace cdtgpu

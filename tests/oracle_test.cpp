@@ -93,6 +93,31 @@ TEST(Prepare, MergesDuplicatesAndFirstZWins) {
   EXPECT_EQ(p.constraint_line[0], 0u);
 }
 
+// The vertices prepare shows ahead (the CLI writes the mesh file's vertex section from them) are the ones it
+// returns, in the same storage, shown once; nothing is abandoned on success.
+TEST(Prepare, ShowsItsFinalVerticesAheadInTheirOwnStorage) {
+  InputSet in;
+  in.points = {{3, 1, 1}, {0, 0, 2}, {3, 1, 9}};
+  in.lines.push_back(line({{1, 1, 0}, {2, 5, 0}, {0, 0, 4}}));
+  int shown = 0, abandoned = 0;
+  const Point3* at = nullptr;
+  Points copy;
+  VerticesAhead ahead;
+  ahead.made = [&](const Points& v) {
+    ++shown;
+    at = v.data();
+    copy.assign(v.begin(), v.end());
+  };
+  ahead.abandoned = [&] { ++abandoned; };
+  const PreparedInput p = prepare(in, {}, {}, ahead);
+  EXPECT_EQ(shown, 1);
+  EXPECT_EQ(abandoned, 0);
+  EXPECT_EQ(at, p.vertices.data());
+  EXPECT_EQ(copy, p.vertices);
+  EXPECT_EQ(p.vertices.size(), 4u);
+  EXPECT_EQ(p.constraints.size(), 2u);
+}
+
 TEST(Prepare, SortsVerticesLexicographically) {
   InputSet in;
   in.points = {{3, 1, 0}, {1, 5, 0}, {1, -2, 0}, {-4, 9, 0}, {3, 0, 0}};
