@@ -4,6 +4,7 @@
 //   uint64_t k = count_if(n, [&](size_t i) { return keep[i]; });
 //   prefix_sums(first);                                   // counts in first[1..] -> offsets
 //   shared(x).fetch_add(1, std::memory_order_relaxed);    // an element written by several threads
+//   group(m, buckets, [&](size_t i) { return key[i]; }, first, items);   // items by key: a counting sort
 #pragma once
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -16,6 +17,8 @@
 #include <cstdint>
 #include <functional>
 #include <type_traits>
+
+#include "core/uninit.hpp"
 
 namespace cdtgpu {
 
@@ -74,6 +77,21 @@ void prefix_sums(Array& first, size_t grain = kParallelGrain) {
         return sum;
       },
       std::plus<T>());
+}
+
+// Items 0 .. m - 1 grouped by key(i) < buckets: group b is items[first[b] .. first[b + 1]), ascending (the
+// order a serial counting sort gives, whatever order the cores scattered them in).
+template <class Key>
+void group(size_t m, size_t buckets, Key&& key, RawVector<uint32_t>& first, RawVector<uint32_t>& items) {
+  first.resize(buckets + 1);
+  each(buckets + 1, [&](size_t b) { first[b] = 0; });
+  each(m, [&](size_t i) { shared(first[key(i) + 1]).fetch_add(1, std::memory_order_relaxed); });
+  prefix_sums(first);
+  RawVector<uint32_t> cursor(buckets);
+  each(buckets, [&](size_t b) { cursor[b] = first[b]; });
+  items.resize(m);
+  each(m, [&](size_t i) { items[shared(cursor[key(i)]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(i); });
+  each(buckets, [&](size_t b) { std::sort(items.begin() + first[b], items.begin() + first[b + 1]); });
 }
 
 }  // namespace cdtgpu

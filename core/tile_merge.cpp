@@ -184,34 +184,20 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
   // The merge's adjacency from its canonical order (core/half_edges) and its border edges listed under their
   // smaller end, each with its final side: a sort of every half-edge instead took 0.1-0.2 s at 1B points on 64
   // cores, serial work after the tiles.
-  auto t = std::chrono::steady_clock::now();
-  std::string steps;  // -v: where the time goes
-  auto step = [&](const char* what) {
-    steps += fmt::format(", {} {:.1f}", what, ms_since(t));
-    t = std::chrono::steady_clock::now();
-  };
+  StepTimes steps;  // -v: where the time goes
   const HalfEdges e = half_edges(m, V);
-  step("adjacency");
+  steps.add("adjacency");
   // sides[from[v] .. from[v + 1]): the border edges whose smaller end is v, as (larger end) << 1 | forward, where
   // forward says the final side is left of (smaller, larger).
-  // Built on all cores (on one it was serial work after the tiles, as long as the border): a vertex's entries
-  // land in any order, which the lookup does not mind (an edge is listed once).
-  BigArray<uint32_t> from(size_t(V) + 1, 0);
-  each(border.size(), [&](size_t i) {
-    shared(from[std::min(border[i][0], border[i][1]) + 1]).fetch_add(1, std::memory_order_relaxed);
-  });
-  prefix_sums(from);
+  // Grouped on all cores (on one it was serial work after the tiles, as long as the border).
+  RawVector<uint32_t> from, listed;
+  group(border.size(), V, [&](size_t i) { return std::min(border[i][0], border[i][1]); }, from, listed);
   BigArray<uint64_t> sides(border.size());
-  {
-    BigArray<uint32_t> at(V);
-    each(at.size(), [&](size_t v) { at[v] = from[v]; });
-    each(border.size(), [&](size_t i) {
-      const Edge& b = border[i];
-      const uint32_t k = shared(at[std::min(b[0], b[1])]).fetch_add(1, std::memory_order_relaxed);
-      sides[k] = uint64_t(std::max(b[0], b[1])) << 1 | (b[0] < b[1]);
-    });
-  }
-  step("border table");
+  each(border.size(), [&](size_t k) {
+    const Edge& b = border[listed[k]];
+    sides[k] = uint64_t(std::max(b[0], b[1])) << 1 | (b[0] < b[1]);
+  });
+  steps.add("border table");
   // 0: a -> b is no border edge; else 1 + its forward bit.
   auto border_side = [&](uint32_t a, uint32_t b) -> int {
     const uint32_t lo = std::min(a, b), hi = std::max(a, b);
@@ -255,7 +241,7 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
     side[g] = s;
     if (!s) unite(uint32_t(h / 3), g / 3);
   });
-  step("parts");
+  steps.add("parts");
   // Each part beside a border edge takes that edge's side: 1 final, 2 outside; a part with both is an error.
   BigArray<uint8_t> mark(m.size(), 0);
   each(halves, [&](size_t h) {
@@ -268,7 +254,7 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
       if (!(mk.load(std::memory_order_relaxed) & bit)) mk.fetch_or(bit, std::memory_order_relaxed);
     }
   });
-  step("sides");
+  steps.add("sides");
   Triangles kept = compact_as<Triangles>(
       m.size(),
       [&](size_t t) {
@@ -281,9 +267,9 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
         if (mark[root(uint32_t(t))] != 1) *at++ = m[t];
         return at;
       });
-  step("kept");
+  steps.add("kept");
   spdlog::debug("the merge's triangles outside the final region ({} of {}; {} border edges), ms: {}", kept.size(),
-                m.size(), border.size(), steps.substr(2));
+                m.size(), border.size(), steps.text());
   return kept;
 }
 

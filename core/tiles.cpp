@@ -30,7 +30,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include "core/big_array.hpp"
 #include "core/canonical.hpp"
 #include "core/compact.hpp"
 #include "core/host_memory.hpp"
@@ -445,12 +444,7 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
                    const VertexSplits& split_segments, std::vector<uint8_t>& in_final, bool slabs,
                    std::vector<uint32_t> slab_ids) {
   const size_t n = v.size();
-  auto t = Clock::now();
-  std::string steps;  // -v: where the merge's input goes
-  auto step = [&](const char* what) {
-    steps += fmt::format(", {} {:.1f}", what, ms_since(t));
-    t = Clock::now();
-  };
+  StepTimes steps;  // -v: where the merge's input goes
   const std::vector<Edge>& split_ones = split_segments.split;
   auto not_split = [&](const Edge& e) {
     return split_ones.empty() || !std::binary_search(split_ones.begin(), split_ones.end(), e);
@@ -459,14 +453,14 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   // on it marks the vertices that are not in the merge). Slabs found their own as they finished.
   std::vector<uint32_t> ids = std::move(slab_ids);
   if (!slabs) ids = unmarked_ids(in_final, border, 0, uint32_t(n));
-  step("vertices");
+  steps.add("vertices");
   RawVector<uint32_t> local_of(n);  // only written, and read, at the merge's vertices
   Points merge_vertices(ids.size());
   tbb::parallel_for(size_t(0), ids.size(), [&](size_t i) {
     local_of[ids[i]] = uint32_t(i);
     merge_vertices[i] = v[ids[i]];
   });
-  step("local ids");
+  steps.add("local ids");
   // The segments between them: such a segment's first end is a merge vertex, and segments are sorted by it
   // (tile_segments checks), so each merge vertex's are found from the last one's by a galloping search, not by a
   // pass over every segment (250M at 1B points).
@@ -485,7 +479,7 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
     }
   });
   segments_from[ids.size()] = uint32_t(segments.size());
-  step("segments found");
+  steps.add("segments found");
   // The border edges and the split segments' pieces between merge vertices, in local ids, listed under their
   // smaller end (extra[extra_from[i] ..], their larger ends, sorted) and merged there with that vertex's segments:
   // the merge's segments come out sorted and unique. Appended and sorted whole, they took ~0.6 s of a
@@ -502,27 +496,16 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   auto extra_edge = [&](size_t k) -> const Edge& {
     return k < pieces.size() ? pieces[k] : local_border[k - pieces.size()];
   };
-  BigArray<uint32_t> extra_from(ids.size() + 1, 0);
-  each(extras, [&](size_t k) {
-    const Edge& e = extra_edge(k);
-    shared(extra_from[std::min(e[0], e[1]) + 1]).fetch_add(1, std::memory_order_relaxed);
-  });
-  prefix_sums(extra_from);
-  BigArray<uint32_t> extra(extras);
-  {
-    BigArray<uint32_t> at(ids.size());
-    each(ids.size(), [&](size_t i) { at[i] = extra_from[i]; });
-    each(extras, [&](size_t k) {
-      const Edge& e = extra_edge(k);
-      extra[shared(at[std::min(e[0], e[1])]).fetch_add(1, std::memory_order_relaxed)] = std::max(e[0], e[1]);
-    });
-  }
+  RawVector<uint32_t> extra_from, extra;
+  auto smaller = [&](size_t k) { return std::min(extra_edge(k)[0], extra_edge(k)[1]); };
+  group(extras, ids.size(), smaller, extra_from, extra);
+  each(extras, [&](size_t j) { extra[j] = std::max(extra_edge(extra[j])[0], extra_edge(extra[j])[1]); });
   each(ids.size(), [&](size_t i) { std::sort(extra.begin() + extra_from[i], extra.begin() + extra_from[i + 1]); });
-  step("border and pieces");
+  steps.add("border and pieces");
   // Merge vertex i's segments to larger ends, each once, in order: its own (sorted already) and the extra ones.
   auto each_segment_of = [&](size_t i, auto&& f) {
-    const uint32_t* x = extra.begin() + extra_from[i];
-    const uint32_t* const x1 = extra.begin() + extra_from[i + 1];
+    const uint32_t* x = extra.data() + extra_from[i];
+    const uint32_t* const x1 = extra.data() + extra_from[i + 1];
     uint64_t last = ~uint64_t(0);
     auto put = [&](uint32_t to) {
       if (to != last) f(to);
@@ -548,8 +531,8 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
         return at;
       });
   free_storage_on_all_cores(in_final);
-  step("segments");
-  spdlog::debug("the merge's input, ms: {}", steps.substr(2));
+  steps.add("segments");
+  spdlog::debug("the merge's input, ms: {}", steps.text());
   return MergeJob{std::move(ids), std::move(merge_vertices), std::move(merge_segments), std::move(local_border)};
 }
 

@@ -39,20 +39,6 @@ void set_all(Array& a, size_t size, uint32_t value) {
   each(size, [&](size_t i) { a[i] = value; });
 }
 
-// Items 0 .. m - 1 grouped by key(i) < buckets: group b is items[first[b] .. first[b + 1]), ascending (the
-// order a serial counting sort gives).
-template <class Key>
-void group(size_t m, size_t buckets, Key&& key, Array& first, Array& items) {
-  set_all(first, buckets + 1, 0);
-  each(m, [&](size_t i) { shared(first[key(i) + 1]).fetch_add(1, std::memory_order_relaxed); });
-  prefix_sums(first);
-  Array cursor(buckets);
-  each(buckets, [&](size_t b) { cursor[b] = first[b]; });
-  items.resize(m);
-  each(m, [&](size_t i) { items[shared(cursor[key(i)]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(i); });
-  each(buckets, [&](size_t b) { std::sort(items.begin() + first[b], items.begin() + first[b + 1]); });
-}
-
 // Offenders found on all cores; their order does not matter (the caller sorts them).
 struct Blame {
   tbb::enumerable_thread_specific<std::vector<uint32_t>> local;
