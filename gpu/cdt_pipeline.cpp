@@ -11,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
 
 #include "core/parallel.hpp"
 #include "core/resolve.hpp"
@@ -392,9 +393,20 @@ void GpuCdt::warm_up_tiles(uint64_t vertices, HostStaging& staging) const {
   top_up_shelf(shelf_->sorted, sorted_bytes, "tri_nbrs", true);
 }
 
+namespace {
+// The border as the device appended it, sorted beside the copy: sorted while the device was held (one core),
+// it took most of a tile's final step, 110-130 ms a 20M-point tile whose border holds 0.9M edges (the 100M
+// LAS points + 25M contour vertices).
+template <class Copy>
+void unstage_with_border(TileFinal& f, Copy&& copy) {
+  tbb::parallel_invoke(copy, [&] { tbb::parallel_sort(f.border.begin(), f.border.end()); });
+}
+}  // namespace
+
 void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f) {
   resize_unwritten(f.triangles, count);
-  copy_on_all_cores(static_cast<const Triangle*>(staging.mapped), count, f.triangles.data());
+  unstage_with_border(
+      f, [&] { copy_on_all_cores(static_cast<const Triangle*>(staging.mapped), count, f.triangles.data()); });
 }
 
 void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, std::span<const uint32_t> ids,
@@ -402,9 +414,11 @@ void GpuCdt::unstage_triangles(const HostStaging& staging, uint32_t count, std::
   resize_unwritten(f.triangles, count);
   const Triangle* from = static_cast<const Triangle*>(staging.mapped);
   Triangle* to = f.triangles.data();
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t i = r.begin(); i < r.end(); ++i)
-      to[i] = {ids[from[i][0]], ids[from[i][1]], ids[from[i][2]]};
+  unstage_with_border(f, [&] {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i)
+        to[i] = {ids[from[i][0]], ids[from[i][1]], ids[from[i][2]]};
+    });
   });
   f.global_ids = true;
 }

@@ -96,6 +96,7 @@ class GpuCdt {
   uint32_t compute_tile(const TileJob& job, TileUpload up, HostStaging& staging, TileFinal& f, Buffer& sorted,
                         GpuCdtStats& s) const;
   void download_tile(Buffer sorted, uint32_t count, const HostStaging& staging, GpuCdtStats& s) const;
+  // The tile's `count` final triangles from `staging` into f, its border (as the device left it) sorted beside.
   static void unstage_triangles(const HostStaging& staging, uint32_t count, TileFinal& f);
   // The same, each vertex mapped through `ids` on the way (the job's: f.global_ids). At 1B points a tile's
   // 250M triangles were copied, then read and written again to map them: 6 GB of host memory a tile.

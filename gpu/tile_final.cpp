@@ -47,7 +47,6 @@ std::vector<Edge> TileFinalPasses::mark(GpuTriangulation& tri, const TileRect& r
     if (found <= capacity) {
       std::vector<Edge> edges(found);
       if (found) download(ctx_, border, edges.data(), uint64_t(found) * sizeof(Edge));
-      std::sort(edges.begin(), edges.end());  // appended in any order
       return edges;
     }
     capacity = found;

@@ -16,7 +16,8 @@ namespace cdtgpu::gpu {
 class TileFinalPasses {
  public:
   explicit TileFinalPasses(const Context& ctx);
-  // The border edges (vertex ids of the triangulation, final triangle on the left), sorted. Leaves in `tri`
+  // The border edges (vertex ids of the triangulation, final triangle on the left) in the order the device's
+  // threads appended them: the caller sorts them once the device is free (GpuCdt::unstage_triangles). Leaves in `tri`
   // only the final triangles for the sort: its other slots lose their first vertex. `gpu_ms`: device time.
   std::vector<Edge> mark(GpuTriangulation& tri, const TileRect& rect, BufferCache& cache, double* gpu_ms) const;
 
