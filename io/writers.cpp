@@ -7,11 +7,15 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_group.h>
+
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <bit>
 #include <cctype>
 #include <charconv>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <span>
@@ -117,22 +121,39 @@ void write_mesh_faces(const Mesh& mesh, const WriteOptions& options, std::ostrea
     return write_items(out, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
       return put(put_indices(put(p, "3"), mesh.triangles[t], 0), "\n");
     });
-  // Faces are 13 bytes each (a count byte and three indices), packed on all cores into one block.
+  // Faces are 13 bytes each (a count byte and three indices), packed on all cores in blocks of 4 MiB reused (a
+  // 65 MB array for 5M faces cost more in page faults than its packing), the next block packed while this thread
+  // writes the last.
+  const auto t0 = std::chrono::steady_clock::now();
   const size_t n = mesh.triangles.size();
-  // In blocks of 4 MiB reused: a 65 MB array for 5M faces cost more in page faults than its packing.
   constexpr size_t kFacesPerBlock = (size_t(4) << 20) / 13;
-  std::vector<char> faces(std::min(n, kFacesPerBlock) * 13);
-  for (size_t first = 0; first < n; first += kFacesPerBlock) {
+  std::vector<char> packed(std::min(n, kFacesPerBlock) * 13), next(packed.size());
+  auto pack = [&](size_t first, std::vector<char>& to) {
     const size_t count = std::min(kFacesPerBlock, n - first);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t t = r.begin(); t < r.end(); ++t) {
-        char* f = faces.data() + t * 13;
+        char* f = to.data() + t * 13;
         f[0] = 3;
         std::memcpy(f + 1, mesh.triangles[first + t].data(), 12);
       }
     });
-    out.write(faces.data(), std::streamsize(count * 13));
+  };
+  if (n) pack(0, packed);
+  for (size_t first = 0; first < n; first += kFacesPerBlock) {
+    const size_t after = first + kFacesPerBlock;
+    tbb::task_group packing;
+    if (after < n) packing.run([&] { pack(after, next); });
+    try {
+      out.write(packed.data(), std::streamsize(std::min(kFacesPerBlock, n - first) * 13));
+    } catch (...) {
+      packing.wait();
+      throw;
+    }
+    packing.wait();
+    packed.swap(next);
   }
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  spdlog::debug("faces: {} packed and written in {:.0f} ms ({:.1f} GB/s)", n, ms, n * 13 / 1e6 / std::max(ms, 1e-3));
 }
 
 namespace {
