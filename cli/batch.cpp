@@ -9,10 +9,12 @@
 #include <memory>
 #include <mutex>
 #include <semaphore>
+#include <set>
 #include <thread>
 
 #include <spdlog/spdlog.h>
 
+#include "cli/batch_devices.hpp"
 #include "cli/job_file.hpp"
 #include "cli/job_log.hpp"
 #include "cli/memory.hpp"
@@ -27,8 +29,8 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-// Jobs held at once: one being read, one on the device, one being written.
-constexpr std::ptrdiff_t kInFlight = 3;
+// Jobs held at once: one being read, and a device worker's and a writer's for each worker.
+constexpr std::ptrdiff_t kReading = 1, kPerWorker = 2;
 
 struct BatchJob {
   size_t index = 0;  // in file order
@@ -132,8 +134,8 @@ std::string same_file_key(const std::string& path) {
   return ec ? fs::absolute(path).lexically_normal().string() : p.string();
 }
 
-// Which job last writes each file, and how many jobs are written (in order): a job reading a file that a job
-// still in flight writes waits until that one is done.
+// Which job last writes each file, and how many jobs are written: a job reading a file that a job still in
+// flight writes waits until that one is done (and every job before it: jobs are written in any order).
 class Written {
  public:
   void will_write(size_t index, const std::vector<std::string>& outputs) {
@@ -147,26 +149,43 @@ class Written {
       auto it = writer_.find(same_file_key(in));
       if (it == writer_.end()) continue;
       const size_t writer = it->second;
-      cv_.wait(lock, [&] { return done_ > writer; });
+      cv_.wait(lock, [&] { return all_before_ > writer; });
     }
   }
   void done(size_t index) {
     {
       std::lock_guard lock(mutex_);
-      done_ = index + 1;
+      ++count_;
+      later_.insert(index);
+      while (later_.erase(all_before_)) ++all_before_;
     }
     cv_.notify_all();
   }
   size_t count() {
     std::lock_guard lock(mutex_);
-    return done_;
+    return count_;
   }
 
  private:
   std::mutex mutex_;
   std::condition_variable cv_;
   std::map<std::string, size_t> writer_;
-  size_t done_ = 0;
+  size_t count_ = 0, all_before_ = 0;  // jobs written; every job below all_before_ written
+  std::set<size_t> later_;             // written, above a job not yet written
+};
+
+// A lock a GPU start, held through a job's device stages: a worker's own start is its alone, but a job that
+// names its own --device takes that device's start, which a worker may be using.
+class DeviceLocks {
+ public:
+  std::mutex& of(const GpuStart* start) {
+    std::lock_guard lock(mutex_);
+    return locks_[start];
+  }
+
+ private:
+  std::mutex mutex_;
+  std::map<const GpuStart*, std::mutex> locks_;
 };
 
 }  // namespace
@@ -179,10 +198,21 @@ int run_batch(const BatchOptions& options) {
     if (!fs::is_directory(options.stats_dir))
       throw UsageError("--stats-dir " + options.stats_dir + ": cannot create the folder");
   }
-  GpuStarts gpus;  // one device for every job
+  // The device workers (cli/batch_devices), as --devices names them (a bad index is an error before any thread
+  // starts); without it one, on the single run's device. Each has a writer.
+  const std::vector<DeviceWorker> workers =
+      options.devices.empty() ? std::vector<DeviceWorker>{} : batch_device_workers(options.devices, options.defaults.device);
+  const size_t worker_count = std::max<size_t>(1, workers.size());
+  if (worker_count > 1) {
+    std::string names;
+    for (size_t k = 0; k < workers.size(); ++k)
+      names += (k ? ", " : "") + std::to_string(k + 1) + " on " + workers[k].name;
+    spdlog::info("batch: {} device workers: {}", workers.size(), names);
+  }
+  GpuStarts gpus;  // a device a worker
   if (lines.size() >= kBatchWarmJobs) gpus.auto_min_points = batch_auto_min_points();
   JobQueue to_device, to_writer;
-  std::counting_semaphore<kInFlight> slots(kInFlight);
+  std::counting_semaphore<1024> slots(kReading + kPerWorker * std::ptrdiff_t(worker_count));
   const HostMemory machine = host_memory();
   MemoryGate memory(machine.available ? machine.available : machine.total);
   Written written;
@@ -195,6 +225,66 @@ int run_batch(const BatchOptions& options) {
     return "batch: " + std::to_string(done) + " of " + std::to_string(lines.size()) + " jobs done" +
            (failed_lines.empty() ? "" : " (" + std::to_string(failed_lines.size()) + " failed)");
   });
+
+  // Writing: the outputs, the stats, the job's summary line.
+  auto write_job = [&](std::unique_ptr<BatchJob> b) {
+    Job& job = b->job;
+    stage(*b, [&] {
+      write_outputs(job);
+      count_results(job);
+    });
+    stage(*b, [&] { release_job(job); });
+    stage(*b, [&] { write_job_stats(job); });
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - b->t0).count();
+    {
+      std::lock_guard lock(summary_mutex);
+      if (b->exit_code) failed_lines.push_back(b->line.number);
+    }
+    if (b->exit_code)
+      spdlog::error("{}: failed (exit code {}), {:.0f} ms", b->label, b->exit_code, ms);
+    else
+      spdlog::info("{}: ok, {:.0f} ms, {} triangles", b->label, ms, job.stats.counts["triangles"].dump());
+    const size_t index = b->index;
+    const uint64_t held = b->memory;
+    b.reset();
+    memory.leave(held);
+    written.done(index);
+    slots.release();
+  };
+  // As many writers as workers: a job's PLY is packed and written on one thread (10M points: 0.3-0.4 s, longer
+  // than its device stages).
+  auto writing = [&] {
+    while (std::unique_ptr<BatchJob> b = to_writer.pop()) write_job(std::move(b));
+  };
+  std::vector<std::thread> writers;
+  for (size_t k = 0; k < worker_count; ++k) writers.emplace_back(writing);
+
+  DeviceLocks locks;
+  // A worker's device stages, one job at a time: the job's GPU start moved to the worker's device, unless it
+  // names a device of its own.
+  auto device_stage = [&](size_t k) {
+    while (std::unique_ptr<BatchJob> b = to_device.pop()) {
+      Job& job = b->job;
+      stage(*b, [&] {
+        if (job.start && k < workers.size() && job.options.device == options.defaults.device) {
+          job.start = &gpu_start_on(job, gpus, workers[k].device, workers[k].copy);
+          if (workers.size() > 1) spdlog::debug("device stages on worker {} of {}", k + 1, workers.size());
+        }
+        std::unique_lock<std::mutex> device;
+        if (job.start) device = std::unique_lock(locks.of(job.start));
+        triangulate_job(job);
+        apply_job_regions(job);
+        derive_outputs(job);
+      });
+      if (b->exit_code) {  // a failed job's device objects go now, on the device's thread
+        job.gpu_raster.reset();
+        job.gpu_contours.reset();
+      }
+      to_writer.push(std::move(b));
+    }
+  };
+  std::vector<std::thread> more_workers;  // the first runs on this thread, once the reader has begun
+  for (size_t k = 1; k < worker_count; ++k) more_workers.emplace_back(device_stage, k);
 
   // Reading: the line's options, the output checks, the inputs read and prepared.
   std::thread reader([&] {
@@ -227,55 +317,15 @@ int run_batch(const BatchOptions& options) {
       });
       to_device.push(std::move(b));
     }
-    to_device.push(nullptr);
+    for (size_t k = 0; k < worker_count; ++k) to_device.push(nullptr);  // one a worker
   });
 
-  // Writing: the outputs, the stats, the job's summary line.
-  std::thread writer([&] {
-    while (std::unique_ptr<BatchJob> b = to_writer.pop()) {
-      Job& job = b->job;
-      stage(*b, [&] {
-        write_outputs(job);
-        count_results(job);
-      });
-      stage(*b, [&] { release_job(job); });
-      stage(*b, [&] { write_job_stats(job); });
-      const double ms = std::chrono::duration<double, std::milli>(Clock::now() - b->t0).count();
-      {
-        std::lock_guard lock(summary_mutex);
-        if (b->exit_code) failed_lines.push_back(b->line.number);
-      }
-      if (b->exit_code)
-        spdlog::error("{}: failed (exit code {}), {:.0f} ms", b->label, b->exit_code, ms);
-      else
-        spdlog::info("{}: ok, {:.0f} ms, {} triangles", b->label, ms, job.stats.counts["triangles"].dump());
-      const size_t index = b->index;
-      const uint64_t held = b->memory;
-      b.reset();
-      memory.leave(held);
-      written.done(index);
-      slots.release();
-    }
-  });
-
-  // The device's stages, one job at a time, on this thread.
-  while (std::unique_ptr<BatchJob> b = to_device.pop()) {
-    Job& job = b->job;
-    stage(*b, [&] {
-      triangulate_job(job);
-      apply_job_regions(job);
-      derive_outputs(job);
-    });
-    if (b->exit_code) {  // a failed job's device objects go now, on the device's thread
-      job.gpu_raster.reset();
-      job.gpu_contours.reset();
-    }
-    to_writer.push(std::move(b));
-  }
-  to_writer.push(nullptr);
-  gpus.close_in_background();  // beside the last job's writing: the reader is done with the device too
+  device_stage(0);
   reader.join();
-  writer.join();
+  for (std::thread& w : more_workers) w.join();
+  for (size_t k = 0; k < worker_count; ++k) to_writer.push(nullptr);  // one a writer
+  gpus.close_in_background();  // beside the last jobs' writing: the reader is done with the devices too
+  for (std::thread& w : writers) w.join();
   progress.stop();
   gpus.leave_for_exit();
 
@@ -283,6 +333,7 @@ int run_batch(const BatchOptions& options) {
     spdlog::info("batch: {} jobs, all ok", lines.size());
     return 0;
   }
+  std::sort(failed_lines.begin(), failed_lines.end());  // written in any order
   std::string which;
   for (int n : failed_lines) which += (which.empty() ? "" : ", ") + std::to_string(n);
   spdlog::error("batch: {} of {} jobs failed (line{} {})", failed_lines.size(), lines.size(),

@@ -218,9 +218,10 @@ const gpu::Context& GpuStart::context() {
   return ready_->ctx;
 }
 
-GpuStart& GpuStarts::start(const std::string& device, bool hardware_only, uint64_t expected_points, bool tiled) {
+GpuStart& GpuStarts::start(const std::string& device, bool hardware_only, uint64_t expected_points, bool tiled,
+                           unsigned copy) {
   std::lock_guard lock(mutex_);
-  std::unique_ptr<GpuStart>& s = starts_[{device, hardware_only}];
+  std::unique_ptr<GpuStart>& s = starts_[{device, hardware_only, copy}];
   if (!s)
     s = std::make_unique<GpuStart>(device, hardware_only, expected_points, device_pool, tiled, nth_gpu,
                                    processes_on_host);

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "gpu/cdt_pipeline.hpp"
@@ -106,8 +107,9 @@ class GpuStarts {
   int nth_gpu = -1;
   int processes_on_host = 1;
   // The start for this device and rule: started now with `expected_points` (and `tiled`, GpuStart's), or the one
-  // started before.
-  GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points, bool tiled = false);
+  // started before. `copy`: another start on the same device (a batch's second worker there, cli/batch_devices).
+  GpuStart& start(const std::string& device, bool hardware_only, uint64_t expected_points, bool tiled = false,
+                  unsigned copy = 0);
   // GpuStart::leave_for_exit for each.
   void leave_for_exit();
   // GpuStart::close_in_background for each.
@@ -115,7 +117,7 @@ class GpuStarts {
 
  private:
   std::mutex mutex_;
-  std::map<std::pair<std::string, bool>, std::unique_ptr<GpuStart>> starts_;
+  std::map<std::tuple<std::string, bool, unsigned>, std::unique_ptr<GpuStart>> starts_;
 };
 
 }  // namespace cdtgpu

@@ -70,6 +70,9 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
   j->add_option("--stats-dir", batch.stats_dir, "also write each job's stats JSON as DIR/LINE.json");
   j->add_option("--backend", batch.defaults.backend, "auto, gpu or cgal for every job whose line has no --backend")
       ->check(CLI::IsMember({"auto", "gpu", "cgal"}));
+  j->add_option("--devices", batch.devices,
+                "GPUs that run the jobs' device stages, a worker each: all, or indices as `cdtgpu devices` lists "
+                "them (an index twice: two workers there); default: one, the device --device or a single run picks");
 
   BenchOptions bench;
   auto* b = app.add_subcommand("bench", "time the paper's workloads with CGAL and the GPU; print the tables");
@@ -114,6 +117,10 @@ int run_cli(int argc, char** argv, const MpiSession& mpi) {
     }
     if (*j) {
       batch.defaults.device = device;
+      if (!device.empty() && !batch.devices.empty()) {
+        spdlog::error("batch: --device names the one device for every job; --devices, its workers: not both");
+        return 2;
+      }
       return run_batch(batch);
     }
     if (*b) {

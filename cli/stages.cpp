@@ -609,6 +609,11 @@ void choose_backend(Job& job, GpuStarts& gpus) {
   }
 }
 
+GpuStart& gpu_start_on(Job& job, GpuStarts& gpus, const std::string& device, unsigned copy) {
+  const uint64_t n = estimated_points(job);
+  return gpus.start(device, hardware_only(job.options), n, tiled_on_any_device(n, job.options.max_tile_points), copy);
+}
+
 namespace {
 // A tiled run's devices (tile_devices) and their staging for tiles of n points, on a started device: rank 0's
 // before prepare (open_tiles_early), an MPI worker's before it serves (serve_tiles).

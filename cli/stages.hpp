@@ -36,6 +36,9 @@ void read_job(Job& job);
 // The host memory the job may hold at its peak, from the files' sizes (cli/memory.hpp's bytes a point).
 uint64_t estimated_peak_bytes(Job& job);
 void choose_backend(Job& job, GpuStarts& gpus);
+// The start a job's device stages take on another device (a batch's device worker, cli/batch_devices): asked for
+// with the job's own rule and size from its files, started now if it was not. `copy`: GpuStarts::start's.
+GpuStart& gpu_start_on(Job& job, GpuStarts& gpus, const std::string& device, unsigned copy);
 // A large GPU run's tile devices and their staging, begun before prepare (not in a batch).
 void open_tiles_early(Job& job);
 // mesh_file_ahead (a single run): begin_mesh_file as soon as the vertices are merged, before prepare makes,

@@ -350,3 +350,48 @@ TEST_F(Batch, ManyJobsWantTheGpuForSmallerInputs) {
     }
   }
 }
+
+// Device workers (--devices): two on the one device there is (lavapipe in CI) take the GPU jobs as they come,
+// each its own Vulkan device, and every job still writes its single run's bytes (two writers, any order); a
+// job naming its own --device shares that device's start with a worker, one job at a time. A bad index, or
+// --devices beside --device, is refused before any job runs.
+TEST_F(Batch, DeviceWorkersGiveEachJobItsSingleRunsBytes) {
+  write_inputs();
+  const std::string terrain = q("dem.csv") + " " + q("lines.wkt");
+  ASSERT_EQ(run("triangulate " + terrain + " --backend gpu -q -o " + q("single.ply")).code, 0);
+  ASSERT_EQ(run("triangulate " + terrain + " --backend gpu -q --grid-out " + q("single.asc") +
+                " --cell 2.5 -o " + q("single-grid.ply"))
+                .code,
+            0);
+  std::vector<std::string> lines;
+  for (int k = 0; k < 8; ++k) {
+    const std::string n = std::to_string(k);
+    if (k % 3 == 2)
+      lines.push_back(terrain + " --backend gpu --grid-out " + q("g" + n + ".asc") + " --cell 2.5 -o " +
+                      q("g" + n + ".ply") + (k == 5 ? " --device 0" : ""));
+    else
+      lines.push_back(terrain + " --backend gpu -o " + q("m" + n + ".ply"));
+  }
+  write_jobs("jobs.txt", lines);
+  Result r = run("batch " + q("jobs.txt") + " --devices 0,0 -v");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("batch: 2 device workers: 1 on device 0"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("device stages on worker 1 of 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("device stages on worker 2 of 2"), std::string::npos) << r.err;
+  for (int k = 0; k < 8; ++k) {
+    const std::string n = std::to_string(k);
+    if (k % 3 == 2) {
+      EXPECT_TRUE(slurp(path("g" + n + ".ply")) == slurp(path("single-grid.ply"))) << k;
+      EXPECT_TRUE(slurp(path("g" + n + ".asc")) == slurp(path("single.asc"))) << k;
+    } else {
+      EXPECT_TRUE(slurp(path("m" + n + ".ply")) == slurp(path("single.ply"))) << k;
+    }
+    EXPECT_NE(r.err.find("line " + std::to_string(k + 1) + ": ok, "), std::string::npos) << k << "\n" << r.err;
+  }
+  Result bad = run("batch " + q("jobs.txt") + " --devices 0,7");
+  EXPECT_EQ(bad.code, 3) << bad.err;
+  EXPECT_NE(bad.err.find("device index 7 out of range"), std::string::npos) << bad.err;
+  Result both = run("--device 0 batch " + q("jobs.txt") + " --devices 0");
+  EXPECT_EQ(both.code, 2) << both.err;
+  EXPECT_NE(both.err.find("not both"), std::string::npos) << both.err;
+}
