@@ -314,6 +314,7 @@ int run_batch(const BatchOptions& options) {
         read_job(job);
         choose_backend(job, gpus);
         prepare_job(job);
+        resolve_early(job);
       });
       to_device.push(std::move(b));
     }

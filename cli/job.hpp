@@ -12,6 +12,7 @@
 #include "core/input_parts.hpp"
 #include "core/prepare.hpp"
 #include "core/projection.hpp"
+#include "core/resolve.hpp"
 #include "core/raster.hpp"
 #include "core/tile_workers.hpp"
 #include "core/tiles.hpp"
@@ -91,6 +92,10 @@ struct Job {
   std::string backend_reason;
   GpuStart* start = nullptr;  // the GPU's start, once asked for
   bool tiles_ahead = false;   // open_tiles_early began the tiles' devices and staging on it
+
+  // resolve_early (a batch's GPU jobs): the constraints resolved in the reader's stage, for triangulate_job
+  std::optional<ResolvedInput> resolved_early;
+  double resolved_early_ms = 0;
 
   // triangulate_job (gpu: the device ran it; the raster and contour passes then run there too)
   CdtResult result;

@@ -609,6 +609,13 @@ void choose_backend(Job& job, GpuStarts& gpus) {
   }
 }
 
+void resolve_early(Job& job) {
+  if (!job.want_gpu || tiled_on_any_device(job.prepared.vertices.size(), job.options.max_tile_points)) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  job.resolved_early = resolve_constraints(job.prepared);
+  job.resolved_early_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
 GpuStart& gpu_start_on(Job& job, GpuStarts& gpus, const std::string& device, unsigned copy) {
   const uint64_t n = estimated_points(job);
   return gpus.start(device, hardware_only(job.options), n, tiled_on_any_device(n, job.options.max_tile_points), copy);
@@ -746,7 +753,14 @@ void triangulate_job(Job& job) {
   // Declared after what its task reads: a throw before get() waits for the task before those go. Tiles that
   // check themselves: run only if one has something to split (or the device fails them).
   std::future<ResolvedInput> resolving;
-  if (job.want_gpu)
+  if (job.want_gpu && job.resolved_early) {
+    resolve_ms = job.resolved_early_ms;
+    resolving = std::async(std::launch::deferred, [&] {
+      ResolvedInput r = std::move(*job.resolved_early);
+      job.resolved_early.reset();
+      return r;
+    });
+  } else if (job.want_gpu) {
     resolving = std::async(ahead ? std::launch::deferred : std::launch::async, [&] {
       const auto t0 = std::chrono::steady_clock::now();
       // Tiles that found something to split read the prepared input no more: where no later stage does, the
@@ -757,6 +771,7 @@ void triangulate_job(Job& job) {
       resolve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       return r;
     });
+  }
   job.result = timed(job, "triangulate", [&] {
     if (job.want_gpu) {
       timed(job, "triangulate: gpu start wait", [&] {

@@ -48,6 +48,10 @@ void open_tiles_early(Job& job);
 void prepare_job(Job& job, bool mesh_file_ahead = false);
 // An MPI rank other than 0 (cli/mpi.hpp): reads its share for rank 0, then runs the tiles rank 0 hands it.
 void serve_tiles(Job& job);
+// A batch's GPU job in one piece: its constraints resolved now, in the reader's stage, beside the device stages of
+// the jobs before it (a single run resolves beside the device's start and Delaunay build instead, and
+// triangulate_job takes either). Nothing for a CPU job or a tiled one (whose tiles check themselves).
+void resolve_early(Job& job);
 // The output's vertex section written on a thread of its own from the prepared vertices (io/mesh_file_ahead),
 // where they will be the mesh's: OBJ and PLY files of a run without boundaries, holes or --max-edge. The
 // write stage adds the faces, or writes the whole file where the run added vertices (crossings). Not in a batch,
