@@ -388,6 +388,10 @@ TEST_F(Batch, DeviceWorkersGiveEachJobItsSingleRunsBytes) {
     }
     EXPECT_NE(r.err.find("line " + std::to_string(k + 1) + ": ok, "), std::string::npos) << k << "\n" << r.err;
   }
+  // `all`: every hardware GPU, or the one device there is (lavapipe: one worker, no list of workers).
+  Result all = run("batch " + q("jobs.txt") + " --devices all");
+  ASSERT_EQ(all.code, 0) << all.err;
+  EXPECT_TRUE(slurp(path("m0.ply")) == slurp(path("single.ply")));
   Result bad = run("batch " + q("jobs.txt") + " --devices 0,7");
   EXPECT_EQ(bad.code, 3) << bad.err;
   EXPECT_NE(bad.err.find("device index 7 out of range"), std::string::npos) << bad.err;
