@@ -80,9 +80,11 @@ void prefix_sums(Array& first, size_t grain = kParallelGrain) {
 }
 
 // Items 0 .. m - 1 grouped by key(i) < buckets: group b is items[first[b] .. first[b + 1]), ascending (the
-// order a serial counting sort gives, whatever order the cores scattered them in).
+// order a serial counting sort gives, whatever order the cores scattered them in); in the order the cores
+// scattered them where `ascending` is false (for callers that sort or search a group by something else).
 template <class Key>
-void group(size_t m, size_t buckets, Key&& key, RawVector<uint32_t>& first, RawVector<uint32_t>& items) {
+void group(size_t m, size_t buckets, Key&& key, RawVector<uint32_t>& first, RawVector<uint32_t>& items,
+           bool ascending = true) {
   first.resize(buckets + 1);
   each(buckets + 1, [&](size_t b) { first[b] = 0; });
   each(m, [&](size_t i) { shared(first[key(i) + 1]).fetch_add(1, std::memory_order_relaxed); });
@@ -91,7 +93,7 @@ void group(size_t m, size_t buckets, Key&& key, RawVector<uint32_t>& first, RawV
   each(buckets, [&](size_t b) { cursor[b] = first[b]; });
   items.resize(m);
   each(m, [&](size_t i) { items[shared(cursor[key(i)]).fetch_add(1, std::memory_order_relaxed)] = uint32_t(i); });
-  each(buckets, [&](size_t b) { std::sort(items.begin() + first[b], items.begin() + first[b + 1]); });
+  if (ascending) each(buckets, [&](size_t b) { std::sort(items.begin() + first[b], items.begin() + first[b + 1]); });
 }
 
 }  // namespace cdtgpu

@@ -189,9 +189,11 @@ Triangles outside_final(const Triangles& m, uint32_t V, const std::vector<Edge>&
   steps.add("adjacency");
   // sides[from[v] .. from[v + 1]): the border edges whose smaller end is v, as (larger end) << 1 | forward, where
   // forward says the final side is left of (smaller, larger).
-  // Grouped on all cores (on one it was serial work after the tiles, as long as the border).
+  // Grouped on all cores (on one it was serial work after the tiles, as long as the border), a vertex's entries
+  // in any order, which the lookup does not mind (an edge is listed once).
   RawVector<uint32_t> from, listed;
-  group(border.size(), V, [&](size_t i) { return std::min(border[i][0], border[i][1]); }, from, listed);
+  group(border.size(), V, [&](size_t i) { return std::min(border[i][0], border[i][1]); }, from, listed,
+        /*ascending=*/false);
   BigArray<uint64_t> sides(border.size());
   each(border.size(), [&](size_t k) {
     const Edge& b = border[listed[k]];

@@ -498,7 +498,7 @@ MergeJob merge_job(const Points& v, const std::vector<Edge>& segments, const std
   };
   RawVector<uint32_t> extra_from, extra;
   auto smaller = [&](size_t k) { return std::min(extra_edge(k)[0], extra_edge(k)[1]); };
-  group(extras, ids.size(), smaller, extra_from, extra);
+  group(extras, ids.size(), smaller, extra_from, extra, /*ascending=*/false);  // sorted by larger end below
   each(extras, [&](size_t j) { extra[j] = std::max(extra_edge(extra[j])[0], extra_edge(extra[j])[1]); });
   each(ids.size(), [&](size_t i) { std::sort(extra.begin() + extra_from[i], extra.begin() + extra_from[i + 1]); });
   steps.add("border and pieces");

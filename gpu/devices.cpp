@@ -10,7 +10,7 @@
 namespace cdtgpu::gpu {
 
 std::vector<size_t> select_devices(const std::vector<DeviceInfo>& devices, const std::string& spec,
-                                   const std::string& single) {
+                                   const std::string& single, bool repeats) {
   if (spec.empty()) return {pick_device(devices, single)};
   std::vector<size_t> picked;
   if (spec == "all") {
@@ -27,7 +27,7 @@ std::vector<size_t> select_devices(const std::vector<DeviceInfo>& devices, const
       throw DeviceError("--devices takes all or device indices separated by commas (as `cdtgpu devices` lists "
                         "them), not '" + spec + "'");
     const size_t i = pick_device(devices, item);  // range and features checked, with its message
-    if (std::find(picked.begin(), picked.end(), i) != picked.end())
+    if (!repeats && std::find(picked.begin(), picked.end(), i) != picked.end())
       throw DeviceError("--devices names device " + item + " twice");
     picked.push_back(i);
   }

@@ -17,9 +17,9 @@ namespace cdtgpu::gpu {
 
 // Indices into `devices`, ascending. `spec`: "all", a comma-separated list of indices, or "" for the one
 // pick_device(devices, single) picks. Throws DeviceError naming what is wrong (an index out of range, a
-// device that lacks a feature, a repeated index, none usable).
+// device that lacks a feature, a repeated index unless `repeats` (a batch's two workers on one GPU), none usable).
 std::vector<size_t> select_devices(const std::vector<DeviceInfo>& devices, const std::string& spec,
-                                   const std::string& single = "");
+                                   const std::string& single = "", bool repeats = false);
 
 // A context on each device, created on threads of their own (each start is ~150 ms of driver work).
 // `options.device` is ignored. A failure names the device.
