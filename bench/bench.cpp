@@ -345,6 +345,9 @@ void add_bench_options(CLI::App* cmd, BenchOptions& o) {
                   "tiles: a GPU tiled row for each of these ramps, the first and the last slab cut into this many "
                   "(0 or 1: none; without the option, cdtgpu triangulate's: 2 for tiles of 100M points or more on a GPU)")
       ->delimiter(',');
+  cmd->add_flag("--in-runs", o.in_runs,
+                "tiles: GPU tiled rows leave the canonical order in the tiles' runs, as cdtgpu triangulate does for "
+                "a mesh it only writes (gathered into one array untimed, for the comparison)");
   cmd->add_option("--devices", o.devices,
                   "tiles: also GPU tiled rows on several devices, 2, 4, ... up to all of these (all, or indices "
                   "0,1,... as `cdtgpu devices` lists them)");

@@ -59,6 +59,7 @@ struct BenchOptions {
   bool points_only = false;           // no constraint segments: the Delaunay triangulation tiled
   unsigned tiles_in_flight = 2;        // GPU tiles worked on at once, per device
   std::vector<unsigned> tile_ramps;    // GPU tiles: a row for each TileOptions::ramp (empty: none)
+  bool in_runs = false;                // GPU tiles: the order left in the tiles' runs (TileOptions::in_runs)
   std::string devices;                // "all" or "0,1": GPU tiled rows on 2, 4, ... of these devices too (issue 29)
   // Every table: no CGAL run (and so no comparison) for inputs of more points than this; CGAL takes minutes there.
   uint64_t cgal_max_points = 10000000;

@@ -80,7 +80,7 @@ Row time_row(const std::string& mode, const std::string& backend, int runs, F&& 
 
 void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangulator& tri, Row& out,
                 unsigned in_flight = 0, const TileFinalizer& finalize = {},
-                const std::function<void(uint64_t)>& reserve = {}, unsigned ramp = 0) {
+                const std::function<void(uint64_t)>& reserve = {}, unsigned ramp = 0, bool in_runs = false) {
   const auto t = Clock::now();
   // As cdtgpu triangulate does: the tiles' staging (and the devices' warm-up) begun before the resolve.
   if (reserve) reserve(tile_staging_points(p.vertices.size(), tile_points));
@@ -90,9 +90,10 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
   opt.finalize = finalize;
   opt.reserve = reserve;
   opt.ramp = ramp;
+  opt.in_runs = in_runs;
   out.tile_points = tile_points;
   if (finalize) {  // a device's tiles check themselves, no resolve unless one has something (core/tiles_ahead.hpp)
-    std::optional<Triangles> checked = tiled_cdt_unresolved(p, opt, tri, &out.tiles);
+    std::optional<OrderedRuns> checked = tiled_cdt_unresolved(p, opt, tri, &out.tiles);
     if (checked) {
       // The mesh's vertices: cdtgpu triangulate moves the prepared ones; `p` serves every run here, so they are
       // copied, untimed. Copied beside the tiles, they took the host's memory from the first tile's gather and
@@ -101,14 +102,17 @@ void tiled_once(const PreparedInput& p, uint64_t tile_points, const TileTriangul
       out.resolve_ms.push_back(0);
       resize_unwritten(out.mesh.vertices, p.vertices.size());
       copy_on_all_cores(p.vertices.data(), p.vertices.size(), out.mesh.vertices.data());
-      out.mesh.triangles = std::move(*checked);
+      out.mesh.triangles = std::move(*checked).take();
       return;
     }
     out.tiles = TileStats{};
   }
   ResolvedInput in = resolve_constraints(p);
   out.resolve_ms.push_back(ms_since(t));
-  out.mesh = triangulate_tiled(std::move(in), opt, tri, &out.tiles).mesh;
+  CdtResult r = triangulate_tiled(std::move(in), opt, tri, &out.tiles);
+  out.timed_ms = ms_since(t);
+  gather_triangles(r);
+  out.mesh = std::move(r.mesh);
 }
 
 // Above kDtEdgesMaxPoints the Delaunay-edge constraints (a CGAL triangulation of half the points, minutes at
@@ -140,7 +144,8 @@ int run_tiles(const BenchOptions& o) {
   std::printf(
       "workload: uniform points + a quarter as many Delaunay-edge constraints (seed %llu), in process; "
       "median of %d runs (single CPU run: %d) after 1 warm-up (none for 1 run); total = resolve + tiles + "
-      "merge + canonical order (GPU tiled rows: their tiles check themselves, no resolve unless one finds a "
+      "merge + canonical order (with --in-runs, GPU tiled rows: the order's spans, the triangles left in the "
+      "tiles' runs as cdtgpu triangulate leaves them for a mesh it only writes; GPU tiled rows: their tiles check themselves, no resolve unless one finds a "
       "constraint to split, core/tiles_ahead.hpp; "
       "single runs: the whole backend call); same = the mesh equals the first single run's\n\n",
       static_cast<unsigned long long>(o.seed), o.runs, cgal_runs);
@@ -229,7 +234,7 @@ int run_tiles(const BenchOptions& o) {
         keep(time_row("tiled", backend, o.runs, [&](Row& r) {
           sum = gpu::GpuCdtStats{};
           tiled_once(p, gpu_tile, tri.triangulate, r, unsigned(o.tiles_in_flight * users.size()), tri.finalize,
-                     tri.reserve, ramp);
+                     tri.reserve, ramp, o.in_runs);
         }));
         std::string parts;
         for (const auto& [name, ms] : sum.wall_ms) parts += " " + name + " " + fmt(ms);

@@ -82,6 +82,8 @@ std::string gpu_refused(const gpu::DeviceError& e) {
 // finalize: the tiles' own (the GPU's, core/tiles.hpp); empty: the host's test.
 // Under MPI the other ranks take tiles too, as devices of this process do (core/tile_workers.hpp): the GPU's
 // tiles (a finalizer given) at ranks with a GPU, the host's at every rank.
+bool mesh_only_written(const Job& job);
+
 TileOptions tile_options(const Job& job, uint64_t tile_points, unsigned in_flight, TileFinalizer finalize,
                          std::function<void(uint64_t)> reserve) {
   TileOptions opt;
@@ -89,6 +91,7 @@ TileOptions tile_options(const Job& job, uint64_t tile_points, unsigned in_fligh
   opt.reserve = std::move(reserve);
   opt.max_tile_points = tile_points;
   opt.tiles_in_flight = in_flight;
+  opt.in_runs = mesh_only_written(job);
   const RankTiles* ranks = job.options.ranks;
   if (!ranks || ranks->rank != 0) return opt;
   const bool gpu = bool(opt.finalize);
@@ -184,6 +187,15 @@ bool has_region_inputs(const Job& job) {
 // --max-edge) and the preview's constraint lines.
 bool prepared_read_later(const Job& job) {
   return job.options.max_edge > 0 || !job.options.preview.empty() || has_region_inputs(job);
+}
+
+// Whether the mesh's triangles go only to its file (OBJ or PLY) and its counts: no regions or --max-edge, grids,
+// contours, preview or --tiles-out read them whole. Such a tiled run leaves them in its tiles' runs
+// (TileOptions::in_runs), and the writer reads them there: no copy into one array (24 GB at 1B points).
+bool mesh_only_written(const Job& job) {
+  const TriangulateOptions& o = job.options;
+  return vertices_first(job.write) && !prepared_read_later(job) && o.grid_out.empty() && o.contours_out.empty() &&
+         o.tiles_out.empty();
 }
 
 // The prepared vertices' storage about to be freed, or handed to a stage that may free it: a mesh file begun
@@ -412,14 +424,17 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
                 tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
             opt.ramp = ramp;
             TileStats ts;
-            std::optional<Triangles> t = timed(job, "triangulate: tiles and merge", [&] {
+            std::optional<OrderedRuns> t = timed(job, "triangulate: tiles and merge", [&] {
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
             });
             if (t) {  // no resolve ran: the prepared vertices are the resolved ones (tiles split segments at them)
               CdtResult r;  // their storage moved (not freed: a mesh file may be begun from it)
               r.mesh.vertices = prepared_read_later(job) ? job.prepared.vertices : std::move(job.prepared.vertices);
               drop_prepared(job);
-              r.mesh.triangles = std::move(*t);
+              if (opt.in_runs)
+                r.in_runs = std::move(*t);
+              else
+                r.mesh.triangles = std::move(*t).take();
               record_tiles(job, ts, tile_here);
               stats.counts["constraint_splits_at_vertices"] = ts.split_at_vertices;
               stats.counts["gpu_tile_retries"] = retries;
@@ -802,6 +817,7 @@ void triangulate_job(Job& job) {
 }
 
 void apply_job_regions(Job& job) {
+  if (!mesh_only_written(job)) gather_triangles(job.result);  // in one array where the regions read them
   const RegionRules rules = region_rules(job.in, job.parts, job.prepared, job.options.max_edge);
   if (const OpenEnds open = open_region_ends(job.prepared, rules); open.count)
     spdlog::warn("{}: their regions leak (docs/rules.md, \"Regions\")", open_ends_text(job.prepared, open));
@@ -812,7 +828,7 @@ void apply_job_regions(Job& job) {
   job.stats.counts["triangles_outside_regions"] = rs.triangles_outside;
   job.stats.counts["triangles_trimmed"] = rs.triangles_trimmed;
   job.stats.counts["vertices_outside_regions"] = rs.vertices_removed;
-  if (job.result.mesh.triangles.empty())
+  if (job.result.mesh.triangles.empty() && job.result.in_runs.empty())
     spdlog::warn(rs.triangles_outside || rs.triangles_trimmed
                      ? "no triangles: boundaries, holes and --max-edge dropped them all"
                      : "no triangles: fewer than 3 distinct points, or all points collinear");
@@ -822,6 +838,7 @@ void apply_job_regions(Job& job) {
 // device's part ends here (its buffers are freed), so that a batch writes this job while the next one runs there.
 void derive_outputs(Job& job) {
   const TriangulateOptions& options = job.options;
+  if (!mesh_only_written(job)) gather_triangles(job.result);
   const Mesh& mesh = job.result.mesh;
   std::optional<gpu::DeviceTin> tin;  // the final mesh on the device, uploaded once for all of them
   auto device_tin = [&]() -> const gpu::DeviceTin& {
@@ -873,9 +890,16 @@ uint64_t write_mesh_files(const Job& job) {
   const TriangulateOptions& options = job.options;
   // A file begun ahead is finished where the mesh has the prepared vertices: the run added none (prepare's
   // vertices are canonical, a resolve only adds Steiner vertices) and dropped none (no regions, begin_mesh_file).
-  const bool ahead = job.mesh_ahead && job.mesh_ahead->finish(job.result.mesh, job.result.steiner_points == 0);
-  if (!options.output.empty() && !ahead)
-    write_mesh_file(job.result.mesh, crs_for(job, options.output), job.write, options.output);
+  const CdtResult& r = job.result;
+  const TriangleSpans one(r.mesh.triangles);
+  const TriangleSpans& triangles = r.in_runs.empty() ? one : r.in_runs.spans();  // mesh_only_written
+  const bool ahead = job.mesh_ahead && job.mesh_ahead->finish(r.mesh.vertices.size(), triangles, r.steiner_points == 0);
+  if (!options.output.empty() && !ahead) {
+    if (r.in_runs.empty())
+      write_mesh_file(r.mesh, crs_for(job, options.output), job.write, options.output);
+    else
+      write_mesh_file(r.mesh.vertices, triangles, crs_for(job, options.output), job.write, options.output);
+  }
   if (options.tiles_out.empty()) return 0;
   // Pieces as large as the run's tiles, else a million points a file.
   const uint64_t piece = options.max_tile_points > 0 ? uint64_t(options.max_tile_points) : 1'000'000;
@@ -916,6 +940,7 @@ void derive_and_write_outputs(Job& job, const std::function<void()>& device_done
   // The mesh is final: it is written while the grid, contours and preview are made from it. A grid the
   // options cannot make is a usage error before anything is written; a later failure of either side leaves
   // the other's files whole (each is written atomically), as a failing grid write always did.
+  gather_triangles(job.result);  // derive_outputs reads them beside the mesh's write
   if (!options.grid_out.empty()) grid_for(job.result.mesh, options.cell);
   double mesh_ms = 0;
   std::future<uint64_t> mesh = std::async(std::launch::async, [&] {
@@ -948,10 +973,10 @@ void count_results(Job& job) {
   if (job.mesh_ahead)
     job.stats.stage_ms.emplace_back("write: mesh vertices, begun ahead (own thread)", job.mesh_ahead->vertices_ms());
   c["vertices"] = result.mesh.vertices.size();
-  c["triangles"] = result.mesh.triangles.size();
+  c["triangles"] = result.mesh.triangles.size() + result.in_runs.size();
   job.stats.peak_host_bytes = peak_host_bytes();  // the process's: in a batch, the largest job's so far
   spdlog::info("{} vertices, {} triangles ({} constraints, {} Steiner points)", result.mesh.vertices.size(),
-               result.mesh.triangles.size(), c["constraints"].get<uint64_t>(), result.steiner_points);
+               c["triangles"].get<uint64_t>(), c["constraints"].get<uint64_t>(), result.steiner_points);
   if (job.gpu) {
     // Both are the process's totals: in a batch, every job's so far.
     job.stats.stage_ms.emplace_back("triangulate: pipeline waits", gpu::pipeline_wait_ms());

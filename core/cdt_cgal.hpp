@@ -2,13 +2,24 @@
 #pragma once
 #include "core/model.hpp"
 #include "core/prepare.hpp"
+#include "core/triangle_spans.hpp"
 
 namespace cdtgpu {
 
 struct CdtResult {
   Mesh mesh;                  // canonical order
+  // Instead of mesh.triangles (then empty), where the caller asked a tiled run for them so
+  // (TileOptions::in_runs): the canonical order left in the tiles' runs, for a writer. gather_triangles() makes
+  // them mesh.triangles.
+  OrderedRuns in_runs;
   uint64_t steiner_points = 0;  // vertices created where constraints cross
 };
+
+// mesh.triangles from in_runs, where they are there.
+inline void gather_triangles(CdtResult& r) {
+  if (!r.in_runs.empty()) r.mesh.triangles = std::move(r.in_runs).take();
+  r.in_runs = OrderedRuns();
+}
 
 // CDT of prepared.vertices with every constraint segment, by the rules of docs/rules.md: constraints through
 // other vertices are split there; crossing constraints get a Steiner vertex at the crossing (exact intersection,

@@ -72,40 +72,105 @@ void RunMerge::make_room(size_t triangles, unsigned threads) {
   });
 }
 
-Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
-  const auto t0 = std::chrono::steady_clock::now();
-  auto ms_from = [](auto t) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-  };
-  const size_t r_count = runs.size();
+namespace {
+
+// Chunks of the runs' order between splitters: every step-th triangle of every run (about 16384 in all, at least
+// 4096 triangles apart), sorted; chunk c holds what lies from splitter c - 1 up to splitter c, and begins in run r
+// at at[c * runs + r] and in the order at start[c].
+// Small chunks: a chunk where three runs meet (a slab's and its neighbour's, with the merge's between them)
+// is one core's, and at 4096 chunks (500K triangles each, then sorted) those took the order from ~0.7
+// to 1.25 s at 1B points on 4 devices. Not smaller: 2M points in 8 square tiles on 2 cores, chunks of 256
+// triangles took 32 ms, of 4096 26 ms (the buckets before: 16).
+struct Chunks {
+  size_t count = 0, runs = 0;
+  std::vector<size_t> at, start;
+  // Run r's part of chunk c.
+  std::span<const Triangle> piece(const std::vector<Triangles>& runs_of, size_t c, size_t r) const {
+    return {runs_of[r].data() + at[c * runs + r], at[(c + 1) * runs + r] - at[c * runs + r]};
+  }
+};
+
+Chunks chunks_of(const std::vector<Triangles>& runs) {
+  Chunks k;
+  const size_t r_count = k.runs = runs.size();
   size_t total = 0;
   for (const Triangles& run : runs) total += run.size();
-  // Splitters: every step-th triangle of every run (about 16384 in all, at least 4096 triangles apart),
-  // sorted; chunk c holds what lies from splitter c - 1 up to splitter c, and begins in run r at at[c][r].
-  // Small chunks: a chunk where three runs meet (a slab's and its neighbour's, with the merge's between them)
-  // is one core's, and at 4096 chunks (500K triangles each, then sorted) those took the order from ~0.7
-  // to 1.25 s at 1B points on 4 devices. Not smaller: 2M points in 8 square tiles on 2 cores, chunks of 256
-  // triangles took 32 ms, of 4096 26 ms (the buckets before: 16).
   const size_t step = std::max<size_t>(4096, total / 16384);
   std::vector<Triangle> cut;
   for (const Triangles& run : runs)
     for (size_t i = step; i < run.size(); i += step) cut.push_back(run[i]);
   std::sort(cut.begin(), cut.end());
   cut.erase(std::unique(cut.begin(), cut.end()), cut.end());
-  const size_t chunks = cut.size() + 1;
-  std::vector<size_t> at((chunks + 1) * r_count, 0), start(chunks + 1, 0);
-  for (size_t r = 0; r < r_count; ++r) at[chunks * r_count + r] = runs[r].size();
+  const size_t chunks = k.count = cut.size() + 1;
+  k.at.assign((chunks + 1) * r_count, 0);
+  k.start.assign(chunks + 1, 0);
+  for (size_t r = 0; r < r_count; ++r) k.at[chunks * r_count + r] = runs[r].size();
   tbb::parallel_for(size_t(1), chunks, [&](size_t c) {
     for (size_t r = 0; r < r_count; ++r) {
       const Triangles& run = runs[r];
       const Triangle& x = cut[c - 1];  // most runs lie wholly on one side of it
-      at[c * r_count + r] = run.empty() || !(run.front() < x) ? 0
-                            : run.back() < x                 ? run.size()
-                                : size_t(std::lower_bound(run.begin(), run.end(), x) - run.begin());
+      k.at[c * r_count + r] = run.empty() || !(run.front() < x) ? 0
+                              : run.back() < x                 ? run.size()
+                                  : size_t(std::lower_bound(run.begin(), run.end(), x) - run.begin());
     }
   });
   for (size_t c = 0; c <= chunks; ++c)
-    for (size_t r = 0; r < r_count; ++r) start[c] += at[c * r_count + r];
+    for (size_t r = 0; r < r_count; ++r) k.start[c] += k.at[c * r_count + r];
+  return k;
+}
+
+}  // namespace
+
+OrderedRuns RunMerge::in_place(std::vector<Triangles>&& runs) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Chunks k = chunks_of(runs);
+  // Each chunk's spans: the run whose head is least gives every triangle below the other heads' least at once
+  // (a gallop to it), so a chunk of one run is one span, and the merge's few triangles among a slab's split it
+  // only where they fall.
+  std::vector<std::vector<std::span<const Triangle>>> of(k.count);
+  tbb::parallel_for(size_t(0), k.count, [&](size_t c) {
+    std::vector<std::span<const Triangle>> heads;
+    for (size_t r = 0; r < k.runs; ++r)
+      if (const auto p = k.piece(runs, c, r); !p.empty()) heads.push_back(p);
+    auto& spans = of[c];
+    while (heads.size() > 1) {
+      size_t best = 0;
+      for (size_t h = 1; h < heads.size(); ++h)
+        if (heads[h].front() < heads[best].front()) best = h;
+      const Triangle* next = nullptr;  // the least head of the others
+      for (size_t h = 0; h < heads.size(); ++h)
+        if (h != best && (!next || heads[h].front() < *next)) next = &heads[h].front();
+      const std::span<const Triangle> b = heads[best];
+      size_t hi = 1;  // b[0] < *next: the runs hold every triangle once
+      while (hi < b.size() && b[hi] < *next) hi *= 2;
+      const size_t lo = hi / 2, end = std::min(hi, b.size());
+      const size_t take = size_t(std::lower_bound(b.begin() + lo, b.begin() + end, *next) - b.begin());
+      spans.push_back(b.first(take));
+      heads[best] = b.subspan(take);
+      if (heads[best].empty()) heads.erase(heads.begin() + best);
+    }
+    if (!heads.empty()) spans.push_back(heads[0]);
+  });
+  std::vector<size_t> at(k.count + 1, 0);
+  for (size_t c = 0; c < k.count; ++c) at[c + 1] = at[c] + of[c].size();
+  std::vector<std::span<const Triangle>> spans(at.back());
+  tbb::parallel_for(size_t(0), k.count, [&](size_t c) { std::copy(of[c].begin(), of[c].end(), spans.begin() + at[c]); });
+  spdlog::debug("canonical order, in place: {} spans in {} chunks in {:.0f} ms", spans.size(), k.count,
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+  stop_.store(true);  // no room is needed: its touching stops
+  return OrderedRuns(std::move(runs), TriangleSpans(std::move(spans)));
+}
+
+Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto ms_from = [](auto t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+  };
+  const Chunks k = chunks_of(runs);
+  const size_t r_count = runs.size(), chunks = k.count;
+  const std::vector<size_t>& at = k.at;
+  const std::vector<size_t>& start = k.start;
+  const size_t total = start.back();
   const double split_ms = ms_from(t0);
   Triangles out;
   if (room_made_.valid()) room_made_.get();  // rethrows its allocation's error
@@ -121,10 +186,7 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
     size_t pieces = 0, only = 0;
     for (size_t r = 0; r < r_count; ++r)
       if (at[(c + 1) * r_count + r] > at[c * r_count + r]) ++pieces, only = r;
-    auto piece = [&](size_t r) {
-      return std::span<const Triangle>(runs[r].data() + at[c * r_count + r],
-                                       at[(c + 1) * r_count + r] - at[c * r_count + r]);
-    };
+    auto piece = [&](size_t r) { return k.piece(runs, c, r); };
     if (pieces == 1) {
       const auto p = piece(only);
       std::memcpy(static_cast<void*>(to), p.data(), p.size_bytes());
@@ -139,8 +201,8 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
         if (!piece(r).empty()) heads.push_back(piece(r));
       for (Triangle* next = to; !heads.empty(); ++next) {
         size_t best = 0;
-        for (size_t k = 1; k < heads.size(); ++k)
-          if (heads[k].front() < heads[best].front()) best = k;
+        for (size_t h = 1; h < heads.size(); ++h)
+          if (heads[h].front() < heads[best].front()) best = h;
         *next = heads[best].front();
         heads[best] = heads[best].subspan(1);
         if (heads[best].empty()) heads.erase(heads.begin() + best);

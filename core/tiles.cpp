@@ -550,8 +550,8 @@ std::vector<T> joined(const std::vector<size_t>& order, Piece&& piece) {
 }
 
 // tiled_cdt's triangles in canonical order: each tile's final ones and the merge's, merged by RunMerge
-// (core/tile_merge).
-Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
+// (core/tile_merge), or at the first level with options.in_runs left in the runs.
+OrderedRuns tiled_runs(const Points& v, const std::vector<Edge>& segments,
                                               const TileOptions& options, const TileTriangulator& triangulate,
                                               TileStats& s) {
   const uint64_t n = v.size();
@@ -566,7 +566,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
     s.merge_vertices = n;
     s.merge_segments = segments.size();
     s.merge_triangles = all.size();
-    return all;
+    return OrderedRuns(std::move(all));
   }
   const auto t_tiles = Clock::now();
   // The tiles' staging, allocated beside the plan (if the caller has not yet), again after it if a tile is larger.
@@ -599,9 +599,10 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   std::vector<uint8_t> in_final;
   RunMerge order;
   const uint64_t available = host_memory().available, room_bytes = 2 * n * sizeof(Triangle);
-  const bool room = available / 3 > room_bytes;
+  const bool leave = options.in_runs && level == 1;
+  const bool room = !leave && available / 3 > room_bytes;
   spdlog::debug("tiles, level {}: the output ({:.1f} GB) {} ahead, {:.1f} GB available", level, room_bytes / 1e9,
-                room ? "made" : "not made", available / 1e9);
+                leave ? "left in the tiles' runs, not made" : room ? "made" : "not made", available / 1e9);
   if (room) order.make_room(2 * n, std::thread::hardware_concurrency() / 4);
   const std::shared_future<void> bookkeeping =
       std::async(std::launch::async, [&] { resize_touched(in_final, n); }).share();
@@ -740,7 +741,7 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
       m.ids.size() > options.max_tile_points && double(m.ids.size()) <= options.retile_share * double(n);
   Triangles merged;
   if (again) {
-    merged = tiled_runs(m.vertices, m.segments, options, triangulate, s);
+    merged = tiled_runs(m.vertices, m.segments, options, triangulate, s).take();
   } else {
     const auto t = Clock::now();
     merged = triangulate(m.vertices, m.segments, "merge, level " + std::to_string(level)).triangles;
@@ -760,29 +761,37 @@ Triangles tiled_runs(const Points& v, const std::vector<Edge>& segments,
   s.tiles_ms += keep_ms;
   s.keep_ms += keep_ms;
   const auto t_order = Clock::now();
-  Triangles out = order.merge(runs);
+  OrderedRuns out = leave ? order.in_place(std::move(runs)) : OrderedRuns(order.merge(runs));
   const double order_ms = ms_since(t_order);
   s.order_ms += order_ms;
-  spdlog::debug("tiles, level {}: the merge's triangles kept in {:.0f} ms, canonical order in {:.0f} ms", level,
-                keep_ms, order_ms);
+  spdlog::debug("tiles, level {}: the merge's triangles kept in {:.0f} ms, canonical order {}in {:.0f} ms", level,
+                keep_ms, leave ? "left in the runs " : "", order_ms);
   return out;
 }
 
 }  // namespace
 
+OrderedRuns tiled_cdt_runs(const Points& v, const std::vector<Edge>& segments, const TileOptions& options,
+                           const TileTriangulator& triangulate, TileStats* stats) {
+  TileStats local_stats;
+  return tiled_runs(v, segments, options, triangulate, stats ? *stats : local_stats);
+}
+
 Triangles tiled_cdt(const Points& v, const std::vector<Edge>& segments,
                                 const TileOptions& options, const TileTriangulator& triangulate,
                                 TileStats* stats) {
-  TileStats local_stats;
-  TileStats& s = stats ? *stats : local_stats;
-  return tiled_runs(v, segments, options, triangulate, s);
+  return tiled_cdt_runs(v, segments, options, triangulate, stats).take();
 }
 
 CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options,
                             const TileTriangulator& triangulate, TileStats* stats) {
   CdtResult r;
   r.steiner_points = in.steiner_points;
-  r.mesh.triangles = tiled_cdt(in.vertices, in.constraints, options, triangulate, stats);
+  OrderedRuns t = tiled_cdt_runs(in.vertices, in.constraints, options, triangulate, stats);
+  if (options.in_runs)
+    r.in_runs = std::move(t);
+  else
+    r.mesh.triangles = std::move(t).take();
   r.mesh.vertices =
       std::move(in.vertices);  // sorted and unique already: the triangles are in canonical order
   return r;

@@ -121,6 +121,9 @@ struct TileOptions {
   // Told a first-level tile's vertex count (tile_staging_points) before the plan, and again after it if a tile
   // is larger: a GPU finalizer allocates its pinned staging meanwhile.
   std::function<void(uint64_t vertices)> reserve;
+  // The first level's canonical order left in the tiles' runs (tiled_cdt_runs, CdtResult::in_runs): for a
+  // caller that only writes the mesh, which then reads them in place (RunMerge::in_place).
+  bool in_runs = false;
 };
 
 // CGAL's CDT of the tile (`triangulate`) and the host's final test: what a tile without a finalizer gets, as a
@@ -157,9 +160,13 @@ Triangles tiled_cdt(const Points& vertices, const std::vector<Edge>& segments,
                                 const TileOptions& options, const TileTriangulator& triangulate,
                                 TileStats* stats = nullptr);
 
+// tiled_cdt's triangles, left in the tiles' runs where options.in_runs says so.
+OrderedRuns tiled_cdt_runs(const Points& vertices, const std::vector<Edge>& segments, const TileOptions& options,
+                           const TileTriangulator& triangulate, TileStats* stats = nullptr);
+
 // The whole mesh of a resolved input, canonical: the bytes of triangulate_cgal(prepared) for the prepared
 // input `in` was resolved from. `in` is moved from only once the triangles are made: when the triangulator
-// throws, it is left whole (the CLI's CPU fallback tiles it again).
+// throws, it is left whole (the CLI's CPU fallback tiles it again). options.in_runs: in CdtResult::in_runs.
 CdtResult triangulate_tiled(ResolvedInput&& in, const TileOptions& options,
                             const TileTriangulator& triangulate, TileStats* stats = nullptr);
 

@@ -54,16 +54,16 @@ void MeshFileAhead::free_after_writing(Points&& storage) {
   else storage_ = std::move(storage);
 }
 
-bool MeshFileAhead::finish(const Mesh& mesh, bool same_vertices) {
+bool MeshFileAhead::finish(uint64_t vertices, const TriangleSpans& triangles, bool same_vertices) {
   if (!begun()) return false;
   const uint64_t end = written_.get();  // a failed vertex write throws here
-  const std::string head = mesh_head(crs_, options_, mesh.vertices.size(), mesh.triangles.size());
-  if (!same_vertices || mesh.vertices.size() != vertices_ || head.size() != head_bytes_) {
+  const std::string head = mesh_head(crs_, options_, vertices, triangles.size());
+  if (!same_vertices || vertices != vertices_ || head.size() != head_bytes_) {
     spdlog::debug("{}: the vertices written ahead are not the mesh's; written again", path_);
     file_.reset();
     return false;
   }
-  file_->write_at(end, [&](std::ostream& out) { write_mesh_faces(mesh, options_, out); });
+  file_->write_at(end, [&](std::ostream& out) { write_mesh_faces(triangles, vertices, options_, out); });
   file_->write_at(0, [&](std::ostream& out) { out << head; });
   file_->commit();
   file_.reset();

@@ -5,7 +5,8 @@
 //
 //   MeshFileAhead ahead(path, crs, options, prepared.vertices);  // writing from their storage
 //   ...                                                            // ahead.wait() before it is freed
-//   if (!ahead.finish(mesh, mesh_has_the_prepared_vertices)) write_mesh_file(mesh, crs, options, path);
+//   if (!ahead.finish(mesh.vertices.size(), TriangleSpans(mesh.triangles), mesh_has_the_prepared_vertices))
+//     write_mesh_file(mesh, crs, options, path);
 #pragma once
 #include <cstdint>
 #include <future>
@@ -34,11 +35,11 @@ class MeshFileAhead {
   // The vertices' storage, freed once they are written (on the writing thread) instead of waited for.
   void free_after_writing(Points&& storage);
 
-  // Adds `mesh`'s faces and renames the file into place (with its .prj) when `same_vertices` (the caller's
-  // word that mesh.vertices are the vertices begun with), their count agrees, and PLY's header has the length
+  // Adds the faces of `triangles` and renames the file into place (with its .prj) when `same_vertices` (the
+  // caller's word that the mesh's `vertices` are the ones begun with), their count agrees, and PLY's header has the length
   // that was left for it (the face count was guessed). Otherwise removes the temporary file and returns false:
   // the caller writes the whole file. A failed write throws as write_mesh_file does.
-  bool finish(const Mesh& mesh, bool same_vertices);
+  bool finish(uint64_t vertices, const TriangleSpans& triangles, bool same_vertices);
 
  private:
   std::string path_;

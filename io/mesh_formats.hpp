@@ -37,13 +37,15 @@ Mesh read_2dm(const std::string& path, std::string_view text);
 
 // mesh.triangles[t], after checking its indices: a bad mesh throws part way and the atomic write leaves no
 // file.
-inline const Triangle& checked_triangle(const Mesh& mesh, size_t t) {
-  const Triangle& tri = mesh.triangles[t];
+inline const Triangle& checked_triangle(const Triangle& tri, size_t t, uint64_t vertices) {
   for (uint32_t v : tri)
-    if (v >= mesh.vertices.size())
+    if (v >= vertices)
       throw std::runtime_error("triangle " + std::to_string(t) + " has vertex index " + std::to_string(v) +
-                               " but the mesh has " + std::to_string(mesh.vertices.size()) + " vertices");
+                               " but the mesh has " + std::to_string(vertices) + " vertices");
   return tri;
+}
+inline const Triangle& checked_triangle(const Mesh& mesh, size_t t) {
+  return checked_triangle(mesh.triangles[t], t, mesh.vertices.size());
 }
 
 }  // namespace cdtgpu

@@ -18,17 +18,20 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <span>
 #include <ostream>
 #include <stdexcept>
 #include <string_view>
 
+#include "core/triangle_spans.hpp"
 #include "io/mesh_formats.hpp"
 
 namespace cdtgpu {
 
-// format(i, p) writes item i's text at p (room for max_chars) and returns its end.
-template <class Format>
-void write_items(std::ostream& out, uint64_t n, size_t max_chars, Format&& format) {
+// format_block(first, count, p) writes items [first, first + count)'s text at p (room for max_chars each) and
+// returns its end: for items read in runs (a mesh's faces from core/triangle_spans).
+template <class FormatBlock>
+void write_blocks(std::ostream& out, uint64_t n, size_t max_chars, FormatBlock&& format_block) {
   struct Block {
     uint64_t first = 0, count = 0;
     std::unique_ptr<char[]> text;
@@ -51,9 +54,7 @@ void write_items(std::ostream& out, uint64_t n, size_t max_chars, Format&& forma
           tbb::make_filter<Block*, Block*>(tbb::filter_mode::parallel,
                                            [&](Block* b) {
                                              b->text.reset(new char[b->count * max_chars]);
-                                             char* p = b->text.get();
-                                             for (uint64_t i = b->first; i < b->first + b->count; ++i)
-                                               p = format(i, p);
+                                             char* p = format_block(b->first, b->count, b->text.get());
                                              b->size = size_t(p - b->text.get());
                                              return b;
                                            }) &
@@ -62,6 +63,15 @@ void write_items(std::ostream& out, uint64_t n, size_t max_chars, Format&& forma
             if (out) out.write(b->text.get(), std::streamsize(b->size));
           }));
   if (!out) throw std::runtime_error("write failed");
+}
+
+// format(i, p) writes item i's text at p (room for max_chars) and returns its end.
+template <class Format>
+void write_items(std::ostream& out, uint64_t n, size_t max_chars, Format&& format) {
+  write_blocks(out, n, max_chars, [&](uint64_t first, uint64_t count, char* p) {
+    for (uint64_t i = first; i < first + count; ++i) p = format(i, p);
+    return p;
+  });
 }
 
 inline char* put(char* p, std::string_view s) {
@@ -90,18 +100,27 @@ inline char* put_indices(char* p, const Triangle& tri, uint64_t base) {
 
 // Every triangle's indices checked on all cores before any is written; the first bad one throws
 // checked_triangle's message.
-inline void check_triangles(const Mesh& mesh) {
-  const size_t n = mesh.triangles.size(), V = mesh.vertices.size();
-  const bool valid = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, n), true,
-      [&](const tbb::blocked_range<size_t>& r, bool ok) {
-        for (size_t t = r.begin(); ok && t < r.end(); ++t)
-          for (uint32_t v : mesh.triangles[t]) ok = ok && v < V;
-        return ok;
-      },
+inline void check_triangles(const TriangleSpans& triangles, uint64_t vertices) {
+  const size_t n = triangles.size();
+  auto valid = [&](size_t first, size_t count) {
+    bool ok = true;
+    triangles.each(first, count, [&](std::span<const Triangle> s) {
+      for (const Triangle& t : s) ok = ok && t[0] < vertices && t[1] < vertices && t[2] < vertices;
+    });
+    return ok;
+  };
+  const bool all = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, n, 1 << 16), true,
+      [&](const tbb::blocked_range<size_t>& r, bool ok) { return ok && valid(r.begin(), r.size()); },
       [](bool a, bool b) { return a && b; });
-  if (!valid)
-    for (size_t t = 0; t < n; ++t) checked_triangle(mesh, t);
+  if (all) return;
+  size_t t = 0;
+  triangles.each(0, n, [&](std::span<const Triangle> s) {
+    for (const Triangle& tri : s) checked_triangle(tri, t++, vertices);
+  });
+}
+inline void check_triangles(const Mesh& mesh) {
+  check_triangles(TriangleSpans(mesh.triangles), mesh.vertices.size());
 }
 
 }  // namespace cdtgpu

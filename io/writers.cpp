@@ -111,31 +111,38 @@ void write_mesh_vertices(std::span<const Point3> vertices, const WriteOptions& o
   out.write(reinterpret_cast<const char*>(vertices.data()), std::streamsize(vertices.size() * sizeof(Point3)));
 }
 
-void write_mesh_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& out) {
-  check_triangles(mesh);
-  if (options.format == MeshFormat::Obj)
-    return write_items(out, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
-      return put(put_indices(put(p, "f"), mesh.triangles[t], 1), "\n");  // OBJ counts from 1
+void write_mesh_faces(const TriangleSpans& triangles, uint64_t vertices, const WriteOptions& options,
+                      std::ostream& out) {
+  check_triangles(triangles, vertices);
+  const size_t n = triangles.size();
+  if (options.format == MeshFormat::Obj || options.ascii) {
+    const bool obj = options.format == MeshFormat::Obj;
+    return write_blocks(out, n, 3 * 11 + 2, [&](uint64_t first, uint64_t count, char* p) {
+      triangles.each(first, count, [&](std::span<const Triangle> s) {
+        for (const Triangle& t : s)
+          p = obj ? put(put_indices(put(p, "f"), t, 1), "\n")   // OBJ counts from 1
+                  : put(put_indices(put(p, "3"), t, 0), "\n");
+      });
+      return p;
     });
-  if (options.ascii)
-    return write_items(out, mesh.triangles.size(), 3 * 11 + 2, [&](uint64_t t, char* p) {
-      return put(put_indices(put(p, "3"), mesh.triangles[t], 0), "\n");
-    });
+  }
   // Faces are 13 bytes each (a count byte and three indices), packed on all cores in blocks of 4 MiB reused (a
   // 65 MB array for 5M faces cost more in page faults than its packing), the next block packed while this thread
   // writes the last.
   const auto t0 = std::chrono::steady_clock::now();
-  const size_t n = mesh.triangles.size();
   constexpr size_t kFacesPerBlock = (size_t(4) << 20) / 13;
   std::vector<char> packed(std::min(n, kFacesPerBlock) * 13), next(packed.size());
   auto pack = [&](size_t first, std::vector<char>& to) {
     const size_t count = std::min(kFacesPerBlock, n - first);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 4096), [&](const tbb::blocked_range<size_t>& r) {
-      for (size_t t = r.begin(); t < r.end(); ++t) {
-        char* f = to.data() + t * 13;
-        f[0] = 3;
-        std::memcpy(f + 1, mesh.triangles[first + t].data(), 12);
-      }
+      char* f = to.data() + r.begin() * 13;
+      triangles.each(first + r.begin(), r.size(), [&](std::span<const Triangle> s) {
+        for (const Triangle& t : s) {
+          f[0] = 3;
+          std::memcpy(f + 1, t.data(), 12);
+          f += 13;
+        }
+      });
     });
   };
   if (n) pack(0, packed);
@@ -154,6 +161,10 @@ void write_mesh_faces(const Mesh& mesh, const WriteOptions& options, std::ostrea
   }
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   spdlog::debug("faces: {} packed and written in {:.0f} ms ({:.1f} GB/s)", n, ms, n * 13 / 1e6 / std::max(ms, 1e-3));
+}
+
+void write_mesh_faces(const Mesh& mesh, const WriteOptions& options, std::ostream& out) {
+  write_mesh_faces(TriangleSpans(mesh.triangles), mesh.vertices.size(), options, out);
 }
 
 namespace {
@@ -276,6 +287,18 @@ void write_prj_beside(const std::string& path, const Crs& crs) {
 
 void write_mesh_file(const Mesh& mesh, const Crs& crs, const WriteOptions& options, const std::string& path) {
   write_file_atomically(path, [&](std::ostream& out) { write_mesh(mesh, crs, options, out); });
+  write_prj_beside(path, crs);
+}
+
+void write_mesh_file(const Points& vertices, const TriangleSpans& triangles, const Crs& crs,
+                     const WriteOptions& options, const std::string& path) {
+  if (!vertices_first(options))
+    throw std::logic_error("write_mesh_file: triangles in spans are written as OBJ or PLY only");
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << mesh_head(crs, options, vertices.size(), triangles.size());
+    write_mesh_vertices({vertices.data(), vertices.size()}, options, out);
+    write_mesh_faces(triangles, vertices.size(), options, out);
+  });
   write_prj_beside(path, crs);
 }
 

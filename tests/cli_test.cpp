@@ -758,13 +758,41 @@ TEST_F(Cli, TiledRunsWriteTheUntiledBytes) {
 // The bundled sample (real contours, DEM points and building footprints) tiled: the untiled bytes.
 TEST_F(Cli, TiledSampleIsTheUntiledSample) {
   const std::string s = std::string(CDTGPU_SOURCE_DIR) + "/samples/katoomba/";
-  const std::string in = s + "contours.shp:z=ELEV " + s + "dem.xyz " + s + "buildings.shp:z=min -q --backend cgal";
+  const std::string inputs = s + "contours.shp:z=ELEV " + s + "dem.xyz " + s + "buildings.shp:z=min --backend cgal";
+  const std::string in = inputs + " -q";
   ASSERT_EQ(run("triangulate " + in + " --max-tile-points 0 -o " + path("single.ply")).code, 0);
   Result r = run("triangulate " + in + " --max-tile-points 400 -o " + path("tiled.ply") + " --stats " +
                  path("t.json"));
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(slurp(path("tiled.ply")) == slurp(path("single.ply")));
   EXPECT_GE(nlohmann::json::parse(slurp(path("t.json")))["counts"]["tiles"].get<int>(), 8);
+  // The tiled run only writes its mesh: its triangles are written from the tiles' runs where they lie
+  // (TileOptions::in_runs), in every OBJ and PLY form and to stdout; the counts are the mesh's.
+  struct Form {
+    const char* format;
+    bool to_stdout;
+  };
+  for (const Form f : {Form{"obj", false}, Form{"ply --ascii", false}, Form{"ply", true}}) {
+    std::string log;
+    auto triangulate = [&](const std::string& tiles, const std::string& name) {
+      const std::string file = path(name);
+      const Result got = run("-v triangulate " + inputs + " --max-tile-points " + tiles + " --format " + f.format +
+                                 " --stats " + path(name + ".json") + (f.to_stdout ? " -o -" : " -o " + file),
+                             f.to_stdout ? file : "/dev/null");
+      EXPECT_EQ(got.code, 0) << f.format << ": " << got.err;
+      log = got.err;
+      return slurp(file);
+    };
+    const std::string one = triangulate("0", "one"), tiled = triangulate("400", "tiled");
+    EXPECT_NE(log.find("canonical order left in the runs"), std::string::npos) << f.format << ": " << log;
+    EXPECT_FALSE(tiled.empty()) << f.format;
+    EXPECT_TRUE(tiled == one) << f.format;
+    const auto counts = [&](const char* name) {
+      return nlohmann::json::parse(slurp(path(std::string(name) + ".json")))["counts"];
+    };
+    EXPECT_EQ(counts("tiled")["triangles"], counts("one")["triangles"]) << f.format;
+    EXPECT_GE(counts("tiled")["tiles"].get<int>(), 8) << f.format;
+  }
 }
 
 // The folder of new tiles that a killed run left (`tiles.tmp-<pid>`, nobody holding it) goes when the folder is

@@ -283,11 +283,13 @@ TEST(GpuTiles, TilesOfAnUnresolvedInputCheckThemselves) {
     const CdtResult single = triangulate_cgal(p);
     for (uint64_t tp : {16, 100, 500, 100000}) {
       TileStats ts;
-      const std::optional<Triangles> t = tiled_cdt_unresolved(p, device_tiles(tp, tiles), tiles.triangulate, &ts);
+      TileOptions opt = device_tiles(tp, tiles);
+      opt.in_runs = tp == 100 || tp == 500;  // the order left in the tiles' runs, then gathered
+      std::optional<OrderedRuns> t = tiled_cdt_unresolved(p, opt, tiles.triangulate, &ts);
       const bool one_piece = p.vertices.size() <= tp;
       EXPECT_EQ(t.has_value(), !crosses && !one_piece) << name << ", tiles of " << tp;
       if (t) {
-        EXPECT_TRUE(*t == single.mesh.triangles) << name << ", tiles of " << tp;
+        EXPECT_TRUE(std::move(*t).take() == single.mesh.triangles) << name << ", tiles of " << tp;
         EXPECT_EQ(ts.split_at_vertices, resolved.split_at_vertices) << name << ", tiles of " << tp;
       }
     }
@@ -316,9 +318,9 @@ TEST(GpuTiles, UnresolvedSlabsSeeASegmentAlongTheirCut) {
     in.lines.push_back(tile_layouts::line({{2, y0, 0}, {2, y1, 0}}));
     const PreparedInput p = prepare(in);
     TileStats ts;
-    const std::optional<Triangles> t = tiled_cdt_unresolved(p, device_tiles(100, tiles), tiles.triangulate, &ts);
+    std::optional<OrderedRuns> t = tiled_cdt_unresolved(p, device_tiles(100, tiles), tiles.triangulate, &ts);
     ASSERT_TRUE(t.has_value()) << "a segment through vertices of the " << owner << " slab only";
-    EXPECT_TRUE(*t == triangulate_cgal(p).mesh.triangles) << owner;
+    EXPECT_TRUE(std::move(*t).take() == triangulate_cgal(p).mesh.triangles) << owner;
     EXPECT_EQ(ts.split_at_vertices, 9u) << owner;
   }
 }

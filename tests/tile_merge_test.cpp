@@ -62,6 +62,56 @@ TEST(RunMerge, PutsTileRunsAndTheMergeBackInCanonicalOrder) {
   EXPECT_TRUE(RunMerge().merge(none).empty());
 }
 
+// RunMerge::in_place: the same order as merge, left in the runs: every span inside a run, read back in any
+// range; split only where runs interleave; take() gives the one array and frees the runs.
+TEST(RunMerge, LeavesTheOrderInTheRuns) {
+  InputSet in = uniform_points(30000, 4);
+  add_dt_edge_constraints(in, 5000, 0.5, 4);
+  const CdtResult r = triangulate_cgal(prepare(in));
+  const Triangles& all = r.mesh.triangles;
+  const size_t n = r.mesh.vertices.size(), total = all.size();
+  std::mt19937_64 rng(9);
+  for (size_t tiles : {1, 3, 16})
+    for (bool interleaved : {false, true}) {
+      std::vector<Triangles> runs = split_runs(all, n, tiles, interleaved, rng);
+      std::vector<std::pair<const Triangle*, const Triangle*>> held;
+      for (const Triangles& run : runs) held.emplace_back(run.data(), run.data() + run.size());
+      const size_t merge_run = runs.back().size();
+      OrderedRuns o = RunMerge().in_place(std::move(runs));
+      const std::string what = std::to_string(tiles) + " tiles, interleaved " + std::to_string(interleaved);
+      ASSERT_EQ(o.size(), total) << what;
+      Triangles read;
+      o.spans().each(0, total, [&](std::span<const Triangle> s) {
+        EXPECT_FALSE(s.empty()) << what;
+        EXPECT_TRUE(std::any_of(held.begin(), held.end(), [&](const auto& h) {
+          return s.data() >= h.first && s.data() + s.size() <= h.second;
+        })) << what;
+        read.insert(read.end(), s.begin(), s.end());
+      });
+      EXPECT_EQ(read, all) << what;
+      // Not split triangle by triangle: slabs' runs only where the merge's triangles fall among them.
+      if (!interleaved) {
+        EXPECT_LE(o.spans().span_count(), 2 * merge_run + tiles + 16384) << what;
+      }
+      for (int k = 0; k < 50; ++k) {
+        const size_t first = rng() % total, count = rng() % (total - first + 1);
+        Triangles part;
+        o.spans().each(first, count, [&](std::span<const Triangle> s) { part.insert(part.end(), s.begin(), s.end()); });
+        EXPECT_TRUE(std::equal(part.begin(), part.end(), all.begin() + first, all.begin() + first + count) &&
+                    part.size() == count)
+            << what << ", from " << first << ", " << count;
+      }
+      EXPECT_EQ(std::move(o).take(), all) << what;
+      EXPECT_TRUE(o.empty());
+    }
+  std::vector<Triangles> none(3);
+  EXPECT_TRUE(RunMerge().in_place(std::move(none)).empty());
+  Triangles one = all;
+  const Triangle* storage = one.data();
+  Triangles back = OrderedRuns(std::move(one)).take();
+  EXPECT_EQ(back.data(), storage);  // one run that is all of them: moved, not copied
+}
+
 // Points around (and on) rectangles whose sides are the border: no point strictly inside one, as in a merge.
 struct Holes {
   Points vertices;
