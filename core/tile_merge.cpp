@@ -154,11 +154,21 @@ OrderedRuns RunMerge::in_place(std::vector<Triangles>&& runs) {
   std::vector<size_t> at(k.count + 1, 0);
   for (size_t c = 0; c < k.count; ++c) at[c + 1] = at[c] + of[c].size();
   std::vector<std::span<const Triangle>> spans(at.back());
-  tbb::parallel_for(size_t(0), k.count, [&](size_t c) { std::copy(of[c].begin(), of[c].end(), spans.begin() + at[c]); });
+  std::vector<size_t> place(at.back() + 1);  // each span's first triangle's place in the order
+  place.back() = k.start.back();
+  tbb::parallel_for(size_t(0), k.count, [&](size_t c) {
+    size_t p = k.start[c];
+    for (size_t i = 0; i < of[c].size(); ++i) {
+      spans[at[c] + i] = of[c][i];
+      place[at[c] + i] = p;
+      p += of[c][i].size();
+    }
+    free_storage(of[c]);
+  });
   spdlog::debug("canonical order, in place: {} spans in {} chunks in {:.0f} ms", spans.size(), k.count,
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   stop_.store(true);  // no room is needed: its touching stops
-  return OrderedRuns(std::move(runs), TriangleSpans(std::move(spans)));
+  return OrderedRuns(std::move(runs), TriangleSpans(std::move(spans), std::move(place)));
 }
 
 Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {

@@ -27,6 +27,10 @@ class TriangleSpans {
     at_.reserve(spans_.size() + 1);
     for (const auto& s : spans_) at_.push_back(at_.back() + s.size());
   }
+  // With their places made already (at: spans.size() + 1 of them, from 0), as RunMerge::in_place makes them
+  // on all cores (4.4M spans at 100M points + 25M contour vertices).
+  TriangleSpans(std::vector<std::span<const Triangle>> spans, std::vector<size_t> at)
+      : spans_(std::move(spans)), at_(std::move(at)) {}
 
   size_t size() const { return at_.back(); }
   bool empty() const { return size() == 0; }
