@@ -261,13 +261,21 @@ std::string mesh_head(const Crs& crs, const WriteOptions& options, uint64_t vert
   return options.format == MeshFormat::Obj ? obj_head(crs) : ply_head(crs, options.ascii, vertices, triangles);
 }
 
+namespace {
+
+// OBJ and PLY: their three parts in one go.
+void write_vertices_first(const Points& vertices, const TriangleSpans& triangles, const Crs& crs,
+                          const WriteOptions& options, std::ostream& out) {
+  out << mesh_head(crs, options, vertices.size(), triangles.size());
+  write_mesh_vertices({vertices.data(), vertices.size()}, options, out);
+  write_mesh_faces(triangles, vertices.size(), options, out);
+}
+
+}  // namespace
+
 void write_mesh(const Mesh& mesh, const Crs& crs, const WriteOptions& options, std::ostream& out) {
-  if (vertices_first(options)) {
-    out << mesh_head(crs, options, mesh.vertices.size(), mesh.triangles.size());
-    write_mesh_vertices({mesh.vertices.data(), mesh.vertices.size()}, options, out);
-    write_mesh_faces(mesh, options, out);
-    return;
-  }
+  if (vertices_first(options))
+    return write_vertices_first(mesh.vertices, TriangleSpans(mesh.triangles), crs, options, out);
   Sink sink(out);
   switch (options.format) {
     case MeshFormat::Obj:
@@ -294,11 +302,7 @@ void write_mesh_file(const Points& vertices, const TriangleSpans& triangles, con
                      const WriteOptions& options, const std::string& path) {
   if (!vertices_first(options))
     throw std::logic_error("write_mesh_file: triangles in spans are written as OBJ or PLY only");
-  write_file_atomically(path, [&](std::ostream& out) {
-    out << mesh_head(crs, options, vertices.size(), triangles.size());
-    write_mesh_vertices({vertices.data(), vertices.size()}, options, out);
-    write_mesh_faces(triangles, vertices.size(), options, out);
-  });
+  write_file_atomically(path, [&](std::ostream& out) { write_vertices_first(vertices, triangles, crs, options, out); });
   write_prj_beside(path, crs);
 }
 
