@@ -22,6 +22,7 @@
 #include "core/touched.hpp"
 #include "core/tiles.hpp"
 #include "core/tiles_ahead.hpp"
+#include "core/timing.hpp"
 #include "core/uninit.hpp"
 #include "gpu/cdt_pipeline.hpp"
 #include "gpu/check.hpp"
@@ -628,7 +629,7 @@ void resolve_early(Job& job) {
   if (!job.want_gpu || tiled_on_any_device(job.prepared.vertices.size(), job.options.max_tile_points)) return;
   const auto t0 = std::chrono::steady_clock::now();
   job.resolved_early = resolve_constraints(job.prepared);
-  job.resolved_early_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  job.resolved_early_ms = ms_since(t0);
 }
 
 GpuStart& gpu_start_on(Job& job, GpuStarts& gpus, const std::string& device, unsigned copy) {
@@ -813,11 +814,13 @@ void triangulate_job(Job& job) {
     if (!ahead && cpu_in_one_piece(job, vertices)) return triangulate_cpu(job);
     return triangulate_cpu(job, &in);
   });
+  // The tiles leave the triangles in their runs only for a job whose mesh is only written (tile_options): every
+  // other reader (regions, grids, contours, preview, --tiles-out) gets one array.
+  if (!mesh_only_written(job)) gather_triangles(job.result);
   drop_prepared(job);
 }
 
 void apply_job_regions(Job& job) {
-  if (!mesh_only_written(job)) gather_triangles(job.result);  // in one array where the regions read them
   const RegionRules rules = region_rules(job.in, job.parts, job.prepared, job.options.max_edge);
   if (const OpenEnds open = open_region_ends(job.prepared, rules); open.count)
     spdlog::warn("{}: their regions leak (docs/rules.md, \"Regions\")", open_ends_text(job.prepared, open));
@@ -838,7 +841,6 @@ void apply_job_regions(Job& job) {
 // device's part ends here (its buffers are freed), so that a batch writes this job while the next one runs there.
 void derive_outputs(Job& job) {
   const TriangulateOptions& options = job.options;
-  if (!mesh_only_written(job)) gather_triangles(job.result);
   const Mesh& mesh = job.result.mesh;
   std::optional<gpu::DeviceTin> tin;  // the final mesh on the device, uploaded once for all of them
   auto device_tin = [&]() -> const gpu::DeviceTin& {
@@ -940,7 +942,6 @@ void derive_and_write_outputs(Job& job, const std::function<void()>& device_done
   // The mesh is final: it is written while the grid, contours and preview are made from it. A grid the
   // options cannot make is a usage error before anything is written; a later failure of either side leaves
   // the other's files whole (each is written atomically), as a failing grid write always did.
-  gather_triangles(job.result);  // derive_outputs reads them beside the mesh's write
   if (!options.grid_out.empty()) grid_for(job.result.mesh, options.cell);
   double mesh_ms = 0;
   std::future<uint64_t> mesh = std::async(std::launch::async, [&] {

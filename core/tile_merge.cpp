@@ -166,22 +166,18 @@ OrderedRuns RunMerge::in_place(std::vector<Triangles>&& runs) {
     free_storage(of[c]);
   });
   spdlog::debug("canonical order, in place: {} spans in {} chunks in {:.0f} ms", spans.size(), k.count,
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-  stop_.store(true);  // no room is needed: its touching stops
+                ms_since(t0));
   return OrderedRuns(std::move(runs), TriangleSpans(std::move(spans), std::move(place)));
 }
 
 Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
   const auto t0 = std::chrono::steady_clock::now();
-  auto ms_from = [](auto t) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-  };
   const Chunks k = chunks_of(runs);
   const size_t r_count = runs.size(), chunks = k.count;
   const std::vector<size_t>& at = k.at;
   const std::vector<size_t>& start = k.start;
   const size_t total = start.back();
-  const double split_ms = ms_from(t0);
+  const double split_ms = ms_since(t0);
   Triangles out;
   if (room_made_.valid()) room_made_.get();  // rethrows its allocation's error
   const bool in_room = room_.size() >= total;
@@ -190,7 +186,7 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
   else
     free_storage(room_);
   resize_unwritten(out, total);  // within the room: only the size changes
-  const double room_ms = ms_from(t0);
+  const double room_ms = ms_since(t0);
   auto chunk = [&](size_t c) {
     Triangle* const to = out.data() + start[c];
     size_t pieces = 0, only = 0;
@@ -238,7 +234,7 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
                       (at[last * r_count + r] - at[done * r_count + r]) * sizeof(Triangle));
     done = last;
   }
-  const double waves_ms = ms_from(t0);
+  const double waves_ms = ms_since(t0);
   if (in_room) {
     std::vector<Triangles> gone(r_count);
     for (size_t r = 0; r < r_count; ++r) gone[r].swap(runs[r]);
@@ -248,7 +244,7 @@ Triangles RunMerge::merge(std::vector<Triangles>& runs, size_t wave_bytes) {
   }
   spdlog::debug(
       "canonical order: {} chunks split in {:.0f} ms, room at {:.0f}, merged at {:.0f}, runs freed at {:.0f}",
-      chunks, split_ms, room_ms, waves_ms, ms_from(t0));
+      chunks, split_ms, room_ms, waves_ms, ms_since(t0));
   return out;
 }
 

@@ -16,7 +16,7 @@ OrderedRuns::OrderedRuns(Triangles&& one) {
 
 Triangles OrderedRuns::take() && {
   Triangles out;
-  if (runs_.size() == 1 && spans_.size() == runs_[0].size() && (spans_.empty() || spans_.span_count() == 1)) {
+  if (runs_.size() == 1 && spans_.span_count() <= 1 && spans_.size() == runs_[0].size()) {  // the span is the run
     out = std::move(runs_[0]);
   } else {
     resize_unwritten(out, spans_.size());
