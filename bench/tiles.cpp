@@ -213,16 +213,17 @@ int run_tiles(const BenchOptions& o) {
       keep(time_row("tiled", "cgal", o.runs,
                                  [&](Row& r) { tiled_once(p, cpu_tile, cgal_tile_triangulator(), r); }));
     // GPU tiles on one device, then on 2, 4, ... of --devices: two tiles in flight a device, as cdtgpu
-    // triangulate runs them; without --tile-points, tiles of a quarter of the input a device (or what the
-    // smallest device holds).
+    // triangulate runs them; without --tile-points, its tiles (auto_gpu_tile_points: a quarter of the input a
+    // device, or what the smallest device holds).
     for (size_t k : gpu_device_counts) {
       gpu::TileDevices devices;
       devices.open(k ? std::vector<size_t>(device_set.begin(), device_set.begin() + std::min(k, device_set.size()))
                      : gpu::select_devices(gpu::list_devices(), "", o.device),
                    co);
       const std::vector<const gpu::GpuCdt*>& users = devices.cdts();
-      const uint64_t gpu_tile = o.tile_points ? o.tile_points
-                                              : std::min(devices.max_tile_points(), p.vertices.size() / (4 * users.size()) + 1);
+      const uint64_t gpu_tile =
+          o.tile_points ? o.tile_points
+                        : auto_gpu_tile_points(p.vertices.size(), devices.max_tile_points(), users.size());
       gpu::GpuCdtStats sum;
       const gpu::GpuTiles tri = gpu::gpu_tiles(users, &sum);
       // One row a ramp of --tile-ramps (TileOptions::ramp), each named by it; without it, cdtgpu triangulate's.

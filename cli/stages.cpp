@@ -112,12 +112,10 @@ TileOptions tile_options(const Job& job, uint64_t tile_points, unsigned in_fligh
 
 void record_tiles(Job& job, const TileStats& ts, uint64_t tile_points);
 
-CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, uint64_t tile_points,
-                               const TileTriangulator& triangulate, unsigned in_flight = 0,
-                               TileFinalizer finalize = {}, std::function<void(uint64_t)> reserve = {},
-                               unsigned ramp = 0) {
-  TileOptions opt = tile_options(job, tile_points, in_flight, std::move(finalize), std::move(reserve));
-  opt.ramp = ramp;
+// A resolved input's tiled CDT, tiles of opt.max_tile_points.
+CdtResult triangulate_in_tiles(Job& job, ResolvedInput&& in, const TileOptions& opt,
+                               const TileTriangulator& triangulate) {
+  const uint64_t tile_points = opt.max_tile_points;
   TileStats ts;
   job.stats.counts["constraint_splits_at_vertices"] = in.split_at_vertices;
   CdtResult r = timed(job, "triangulate: tiles and merge", [&] {
@@ -263,13 +261,15 @@ CdtResult triangulate_cpu(Job& job, ResolvedInput* resolved = nullptr) {
                       "read, on the CPU");
   const uint64_t n = resolved ? resolved->vertices.size() : job.prepared.vertices.size();
   const uint64_t tile = cpu_tile_points(job, n);
-  if (resolved) return triangulate_in_tiles(job, std::move(*resolved), tile < 3 ? 0 : tile, cgal_tile_triangulator());
+  if (resolved)
+    return triangulate_in_tiles(job, std::move(*resolved), tile_options(job, tile < 3 ? 0 : tile, 0, {}, {}),
+                                cgal_tile_triangulator());
   if (cpu_in_one_piece(job, n)) return triangulate_cgal(job.prepared);
   // The prepared input handed to the resolve where nothing reads it later: no copy of it beside round 1.
   ResolvedInput in = timed(job, "triangulate: resolve", [&] {
     return prepared_read_later(job) ? resolve_constraints(job.prepared) : resolve_constraints(take_prepared(job));
   });
-  return triangulate_in_tiles(job, std::move(in), tile, cgal_tile_triangulator());
+  return triangulate_in_tiles(job, std::move(in), tile_options(job, tile, 0, {}, {}), cgal_tile_triangulator());
 }
 
 // After a tile too large for its device (gpu::too_large), the tile size to try next: the old one scaled by how
@@ -410,7 +410,8 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       });
       record_tile_devices(job, *opened);
       const gpu::TileDevices& devices = *opened;
-      if (options.max_tile_points < 0) tile_here = std::min(tile_here, devices.max_tile_points());
+      if (options.max_tile_points < 0)
+        tile_here = std::min(tile_here, auto_gpu_tile_points(vertices, devices.max_tile_points(), devices.cdts().size()));
       for (;; ++retries) {
         try {
           const bool pools = tile_pools(options, start.context());
@@ -418,12 +419,16 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
                        ? std::move(ahead->tiles)
                        : std::make_shared<gpu::GpuTiles>(gpu::gpu_tiles(devices.cdts(), nullptr, pools));
           gpu::GpuTiles& tiles = *staged;
-          const unsigned ramp = gpu::tile_ramp(devices.cdts(), tile_here);
           if (!got) tiles.reserve(tile_staging_points(vertices, tile_here));
-          if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
+          auto gpu_options = [&] {
             TileOptions opt =
                 tile_options(job, tile_here, unsigned(2 * devices.cdts().size()), tiles.finalize, tiles.reserve);
-            opt.ramp = ramp;
+            opt.ramp = gpu::tile_ramp(devices.cdts(), tile_here);
+            opt.tiles_done = tiles.tiles_done;
+            return opt;
+          };
+          if (ahead && !got) {  // the prepared input's tiles; an input they find unresolved, tiled again below
+            const TileOptions opt = gpu_options();
             TileStats ts;
             std::optional<OrderedRuns> t = timed(job, "triangulate: tiles and merge", [&] {
               return tiled_cdt_unresolved(job.prepared, opt, tiles.triangulate, &ts);
@@ -442,9 +447,7 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
               return r;
             }
           }
-          CdtResult r = triangulate_in_tiles(job, std::move(input()), tile_here, tiles.triangulate,
-                                             unsigned(2 * devices.cdts().size()), std::move(tiles.finalize),
-                                             std::move(tiles.reserve), ramp);
+          CdtResult r = triangulate_in_tiles(job, std::move(input()), gpu_options(), tiles.triangulate);
           stats.counts["gpu_tile_retries"] = retries;
           return r;
         } catch (const gpu::DeviceError& e) {
@@ -646,7 +649,7 @@ std::shared_ptr<TilesAhead> open_tile_devices(const Job& job, gpu::GpuCdt& cdt, 
   auto ahead = std::make_shared<TilesAhead>();
   ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(job.options, cdt.context(), cdt));
   uint64_t tile = gpu_tile_points(cdt.context(), n, m);
-  if (m < 0) tile = std::min(tile, ahead->devices->max_tile_points());
+  if (m < 0) tile = std::min(tile, auto_gpu_tile_points(n, ahead->devices->max_tile_points(), ahead->devices->cdts().size()));
   ahead->tiles = std::make_shared<gpu::GpuTiles>(
       gpu::gpu_tiles(ahead->devices->cdts(), nullptr, tile_pools(job.options, cdt.context())));
   if (tiled_on_any_device(n, m)) ahead->tiles->reserve(tile_staging_points(n, tile));

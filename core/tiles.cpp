@@ -681,6 +681,7 @@ OrderedRuns tiled_runs(const Points& v, const std::vector<Edge>& segments,
     run_tiles();
   }
   if (failed) std::rethrow_exception(failed);
+  if (level == 1 && options.tiles_done) options.tiles_done();
   bookkeeping.get();  // its error, if any
 
   const double tiles_wall_ms = ms_since(t_tiles);
@@ -861,6 +862,10 @@ uint64_t auto_cpu_tile_points(uint64_t vertices, unsigned cores) {
   // Rounded up: rounded down, 64 tiles asked of 2.5M vertices came as 80 (a column of 312,589 vertices is
   // more than 8 tiles of 39,073), five rounds on 16 cores instead of four.
   return std::clamp((vertices + 4 * uint64_t(cores) - 1) / (4 * uint64_t(cores)), kMinTile, kMaxTile);
+}
+
+uint64_t auto_gpu_tile_points(uint64_t vertices, uint64_t device_max, size_t devices) {
+  return std::min(device_max, vertices / (4 * std::max<uint64_t>(devices, 1)) + 1);
 }
 
 }  // namespace cdtgpu

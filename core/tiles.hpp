@@ -121,6 +121,9 @@ struct TileOptions {
   // Told a first-level tile's vertex count (tile_staging_points) before the plan, and again after it if a tile
   // is larger: a GPU finalizer allocates its pinned staging meanwhile.
   std::function<void(uint64_t vertices)> reserve;
+  // Called once the first level's tiles are done, before their merge: a GPU run frees the devices and staging
+  // that only the tiles needed (GpuTiles::tiles_done), beside the merge. Later calls still work, on what is left.
+  std::function<void()> tiles_done;
   // The first level's canonical order left in the tiles' runs (tiled_cdt_runs, CdtResult::in_runs): for a
   // caller that only writes the mesh, which then reads them in place (RunMerge::in_place).
   bool in_runs = false;
@@ -190,6 +193,12 @@ bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double
 // The tile size `--max-tile-points` auto picks for the CPU: 0 (no tiles) below min_points or on one core,
 // else vertices / (4 x cores), so that every core has a few tiles (docs/tiles.md has the measurements).
 uint64_t auto_cpu_tile_points(uint64_t vertices, unsigned cores);
+// The tile size `--max-tile-points` auto picks for GPU tiles on `devices` devices that take at most device_max
+// points each: vertices / (4 x devices), so that every device has a few tiles (two in flight a device), as
+// `bench --table tiles` has measured since session 45; at most device_max. Smaller tiles also make less device
+// memory and pinned staging, which the driver makes and frees one device after another (~25 ms and ~250 ms a
+// GB; docs/tiles.md, session 63).
+uint64_t auto_gpu_tile_points(uint64_t vertices, uint64_t device_max, size_t devices);
 // The points a tile's staging (TileOptions::reserve) is sized for before the plan: tiles of about n / ceil(n /
 // max) points (the plan's cells are no larger, but for rounding), with room for segments' far endpoints.
 uint64_t tile_staging_points(uint64_t n, uint64_t max_tile_points);

@@ -67,6 +67,7 @@ class DeviceMemoryPool {
   bool closed_ = false;  // free_blocks() ran: no more blocks
   std::atomic<uint64_t> bytes_{0};  // grows under mutex_; read by bytes() without it
   std::atomic<uint64_t> taken_{0};
+  uint64_t in_use_ = 0, most_in_use_ = 0;  // bytes of the ranges out, now and at most (mutex_): -v at the free
   std::mutex mutex_;
   std::vector<VkDeviceMemory> blocks_;
   std::vector<FreeRanges> free_;

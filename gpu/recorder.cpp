@@ -27,6 +27,10 @@ TempPool& pool_of(const Context& ctx) {
 
 }  // namespace
 
+void drop_temps(const Context& ctx) {
+  if (ctx.temp_pool) pool_of(ctx).free.clear();
+}
+
 Recorder::Recorder(const Context& ctx) : ctx_(ctx) {
   VkCommandBufferAllocateInfo ai{};
   ai.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO;

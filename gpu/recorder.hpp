@@ -31,6 +31,10 @@ struct Binding {
       : buffer(b.buffer), offset(offset), range(range), address(b.address ? b.address + offset : 0) {}
 };
 
+// The context's pooled temps (the small scratch buffers recordings reuse) freed: for a device whose work is
+// done, so that its memory pool can go (gpu/tile_triangulator). Nothing may be recording on it.
+void drop_temps(const Context& ctx);
+
 class Recorder {
  public:
   explicit Recorder(const Context& ctx);

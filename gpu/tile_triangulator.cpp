@@ -14,8 +14,10 @@
 
 #include "core/timing.hpp"
 #include "gpu/check.hpp"
+#include "gpu/device_memory_pool.hpp"
 #include "gpu/device_pool.hpp"
 #include "gpu/devices.hpp"
+#include "gpu/recorder.hpp"
 #include "shaders/layout_dt.h"
 
 namespace cdtgpu::gpu {
@@ -72,7 +74,7 @@ class OnDevice {
   // no more than before (the plan's own call after the CLI's), it does nothing. For tiles of pools_from points
   // or more, each device's memory pool is made beside its slots' pinning; a tile waits for it too (pools_made_).
   void reserve(uint64_t vertices) {
-    if (vertices <= reserved_vertices_) return;
+    if (vertices <= reserved_vertices_ || released_) return;  // released: a tile's own fit() sizes slot 0
     const bool warm = reserved_vertices_ == 0 && vertices >= warm_up_from_;  // the first reserve
     const bool pools = vertices >= pools_from_;
     reserved_vertices_ = vertices;
@@ -141,9 +143,40 @@ class OnDevice {
     }
   }
 
+  // The first level's tiles are done (TileOptions::tiles_done): every slot but the first and every device but
+  // the first are taken for good, and their staging, kept buffers and memory pools freed on a thread of its own,
+  // beside the merge, which takes the slot and device left. The driver frees pinned memory at ~55 ms a GB and
+  // device memory at ~25 ms a GB, one device after another (scripts/memory_probe.cpp): at 1B points on two
+  // devices, 4.3 s that all came after the tiles' merge, most of it after the writing.
+  void tiles_done() {
+    if (released_.exchange(true) || staging_.size() < 2) return;
+    releasing_ = std::jthread([this] {
+      const auto t0 = std::chrono::steady_clock::now();
+      for (size_t slot = 1; slot < staging_.size(); ++slot) {
+        slots_.take(slot);
+        if (reserved_[slot].valid()) reserved_[slot].wait();  // its pinning (and warm-up) done
+        staging_[slot].reset();
+      }
+      size_t held = 0;
+      for (size_t d = 1; d < cdts_.size(); ++d) {
+        pool_.take(d);
+        if (pools_made_[d].valid()) pools_made_[d].wait();
+        cdts_[d]->drop_kept();
+        drop_temps(cdts_[d]->context());
+        std::shared_ptr<DeviceMemoryPool> memory = cdts_[d]->context().memory_pool.exchange(nullptr);
+        // Buffers of the device's own (not kept between tiles) hold it to the device's close.
+        if (memory && memory.use_count() > 1) ++held;
+      }
+      spdlog::debug("tiles done: {} slot(s) and the memory of {} device(s) freed beside the merge in {:.0f} ms{}",
+                    staging_.size() - 1, cdts_.size() - 1, ms_since(t0),
+                    held ? " (" + std::to_string(held) + " pool(s) held by buffers to their device's close)" : "");
+    });
+  }
+
   // Each slot's pinned memory freed on a thread of its own (0.2 s a 3 GB slot at 1B points), once the
   // reserve's threads that fill them are done.
   ~OnDevice() {
+    if (releasing_.joinable()) releasing_.join();
     allocating_.clear();
     std::vector<std::jthread> freeing;
     for (std::unique_ptr<HostStaging>& slot : staging_) freeing.emplace_back([&slot] { slot.reset(); });
@@ -283,6 +316,8 @@ class OnDevice {
   std::vector<std::shared_future<void>> reserved_;  // their futures, which a tile waits on
   std::vector<std::shared_future<void>> pools_made_;  // a device's memory pool, made by reserve() (if valid)
   std::mutex sum_lock_;
+  std::atomic<bool> released_{false};     // tiles_done() ran
+  std::jthread releasing_;                 // its frees, joined first by the destructor
   std::vector<std::jthread> allocating_;  // last: joined before the slots it fills are freed
 };
 
@@ -322,6 +357,7 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t w
   g.finalize = [on](const TileJob& job) { return on->staged(job); };
   g.reserve = [on](uint64_t vertices) { on->reserve(vertices); };
   g.warm_ups = [on] { return on->warm_ups(); };
+  g.tiles_done = [on] { on->tiles_done(); };
   return g;
 }
 

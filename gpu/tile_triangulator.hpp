@@ -29,6 +29,9 @@ struct GpuTiles {
   // `warm_up_from` points also warms each device up (GpuCdt::warm_up_tiles) unless a tile has begun.
   std::function<void(uint64_t vertices)> reserve;
   std::function<size_t()> warm_ups;  // devices warmed up so far
+  // TileOptions::tiles_done, for a run that tiles once: what only the tiles need (every device but the first,
+  // every staging slot but the first) freed beside the merge. Later calls run on what is left, one at a time.
+  std::function<void()> tiles_done;
 };
 // Tiles from which a warm-up pays on these devices: 100M points on hardware GPUs. At 1B points (tiles of 134M)
 // the resolve and plan take 6-14 s, the warm-up 1-2 s; at 256M (tiles of 64M) they take ~0.6 s, less than

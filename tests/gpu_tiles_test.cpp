@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -58,6 +59,39 @@ TEST(GpuTiles, TwoDevicesGiveTheSingleRunsBytes) {
       EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << what;
       EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << what;
     }
+}
+
+// GpuTiles::tiles_done, as cdtgpu triangulate passes it: the tiles on two devices with memory pools, then every
+// slot but the first and the second device's pool freed beside the merge, which runs on what is left. The single
+// run's bytes, and again from a second run on the same tiles (one slot, one device: later calls still work).
+TEST(GpuTiles, TilesDoneFreesWhatTheMergeDoesNotNeed) {
+  InputSet in = uniform_points(12000, 9);
+  add_dt_edge_constraints(in, 3000, 0.5, 9);
+  const PreparedInput p = prepare(in);
+  const CdtResult single = triangulate_cgal(p);
+  const size_t d = test_device();
+  const auto ctxs = gpu::create_contexts({d, d}, gpu::ContextOptions{});
+  for (const auto& c : ctxs) c->memory_pool.store(gpu::make_device_pool(*c, uint64_t(1) << 30));
+  const std::weak_ptr<gpu::DeviceMemoryPool> second = ctxs[1]->memory_pool.load();
+  {
+    const gpu::GpuCdt a(*ctxs[0]), b(*ctxs[1]);
+    std::optional<gpu::GpuTiles> tiles = gpu::gpu_tiles({&a, &b}, nullptr, /*warm_up_from=*/UINT64_MAX, /*pools_from=*/0);
+    for (int run = 0; run < 2; ++run) {
+      TileOptions opt;
+      opt.max_tile_points = 2000;
+      opt.tiles_in_flight = 4;
+      opt.finalize = tiles->finalize, opt.reserve = tiles->reserve, opt.tiles_done = tiles->tiles_done;
+      TileStats ts;
+      const CdtResult tiled = triangulate_tiled(resolve_constraints(p), opt, tiles->triangulate, &ts);
+      EXPECT_GE(ts.tiles, 6u) << "run " << run;
+      EXPECT_EQ(tiled.mesh.vertices, single.mesh.vertices) << "run " << run;
+      EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << "run " << run;
+    }
+    tiles.reset();  // joins the frees
+    EXPECT_TRUE(ctxs[0]->memory_pool.load()) << "the first device keeps its pool for the merge";
+    EXPECT_FALSE(ctxs[1]->memory_pool.load()) << "the second device's pool is let go once the tiles are done";
+    EXPECT_TRUE(second.expired()) << "no buffer of the second device holds its pool: its memory is freed";
+  }
 }
 
 // Devices warmed up for the tiles before the resolve (as cdtgpu triangulate reserves them), each with a device

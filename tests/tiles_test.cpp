@@ -8,11 +8,13 @@
 #include <gtest/gtest.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <random>
 #include <thread>
 
@@ -306,6 +308,65 @@ TEST(Tiles, AutoTileSizeForTheCpu) {
   EXPECT_GT(auto_cpu_tile_points(2'000'000, 2), 0u);
   EXPECT_LT(auto_cpu_tile_points(2'000'000, 2), 2'000'000u);
   EXPECT_EQ(auto_cpu_tile_points(1'000'000'000, 16), 1'000'000u);  // at most 1M: faster, and less in flight
+}
+
+// GPU tiles: a quarter of the input a device, at most what the smallest device holds (1B LAS points + 250M
+// contour vertices on one or two H200s: its 134M; on 4 devices 78M, on 8 39M, where the device maximum gave 12
+// tiles for 8 devices).
+TEST(Tiles, AutoTileSizeForGpus) {
+  const uint64_t h200 = 134'217'726;
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 1), h200);
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 2), h200);
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 4), 78'125'001u);
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 8), 39'062'501u);
+  EXPECT_EQ(auto_gpu_tile_points(200'000'000, h200, 1), 50'000'001u);
+  EXPECT_EQ(auto_gpu_tile_points(1'000, 100, 0), 100u);  // no device counted: as one
+}
+
+// TileOptions::tiles_done: called once, after every first-level tile and before any merge (a GPU run frees its
+// other devices and staging there), whatever the levels; the triangles stay the single run's.
+TEST(Tiles, TilesDoneComesBetweenTheTilesAndTheMerge) {
+  InputSet in = random_points(3000, 17);
+  in.lines.push_back(line({{-10, 500, 0}, {1010, 480, 0}}));
+  const PreparedInput p = prepare(in);
+  const CdtResult single = triangulate_cgal(p);
+  const TileFinalizer host = host_finalizer(cgal_tile_triangulator());
+  const TileTriangulator cgal = cgal_tile_triangulator();
+  for (const double share : {0.0, 1.0}) {  // one level; a merge tiled again
+    std::mutex m;
+    std::vector<std::string> calls;
+    auto note = [&](std::string what) {
+      std::lock_guard<std::mutex> lock(m);
+      calls.push_back(std::move(what));
+    };
+    TileOptions opt;
+    opt.max_tile_points = 300;
+    opt.retile_share = share;
+    opt.tiles_in_flight = 4;
+    opt.finalize = [&](const TileJob& job) {
+      note(job.what.ends_with("level 1") ? "tile" : "later tile");
+      return host(job);
+    };
+    opt.tiles_done = [&] { note("done"); };
+    TileStats ts;
+    const CdtResult tiled = triangulate_tiled(
+        resolve_constraints(p), opt,
+        [&](const Points& v, const std::vector<Edge>& e, std::string_view what) {
+          note("merge");
+          return cgal(v, e, what);
+        },
+        &ts);
+    EXPECT_TRUE(tiled.mesh.triangles == single.mesh.triangles) << "retile share " << share;
+    const auto done = std::find(calls.begin(), calls.end(), "done");
+    ASSERT_NE(done, calls.end()) << "retile share " << share;
+    EXPECT_EQ(std::count(calls.begin(), calls.end(), "done"), 1) << "retile share " << share;
+    EXPECT_GT(std::count(calls.begin(), done, "tile"), 1) << "retile share " << share;
+    EXPECT_EQ(std::count(done, calls.end(), "tile"), 0) << "retile share " << share;
+    EXPECT_EQ(std::count(calls.begin(), done, "later tile"), 0) << "retile share " << share;
+    EXPECT_EQ(std::count(calls.begin(), done, "merge"), 0) << "retile share " << share;
+    EXPECT_GE(std::count(done, calls.end(), "merge"), 1) << "retile share " << share;
+    if (share > 0) EXPECT_GT(std::count(done, calls.end(), "later tile"), 0) << "the merge was to be tiled again";
+  }
 }
 
 // Four tiles a core, exactly, on data about as wide as tall: 2 cores 2 x 4 tiles (not 3 x 3), 16 cores 8 x 8
