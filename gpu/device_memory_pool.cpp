@@ -148,6 +148,21 @@ uint64_t DeviceMemoryPool::free_bytes() {
   return n;
 }
 
+uint64_t DeviceMemoryPool::most_in_use() {
+  std::lock_guard lock(mutex_);
+  return most_in_use_;
+}
+
+bool DeviceMemoryPool::release_block() {
+  std::lock_guard lock(mutex_);
+  if (blocks_.empty() || in_use_ > 0) return false;
+  closed_ = true;
+  vkFreeMemory(device_, blocks_.back(), nullptr);
+  blocks_.pop_back();
+  free_.pop_back();
+  return true;
+}
+
 void DeviceMemoryPool::free_blocks() {
   std::lock_guard lock(mutex_);
   closed_ = true;

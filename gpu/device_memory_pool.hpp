@@ -54,9 +54,14 @@ class DeviceMemoryPool {
   void give(const Range& r);
   // The blocks' memory back to the driver (before the device goes; buffers still out must not be used).
   void free_blocks();
+  // One block back to the driver, the last, for a pool that no buffer uses any more: a caller frees the blocks
+  // one at a time between other work's driver calls (gpu/tile_triangulator). False when none is left or a
+  // buffer still uses the pool.
+  bool release_block();
   uint64_t bytes() const { return bytes_.load(); }
   uint64_t free_bytes();
   uint64_t ranges_taken() const { return taken_; }  // how many buffers took memory here so far
+  uint64_t most_in_use();                            // the most bytes its buffers held at once
 
  private:
   bool add_block(uint64_t size);  // mutex_ held (or in the constructor)

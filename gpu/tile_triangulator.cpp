@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <future>
 #include <memory>
 #include <mutex>
@@ -145,33 +146,67 @@ class OnDevice {
 
   // The first level's tiles are done (TileOptions::tiles_done): every slot but the first and every device but
   // the first are taken for good, and their staging, kept buffers and memory pools freed on a thread of its own,
-  // beside the merge, which takes the slot and device left. The driver frees pinned memory at ~55 ms a GB and
-  // device memory at ~25 ms a GB, one device after another (scripts/memory_probe.cpp): at 1B points on two
-  // devices, 4.3 s that all came after the tiles' merge, most of it after the writing.
+  // beside the merge, which takes the slot and device left. The driver frees device memory at ~25 ms a GB and
+  // pinned memory at ~55 ms a GB, one device after another (scripts/memory_probe.cpp), and a device call waits
+  // for it: at 1B points on two devices those frees took 3.4-3.6 s after the writing, and freed at once beside the
+  // merge, they held its device calls ~1 s. So one piece at a time (a pool's block, a slot), never while a call
+  // runs (quiet()).
   void tiles_done() {
     if (released_.exchange(true) || staging_.size() < 2) return;
     releasing_ = std::jthread([this] {
       const auto t0 = std::chrono::steady_clock::now();
-      for (size_t slot = 1; slot < staging_.size(); ++slot) {
-        slots_.take(slot);
-        if (reserved_[slot].valid()) reserved_[slot].wait();  // its pinning (and warm-up) done
-        staging_[slot].reset();
-      }
+      uint64_t pool_bytes = 0, most_used = 0;
       size_t held = 0;
+      // The slots first, then the devices: a merge that took another device's slot before this thread did holds
+      // it while it waits for that device.
+      for (size_t slot = 1; slot < staging_.size(); ++slot) slots_.take(slot);
       for (size_t d = 1; d < cdts_.size(); ++d) {
         pool_.take(d);
         if (pools_made_[d].valid()) pools_made_[d].wait();
         cdts_[d]->drop_kept();
         drop_temps(cdts_[d]->context());
-        std::shared_ptr<DeviceMemoryPool> memory = cdts_[d]->context().memory_pool.exchange(nullptr);
+        const std::shared_ptr<DeviceMemoryPool> memory = cdts_[d]->context().memory_pool.exchange(nullptr);
+        if (!memory) continue;
+        pool_bytes += memory->bytes();
+        most_used = std::max(most_used, memory->most_in_use());
         // Buffers of the device's own (not kept between tiles) hold it to the device's close.
-        if (memory && memory.use_count() > 1) ++held;
+        if (memory.use_count() > 1) ++held;
+        while (quiet() && memory->release_block()) {
+        }
       }
-      spdlog::debug("tiles done: {} slot(s) and the memory of {} device(s) freed beside the merge in {:.0f} ms{}",
-                    staging_.size() - 1, cdts_.size() - 1, ms_since(t0),
-                    held ? " (" + std::to_string(held) + " pool(s) held by buffers to their device's close)" : "");
+      for (size_t slot = 1; slot < staging_.size(); ++slot) {
+        if (reserved_[slot].valid()) reserved_[slot].wait();  // its pinning (and warm-up) done
+        quiet();
+        staging_[slot].reset();
+      }
+      spdlog::debug("tiles done: {} slot(s) and {:.0f} MB of {} device(s)' pools (at most {:.0f} MB a device in use) "
+                    "freed beside the merge in {:.0f} ms{}",
+                    staging_.size() - 1, pool_bytes / 1e6, cdts_.size() - 1, most_used / 1e6, ms_since(t0),
+                    held ? ", " + std::to_string(held) + " held by buffers to their device's close" : "");
     });
   }
+
+  // Waits while a call runs on a device (the merge; tiles of a later level); true.
+  bool quiet() {
+    std::unique_lock<std::mutex> lock(calls_mutex_);
+    calls_done_.wait(lock, [&] { return calls_ == 0; });
+    return true;
+  }
+  // Counts a device call for quiet(), from its start to its end.
+  struct Call {
+    OnDevice& on;
+    explicit Call(OnDevice& o) : on(o) {
+      const std::lock_guard<std::mutex> lock(on.calls_mutex_);
+      ++on.calls_;
+    }
+    ~Call() {
+      {
+        const std::lock_guard<std::mutex> lock(on.calls_mutex_);
+        --on.calls_;
+      }
+      on.calls_done_.notify_all();
+    }
+  };
 
   // Each slot's pinned memory freed on a thread of its own (0.2 s a 3 GB slot at 1B points), once the
   // reserve's threads that fill them are done.
@@ -193,6 +228,7 @@ class OnDevice {
       const auto t0 = std::chrono::steady_clock::now();
       const size_t slot = slots_.take_spread(cdts_.size());
       const DevicePool::Held held_slot{slots_, slot};
+      const Call call(*this);
       const auto slot_taken = std::chrono::steady_clock::now();
       const size_t d = slot % cdts_.size();
       wait_reserved(slot, d);  // rethrows its allocation's error
@@ -259,6 +295,7 @@ class OnDevice {
       const size_t d = slot % cdts_.size();
       pool_.take(d);
       const DevicePool::Held held{pool_, d};
+      const Call call(*this);
       try {
         wait_reserved(slot, d);
         const StagingLent lent(cdts_[d]->context(), *staging_[slot]);
@@ -316,6 +353,9 @@ class OnDevice {
   std::vector<std::shared_future<void>> reserved_;  // their futures, which a tile waits on
   std::vector<std::shared_future<void>> pools_made_;  // a device's memory pool, made by reserve() (if valid)
   std::mutex sum_lock_;
+  std::mutex calls_mutex_;                 // quiet()'s
+  std::condition_variable calls_done_;
+  int calls_ = 0;                          // device calls running (Call)
   std::atomic<bool> released_{false};     // tiles_done() ran
   std::jthread releasing_;                 // its frees, joined first by the destructor
   std::vector<std::jthread> allocating_;  // last: joined before the slots it fills are freed
