@@ -410,8 +410,9 @@ CdtResult triangulate_gpu(Job& job, std::future<ResolvedInput>& resolving, const
       });
       record_tile_devices(job, *opened);
       const gpu::TileDevices& devices = *opened;
-      if (options.max_tile_points < 0)
-        tile_here = std::min(tile_here, auto_gpu_tile_points(vertices, devices.max_tile_points(), devices.cdts().size()));
+      if (options.max_tile_points < 0)  // rank 0 of an MPI run waits here for the other ranks' devices
+        tile_here = std::min(tile_here, auto_gpu_tile_points(vertices, devices.max_tile_points(),
+                                                             run_gpu_devices(devices.cdts().size(), options.ranks)));
       for (;; ++retries) {
         try {
           const bool pools = tile_pools(options, start.context());

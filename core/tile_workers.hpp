@@ -65,6 +65,14 @@ struct RankTiles {
       serve;
 };
 
+// The GPUs a run's tiles spread over (auto_gpu_tile_points): this process's `local` ones and, at rank 0 of an MPI
+// run, the other ranks' (two GPU slots a device, as serve() is told). Counting rank 0's alone, ranks bound one to
+// a GPU planned tiles for one device: ~10 tiles of 134M at 1B points for every GPU of a cluster.
+inline size_t run_gpu_devices(size_t local, const RankTiles* ranks) {
+  if (!ranks || ranks->rank != 0 || !ranks->workers) return local;
+  return local + ranks->workers(true).total_slots() / 2;
+}
+
 // A finalizer that runs each tile here (`local`, at most `local_slots` at once) or at a free worker slot, a
 // worker's first: so run local_slots + workers.total_slots() tiles in flight, on as many threads (a tile at a
 // worker holds its thread while it waits: TileOptions::waiting_threads). A worker's results come in the job's

@@ -323,6 +323,23 @@ TEST(Tiles, AutoTileSizeForGpus) {
   EXPECT_EQ(auto_gpu_tile_points(1'000, 100, 0), 100u);  // no device counted: as one
 }
 
+// Under MPI rank 0 sizes GPU tiles for every rank's GPUs (their GPU slots, two a device); other ranks and a run
+// without ranks count their own.
+TEST(Tiles, GpuTilesAreSizedForEveryRanksDevices) {
+  RankTiles ranks;
+  ranks.ranks = 4;
+  ranks.workers = [](bool gpu) {
+    TileWorkers w;
+    w.slots = gpu ? std::vector<unsigned>{2, 4, 0} : std::vector<unsigned>{16, 16, 16};
+    return w;
+  };
+  EXPECT_EQ(run_gpu_devices(1, &ranks), 4u);  // its own, one on the second rank, two on the third, none on the fourth
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, 134'217'726, run_gpu_devices(1, &ranks)), 78'125'001u);
+  ranks.rank = 2;
+  EXPECT_EQ(run_gpu_devices(1, &ranks), 1u);
+  EXPECT_EQ(run_gpu_devices(2, nullptr), 2u);
+}
+
 // TileOptions::tiles_done: called once, after every first-level tile and before any merge (a GPU run frees its
 // other devices and staging there), whatever the levels; the triangles stay the single run's.
 TEST(Tiles, TilesDoneComesBetweenTheTilesAndTheMerge) {
