@@ -21,6 +21,7 @@
 #include "cli/progress.hpp"
 #include "cli/stages.hpp"
 #include "core/error.hpp"
+#include "core/timing.hpp"
 #include "gpu/check.hpp"
 
 namespace cdtgpu {
@@ -235,7 +236,7 @@ int run_batch(const BatchOptions& options) {
     });
     stage(*b, [&] { release_job(job); });
     stage(*b, [&] { write_job_stats(job); });
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - b->t0).count();
+    const double ms = ms_since(b->t0);
     {
       std::lock_guard lock(summary_mutex);
       if (b->exit_code) failed_lines.push_back(b->line.number);

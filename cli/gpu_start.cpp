@@ -14,6 +14,7 @@
 #include "gpu/buffers.hpp"
 #include "gpu/tile_triangulator.hpp"
 #include "core/error.hpp"
+#include "core/timing.hpp"
 #include "io/geotiff.hpp"
 #include "io/mapped_files.hpp"
 #include "io/read_las.hpp"
@@ -89,8 +90,6 @@ constexpr uint64_t kDevicePoolFrom = 32'000'000;
 GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expected_points, bool device_pool,
                    bool tiled, int nth_gpu, int processes_on_host) {
   pending_ = std::async(std::launch::async, [=, this] {
-    using Clock = std::chrono::steady_clock;
-    auto ms = [](Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); };
     auto r = std::make_unique<Ready>();
     gpu::ContextOptions options;
     options.device = device;
@@ -112,12 +111,12 @@ GpuStart::GpuStart(const std::string& device, bool hardware_only, uint64_t expec
     if (device_pool && one_piece && expected_points >= kDevicePoolFrom)
       options.device_pool_bytes = expected_points * 260;
     options.staging_ms = &staging_ms;
-    auto t = Clock::now();
+    auto t = std::chrono::steady_clock::now();
     r->ctx = gpu::create_context(options);
-    context_ms = ms(t);
-    t = Clock::now();
+    context_ms = ms_since(t);
+    t = std::chrono::steady_clock::now();
     r->cdt = std::make_unique<gpu::GpuCdt>(r->ctx);  // queues every pipeline's compile
-    pipelines_ms = ms(t);
+    pipelines_ms = ms_since(t);
     return r;
   });
 }
@@ -183,8 +182,7 @@ void GpuStart::close_in_background() {
     // H200 machine) outlasts a 2M run's write: left to the exit, the device made the run 25-30 ms slower, the
     // instance alone 6-14 ms (session 56, docs/performance.md).
     ready_->cdt.reset();  // its passes before the context
-    spdlog::debug("gpu close: buffers and passes: {:.1f} ms",
-                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    spdlog::debug("gpu close: buffers and passes: {:.1f} ms", ms_since(t0));
     ready_.reset();  // the context saves its pipeline cache as it goes
   });
 }

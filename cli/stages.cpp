@@ -47,7 +47,7 @@ auto timed(Job& job, const std::string& name, F&& f) {
   auto t0 = std::chrono::steady_clock::now();
   auto finish = [&] {
     progress.reset();
-    double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const double ms = ms_since(t0);
     job.stats.stage_ms.emplace_back(name, ms);
     spdlog::log(ms > 1000 ? spdlog::level::info : spdlog::level::debug, "{}: {:.1f} ms", name, ms);
   };
@@ -788,7 +788,7 @@ void triangulate_job(Job& job) {
       ResolvedInput r = !ahead                      ? resolve_constraints(job.prepared, progress)
                         : prepared_read_later(job) ? resolve_if_needed(job.prepared)
                                                    : resolve_constraints(take_prepared(job));
-      resolve_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      resolve_ms = ms_since(t0);
       return r;
     });
   }
@@ -951,7 +951,7 @@ void derive_and_write_outputs(Job& job, const std::function<void()>& device_done
   std::future<uint64_t> mesh = std::async(std::launch::async, [&] {
     const auto t0 = std::chrono::steady_clock::now();
     const uint64_t files = write_mesh_files(job);
-    mesh_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    mesh_ms = ms_since(t0);
     return files;
   });
   try {
