@@ -311,7 +311,10 @@ class OnDevice {
 
  private:
   static constexpr size_t kSlotsPerDevice = 2;
-  // A tile's device memory at its peak, buffers on the shelf included: ~232 bytes a point at 125M (29 GB).
+  // A device's memory pool for tiles, made ahead: ~232 bytes a point at 125M (29 GB) was a tile's peak, buffers
+  // on the shelf included, without segments. With contour segments the pools grow in the first tiles to at most
+  // 41.6 GB in use for tiles of 127M (~330 bytes a point, the pool's -v line); made at 400 ahead, they were no
+  // faster and took longer to free (docs/tiles.md, session 63).
   static constexpr uint64_t kTileBytesPerPoint = 260;
 
   // e again, named by its tile (and device); still TooLarge where smaller tiles may fit.
