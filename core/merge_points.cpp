@@ -1,5 +1,5 @@
-// merge_points and merge_input on the CPU: a bucket sort by x on all cores, then the duplicates numbered on all
-// cores.
+// merge_points and merge_input on the CPU: a bucket sort by x on all cores, each bucket's vertices numbered and
+// written as soon as it is sorted.
 // Why not one std::sort(par) of every point: it took ~150 ms for 2.5M points on the H100 machine's 16 cores
 // and 230 ms on 2; a bucket pass plus small sorts that stay in cache take 31-44 ms and 77 ms
 // (docs/performance.md). Inside a bucket the order is the comparator's, so the result is the same whatever the
@@ -11,10 +11,12 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_arena.h>
 
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -22,7 +24,10 @@
 #include <limits>
 #include <functional>
 #include <memory>
+#include <optional>
+#include <span>
 #include <string>
+#include <thread>
 #include <utility>
 
 namespace cdtgpu {
@@ -30,7 +35,8 @@ namespace {
 
 struct Occurrence {
   double x, y;
-  uint32_t occ;  // index of the point in the input
+  uint32_t occ;   // index of the point in the input
+  uint32_t fine;  // its fine bucket within its coarse one, kept from the scatter (the padding's room)
 };
 
 // prepare's own merge carries z along: the merged vertices and their z conflicts then come out of the sorted
@@ -38,7 +44,7 @@ struct Occurrence {
 // points on 16 threads).
 struct OccurrenceZ {
   double x, y, z;
-  uint32_t occ;
+  uint32_t occ, fine;
 };
 
 template <class Occ>
@@ -64,19 +70,31 @@ struct Buckets {
 };
 
 // `each(begin, end, f)` calls f(i, x, y, z) for the points i in [begin, end), in order.
+//
+// The x range from a sample of up to 2^20 points spread over the input, less its outer 1/8192 on each side,
+// instead of a pass over every point: that pass read the whole input once more (24 bytes a point), and one far
+// outlier (a LiDAR noise point, a record at x = 0) stretched the range so that a few buckets held every point and
+// the sort ran on a few cores. Points outside the range are clamped into the end buckets (sorted there like any
+// other), so the result does not depend on the range.
 template <class Each>
 Buckets buckets_for(const Each& each, size_t n) {
-  using Range = std::pair<double, double>;
-  const double inf = std::numeric_limits<double>::infinity();
-  const Range r = tbb::parallel_reduce(
-      tbb::blocked_range<size_t>(0, n, kBlock), Range{inf, -inf},
-      [&](const tbb::blocked_range<size_t>& b, Range m) {
-        each(b.begin(), b.end(), [&](size_t, double x, double, double) {
-          m = {std::min(m.first, x), std::max(m.second, x)};
-        });
-        return m;
-      },
-      [](Range a, Range b) { return Range{std::min(a.first, b.first), std::max(a.second, b.second)}; });
+  const size_t samples = std::min(n, size_t(1) << 20);
+  std::vector<double> xs(samples);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples, 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t k = r.begin(); k < r.end(); ++k) {
+      const size_t i = uint64_t(k) * n / samples;
+      each(i, i + 1, [&](size_t, double x, double, double) { xs[k] = x; });
+    }
+  });
+  std::erase_if(xs, [](double x) { return !std::isfinite(x); });
+  std::pair<double, double> r{0, 0};
+  if (!xs.empty()) {
+    const size_t trim = xs.size() >> 13;
+    std::nth_element(xs.begin(), xs.begin() + trim, xs.end());
+    r.first = xs[trim];
+    std::nth_element(xs.begin() + trim, xs.end() - 1 - trim, xs.end());
+    r.second = xs[xs.size() - 1 - trim];
+  }
   Buckets k;
   const double width = r.second - r.first;
   // About 8 points per fine bucket on even data. A zero or overflowing x range (every point on one vertical
@@ -91,8 +109,8 @@ Buckets buckets_for(const Each& each, size_t n) {
 }
 
 template <class Occ>
-bool is_head(const RawVector<Occ>& occ, size_t i) {
-  return i == 0 || occ[i].x != occ[i - 1].x || occ[i].y != occ[i - 1].y;
+bool same_xy(const Occ& a, const Occ& b) {
+  return a.x == b.x && a.y == b.y;
 }
 
 // Sorts [first, last) by xy_less; a crowded range (all x equal, say) on all cores.
@@ -104,11 +122,13 @@ void sort_range(Occ* first, Occ* last, size_t n) {
     std::sort(first, last, xy_less<Occ>);
 }
 
-// Every point's occurrence sorted by (x, y, occ) into `occ`: a bucket sort by x on all cores. `make(x, y, z, i)`
+// Every point's occurrence sorted by (x, y, occ), a bucket at a time, each bucket handed to `emit(bucket,
+// sorted, first_vertex)` (on all cores, in no order) with the number of its first vertex: vertices are numbered
+// in (x, y) order, a new one where (x, y) changes. Returns the vertex count. A bucket sort by x: `make(x, y, z, i)`
 // makes an occurrence; `scattered`, if given, is called once `each` is read no more.
-template <class Occ, class Each, class Make>
-void sort_occurrences(const Each& each, size_t n, const Make& make, RawVector<Occ>& occ,
-                      const std::function<void()>& scattered = {}) {
+template <class Occ, class Each, class Make, class Emit>
+uint32_t sort_occurrences(const Each& each, size_t n, const Make& make, const Emit& emit,
+                          const std::function<void()>& scattered = {}) {
   const Buckets bk = buckets_for(each, n);
 
   // Pass 1, per block of points: a histogram of coarse buckets. Pass 2: each block writes its points to their
@@ -131,56 +151,128 @@ void sort_occurrences(const Each& each, size_t n, const Make& make, RawVector<Oc
   for (size_t b = 0; b < blocks; ++b)
     for (uint32_t c = 0; c < bk.coarse; ++c) running[c] += std::exchange(place[b * bk.coarse + c], running[c]);
   // The points themselves are scattered, not their indices: a coarse bucket is then read front to back (with
-  // indices, each of its points was a random read of xy, ~25 s at 1B points on 16 threads). Unzeroed storage:
-  // the scatter touches its pages first, on all cores.
+  // indices, each of its points was a random read of xy, ~25 s at 1B points on 16 threads). Each keeps its fine
+  // bucket in the padding. Unzeroed storage: the scatter touches its pages first, on all cores.
+  RawVector<Occ> occ;
   resize_unwritten(occ, n);
+  const uint32_t mask = (1u << bk.shift) - 1;
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     uint32_t* at = &place[b * bk.coarse];
     each(b * block, std::min(n, (b + 1) * block), [&](size_t i, double x, double y, double z) {
-      occ[at[bk.of(x) >> bk.shift]++] = make(x, y, z, uint32_t(i));
+      const uint32_t f = bk.of(x);
+      Occ& o = occ[at[f >> bk.shift]++];
+      o = make(x, y, z, uint32_t(i));
+      o.fine = f & mask;
     });
   });
   if (scattered) scattered();
+
   // Per coarse bucket, in cache: a counting sort by fine bucket into a buffer of the thread's, each fine bucket
-  // sorted there, and the bucket copied back. The counts are the thread's too, not allocated per bucket (4096
-  // buckets of 65536 fine ones at 1B points: 8192 allocations of 256 KB).
+  // sorted there, and the heads counted. The bucket's first vertex is the heads of the buckets before it: the
+  // workers take buckets in order, each publishes its count, then looks back over those before it until one
+  // knows its whole prefix (a decoupled look-back). Once every bucket before it is counted, the bucket is emitted
+  // from the buffer and its pages of `occ` given back. Until then its worker holds it and sorts the next (three
+  // buffers a worker); only a bucket that would need a fourth is written back and emitted after the sort. Nobody
+  // waits: with waits, one slow bucket (its worker descheduled beside the driver's threads) held every worker
+  // after it, 20-28 % of the workers' time at 1B points on 32 threads; with one buffer, 55-82 % of the buckets
+  // were written back; with three, 15-42 of 4096. Before, the sorted occurrences were copied back, counted and
+  // read again by a vertex pass: 4 of 7 passes over 32 bytes a point (docs/performance.md, session 64). Equal x
+  // share a fine bucket, so a group of equal (x, y) never spans two buckets. The counts are the thread's, not
+  // allocated per bucket (4096 buckets of 65536 fine ones at 1B points: 8192 allocations of 256 KB).
+  constexpr uint64_t kCounted = uint64_t(1) << 62, kPrefixed = uint64_t(1) << 63, kValue = kCounted - 1;
+  constexpr size_t kHeld = 3;                            // sorted buckets a worker may hold
+  std::vector<std::atomic<uint64_t>> state(bk.coarse);  // 0, kCounted | heads, or kPrefixed | heads up to it
+  std::vector<uint32_t> count(bk.coarse, 0);             // each bucket's heads
+  std::vector<uint8_t> later(bk.coarse, 0);              // written back, to be emitted from `occ`
+  std::atomic<uint32_t> next{0};
+  struct Held {
+    uint32_t bucket;
+    std::vector<Occ>* sorted;
+  };
   struct Scratch {
-    std::vector<Occ> sorted;
+    std::array<std::vector<Occ>, kHeld> buffers;
+    std::vector<Held> held;  // by bucket
     std::vector<uint32_t> fine_start, at;
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
-  tbb::parallel_for(uint32_t(0), bk.coarse, [&](uint32_t c) {
-    const uint32_t begin = coarse_start[c], end = coarse_start[c + 1];
-    const uint32_t mask = (1u << bk.shift) - 1;
+  // The vertices before `c` if every bucket before it is counted (walking back to one that knows its prefix).
+  auto prefix = [&](uint32_t c) -> std::optional<uint64_t> {
+    uint64_t before = 0;
+    for (uint32_t j = c; j-- > 0;) {
+      const uint64_t s = state[j].load(std::memory_order_acquire);
+      if (s == 0) return std::nullopt;
+      before += s & kValue;
+      if (s & kPrefixed) break;
+    }
+    return before;
+  };
+  auto size_of = [&](uint32_t c) { return coarse_start[c + 1] - coarse_start[c]; };
+  auto write_back = [&](const Held& h) {
+    std::copy(h.sorted->begin(), h.sorted->begin() + size_of(h.bucket), occ.begin() + coarse_start[h.bucket]);
+    later[h.bucket] = 1;
+  };
+  // Emits the held buckets whose prefix is known; with `all`, writes the others back. The release of a large
+  // bucket's pages runs on all cores, isolated: this thread must not take up another worker's loop meanwhile
+  // (it would share this one's buffers).
+  auto settle = [&](Scratch& local, bool all) {
+    std::erase_if(local.held, [&](const Held& h) {
+      const uint32_t size = size_of(h.bucket);
+      if (const std::optional<uint64_t> before = prefix(h.bucket)) {
+        state[h.bucket].store(kPrefixed | (*before + count[h.bucket]), std::memory_order_release);
+        emit(h.bucket, std::span<const Occ>(h.sorted->data(), size), uint32_t(*before));
+        tbb::this_task_arena::isolate(
+            [&] { release_pages(&occ[coarse_start[h.bucket]], size_t(size) * sizeof(Occ)); });
+        return true;
+      }
+      if (all) write_back(h);
+      return all;
+    });
+  };
+  const int workers = tbb::this_task_arena::max_concurrency();
+  tbb::parallel_for(0, workers, 1, [&](int) {
     Scratch& local = scratch.local();
-    std::vector<Occ>& sorted = local.sorted;
-    sorted.resize(std::max<size_t>(sorted.size(), end - begin));
-    std::vector<uint32_t>& fine_start = local.fine_start;
-    fine_start.assign((size_t(1) << bk.shift) + 1, 0);
-    for (uint32_t i = begin; i < end; ++i) ++fine_start[(bk.of(occ[i].x) & mask) + 1];
-    for (size_t f = 1; f < fine_start.size(); ++f) fine_start[f] += fine_start[f - 1];
-    std::vector<uint32_t>& at = local.at;
-    at.assign(fine_start.begin(), fine_start.end() - 1);
-    for (uint32_t i = begin; i < end; ++i) sorted[at[bk.of(occ[i].x) & mask]++] = occ[i];
-    for (size_t f = 0; f + 1 < fine_start.size(); ++f)
-      if (fine_start[f + 1] - fine_start[f] > 1) sort_range(&sorted[fine_start[f]], &sorted[fine_start[f + 1]], n);
-    std::copy(sorted.begin(), sorted.begin() + (end - begin), occ.begin() + begin);
+    for (uint32_t c; (c = next.fetch_add(1)) < bk.coarse;) {
+      const uint32_t begin = coarse_start[c], end = coarse_start[c + 1], size = end - begin;
+      if (size == 0) {
+        state[c].store(kCounted, std::memory_order_release);
+        continue;
+      }
+      if (local.held.size() == kHeld) {  // every buffer holds a bucket: the oldest is written back
+        write_back(local.held.front());
+        local.held.erase(local.held.begin());
+      }
+      std::vector<Occ>* free = nullptr;
+      for (std::vector<Occ>& b : local.buffers)
+        if (std::none_of(local.held.begin(), local.held.end(), [&](const Held& h) { return h.sorted == &b; })) free = &b;
+      std::vector<Occ>& sorted = *free;
+      sorted.resize(std::max<size_t>(sorted.size(), size));
+      std::vector<uint32_t>& fine_start = local.fine_start;
+      fine_start.assign((size_t(1) << bk.shift) + 1, 0);
+      for (uint32_t i = begin; i < end; ++i) ++fine_start[occ[i].fine + 1];
+      for (size_t f = 1; f < fine_start.size(); ++f) fine_start[f] += fine_start[f - 1];
+      std::vector<uint32_t>& at = local.at;
+      at.assign(fine_start.begin(), fine_start.end() - 1);
+      for (uint32_t i = begin; i < end; ++i) sorted[at[occ[i].fine]++] = occ[i];
+      for (size_t f = 0; f + 1 < fine_start.size(); ++f)
+        if (fine_start[f + 1] - fine_start[f] > 1) sort_range(&sorted[fine_start[f]], &sorted[fine_start[f + 1]], n);
+      uint64_t heads = 1;
+      for (uint32_t i = 1; i < size; ++i) heads += !same_xy(sorted[i], sorted[i - 1]);
+      count[c] = uint32_t(heads);
+      state[c].store(kCounted | heads, std::memory_order_release);
+      local.held.push_back({c, &sorted});
+      settle(local, false);
+    }
+    settle(local, true);
   });
-}
-
-// Vertex numbers: a new vertex where (x, y) changes. Blocks count their heads; heads[k] is then block k's first
-// vertex, heads.back() the count.
-template <class Occ>
-std::vector<uint32_t> count_heads(const RawVector<Occ>& occ) {
-  const size_t n = occ.size(), runs = (n + kBlock - 1) / kBlock;
-  std::vector<uint32_t> heads(runs + 1, 0);
-  tbb::parallel_for(size_t(0), runs, [&](size_t k) {
-    uint32_t c = 0;
-    for (size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) c += is_head(occ, i);
-    heads[k + 1] = c;
+  std::vector<uint32_t> first(size_t(bk.coarse) + 1, 0);  // every bucket's first vertex, then the count
+  for (uint32_t c = 0; c < bk.coarse; ++c) first[c + 1] = first[c] + count[c];
+  if (n >= (size_t(1) << 20))
+    spdlog::debug("merge: {} of {} buckets emitted after the sort, {} points a bucket", std::count(later.begin(), later.end(), 1),
+                  bk.coarse, n / bk.coarse);
+  tbb::parallel_for(uint32_t(0), bk.coarse, [&](uint32_t c) {
+    if (later[c]) emit(c, std::span<const Occ>(&occ[coarse_start[c]], coarse_start[c + 1] - coarse_start[c]), first[c]);
   });
-  for (size_t k = 1; k <= runs; ++k) heads[k] += heads[k - 1];
-  return heads;
+  return first.back();
 }
 
 }  // namespace
@@ -192,19 +284,17 @@ PointMerge merge_points(std::span<const double> xy) {
   auto each = [&](size_t begin, size_t end, const auto& f) {
     for (size_t i = begin; i < end; ++i) f(i, xy[2 * i], xy[2 * i + 1], 0.0);
   };
-  RawVector<Occurrence> occ;
-  sort_occurrences(each, n, [](double x, double y, double, uint32_t i) { return Occurrence{x, y, i}; }, occ);
-  const std::vector<uint32_t> heads = count_heads(occ);
-  const size_t runs = heads.size() - 1;
   resize_unwritten(m.vertex_of, n);  // every element written below, on all cores
-  resize_unwritten(m.first, heads[runs]);
-  tbb::parallel_for(size_t(0), runs, [&](size_t k) {
-    uint32_t v = heads[k];
-    for (size_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) {
-      if (is_head(occ, i)) m.first[v++] = occ[i].occ;
-      m.vertex_of[occ[i].occ] = v - 1;
-    }
-  });
+  resize_unwritten(m.first, n);      // at most n vertices; cut to their count below
+  const uint32_t vertices = sort_occurrences<Occurrence>(
+      each, n, [](double x, double y, double, uint32_t i) { return Occurrence{x, y, i, 0}; },
+      [&](uint32_t, std::span<const Occurrence> s, uint32_t v) {
+        for (size_t i = 0; i < s.size(); ++i) {
+          if (i == 0 || !same_xy(s[i], s[i - 1])) m.first[v++] = s[i].occ;
+          m.vertex_of[s[i].occ] = v - 1;
+        }
+      });
+  m.first.resize(vertices);
   return m;
 }
 
@@ -242,11 +332,37 @@ MergedInput merge_input(const InputSet& in, const std::function<void()>& scatter
   };
   MergedInput out;
   if (n == 0) return out;
-  RawVector<OccurrenceZ> occ;
-  const auto make = [](double x, double y, double z, uint32_t i) { return OccurrenceZ{x, y, z, i}; };
+  // The vertices in order: each group's head is its first occurrence (xy_less), whose coordinates and z it
+  // keeps; a later z that differs is a conflict of that vertex. A group lies in one bucket.
+  resize_unwritten(out.line_vertex_of, n - loose);
+  resize_unwritten(out.vertices, n);  // at most n; cut to their count below (the pages past it never touched)
+  struct Conflicts {
+    double largest = 0;
+    uint64_t vertices = 0;
+  };
+  tbb::enumerable_thread_specific<Conflicts> conflicts;
+  const auto make = [](double x, double y, double z, uint32_t i) { return OccurrenceZ{x, y, z, i, 0}; };
+  const auto emit = [&](uint32_t, std::span<const OccurrenceZ> s, uint32_t v) {
+    Conflicts& c = conflicts.local();
+    double hz = 0;
+    bool conflicted = false;
+    for (size_t i = 0; i < s.size(); ++i) {
+      const OccurrenceZ& o = s[i];
+      if (i == 0 || !same_xy(o, s[i - 1])) {
+        out.vertices[v++] = {o.x, o.y, o.z};
+        hz = o.z;
+        conflicted = false;
+      } else if (const double dz = std::abs(o.z - hz); dz != 0) {
+        c.largest = std::max(c.largest, dz);
+        c.vertices += !conflicted;
+        conflicted = true;
+      }
+      if (o.occ >= loose) out.line_vertex_of[o.occ - loose] = v - 1;
+    }
+  };
   auto t = Clock::now();
   double scatter_ms = 0, freed_ms = 0;
-  sort_occurrences(each, n, make, occ, [&] {
+  const uint32_t vertices = sort_occurrences<OccurrenceZ>(each, n, make, emit, [&] {
     // NaN would break the sort's strict weak order; readers reject it, this guards direct callers.
     if (bad)
       for (uint64_t i = 0; i < n; ++i)
@@ -260,45 +376,13 @@ MergedInput merge_input(const InputSet& in, const std::function<void()>& scatter
     freed_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
     t = Clock::now();
   });
-  const double sort_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-  t = Clock::now();
-
-  // The vertices in order: each group's head is its first occurrence (xy_less), whose coordinates and z it
-  // keeps; a later z that differs is a conflict of that vertex.
-  const std::vector<uint32_t> heads = count_heads(occ);
-  const size_t runs = heads.size() - 1;
-  resize_unwritten(out.line_vertex_of, n - loose);
-  resize_unwritten(out.vertices, heads[runs]);
-  std::vector<double> largest(runs, 0);
-  std::vector<std::vector<uint32_t>> conflicted(runs);
-  tbb::parallel_for(size_t(0), runs, [&](size_t k) {
-    const size_t first = k * kBlock, last = std::min<size_t>(n, first + kBlock);
-    size_t h = first;
-    while (!is_head(occ, h)) --h;  // a group begun in the block before
-    double hz = occ[h].z;
-    uint32_t v = heads[k];
-    for (size_t i = first; i < last; ++i) {
-      const OccurrenceZ& o = occ[i];
-      if (is_head(occ, i)) {
-        out.vertices[v++] = {o.x, o.y, o.z};
-        hz = o.z;
-      } else if (const double dz = std::abs(o.z - hz); dz != 0) {
-        largest[k] = std::max(largest[k], dz);
-        if (conflicted[k].empty() || conflicted[k].back() != v - 1) conflicted[k].push_back(v - 1);
-      }
-      if (o.occ >= loose) out.line_vertex_of[o.occ - loose] = v - 1;
-    }
-  });
-  // Vertices ascend within a block and from block to block; one group may end a block and begin the next.
-  int64_t last_conflict = -1;
-  for (size_t k = 0; k < runs; ++k) {
-    out.max_z_conflict = std::max(out.max_z_conflict, largest[k]);
-    for (uint32_t v : conflicted[k])
-      if (int64_t(v) != last_conflict) ++out.z_conflicts, last_conflict = v;
+  out.vertices.resize(vertices);
+  for (const Conflicts& c : conflicts) {
+    out.max_z_conflict = std::max(out.max_z_conflict, c.largest);
+    out.z_conflicts += c.vertices;
   }
-  spdlog::debug("prepare: merge: scatter {:.1f} ms, the input's points freed {:.1f} ms, sort {:.1f} ms, vertices "
-                "{:.1f} ms",
-                scatter_ms, freed_ms, sort_ms, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+  spdlog::debug("prepare: merge: scatter {:.1f} ms, the input's points freed {:.1f} ms, sort and vertices {:.1f} ms",
+                scatter_ms, freed_ms, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
   return out;
 }
 

@@ -53,7 +53,9 @@ TEST(MergePoints, EqualsAStableSort) {
 }
 
 // One crowded coarse bucket over all its fine ones (core/merge_points.cpp): 2.5M points, nine in ten in a band of
-// x one 4096th of the range wide, on a millimetre grid with duplicates.
+// x one 4096th of the range wide, on a millimetre grid with duplicates. The crowded bucket is the first, so while
+// it is sorted the other workers' buckets wait for its count: nearly all are written back and emitted after the
+// sort (the other path of the merge; on the uniform inputs above nearly all are emitted from the sort's buffers).
 TEST(MergePoints, CrowdedCoarseBucketOverItsFineOnes) {
   std::mt19937_64 rng(11);
   const size_t n = 2500000;
@@ -64,6 +66,25 @@ TEST(MergePoints, CrowdedCoarseBucketOverItsFineOnes) {
     band[2 * i + 1] = double(rng() % 2000) / 1000;
   }
   expect_reference(band, "a band of x in one coarse bucket");
+}
+
+// The x range comes from a sample of 2^20 points less its outer 1/8192 (core/merge_points.cpp): far outliers
+// and points the sample may skip fall outside it, into the end buckets, with duplicates among them and with the
+// points inside. 1.5M points, so the sample skips some.
+TEST(MergePoints, PointsOutsideTheSampledRange) {
+  std::mt19937_64 rng(13);
+  const size_t n = 1500000;
+  std::vector<double> xy(2 * n);
+  for (size_t i = 0; i < n; ++i) {
+    xy[2 * i] = 500000 + double(rng() % 1000000) / 100;
+    xy[2 * i + 1] = double(rng() % 1000);
+  }
+  for (size_t i = 0; i < n; i += 9973) xy[2 * i] = (rng() & 1) ? 1e12 : -1e9 - double(rng() % 3);  // outliers
+  xy[2 * 700001] = 0;  // one point, far below the rest
+  for (size_t i = 300000; i < 300040; ++i) xy[2 * i] = 510000 + double(i % 4);  // past the top, duplicates
+  xy[2 * 5] = 0, xy[2 * 5 + 1] = 7;
+  xy[2 * 9] = 0, xy[2 * 9 + 1] = 7;
+  expect_reference(xy, "outliers");
 }
 
 namespace {
@@ -90,7 +111,7 @@ void expect_both_paths_equal(const InputSet& in, const char* what) {
 
 }  // namespace
 
-// Duplicates with and without z conflicts (groups that straddle the merge's blocks of 32K), signed zeros, lines
+// Duplicates with and without z conflicts (groups at the buckets' edges), signed zeros, lines
 // sharing points with the loose points and each other, empty lines, no loose points at all.
 TEST(MergeInput, SameAsTheGatheredMerge) {
   std::mt19937_64 rng(11);
