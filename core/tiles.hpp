@@ -124,8 +124,8 @@ struct TileOptions {
   // Called once the first level's tiles are done, before their merge: a GPU run frees the devices and staging
   // that only the tiles needed (GpuTiles::tiles_done), beside the merge. Later calls still work, on what is left.
   std::function<void()> tiles_done;
-  // The first level's canonical order left in the tiles' runs (tiled_cdt_runs, CdtResult::in_runs): for a
-  // caller that only writes the mesh, which then reads them in place (RunMerge::in_place).
+  // The first level's canonical order left in the tiles' runs (tiled_cdt_runs, CdtResult::in_runs) when its
+  // tiles are slabs: for a caller that only writes the mesh, which then reads them in place (RunMerge::in_place).
   bool in_runs = false;
 };
 

@@ -318,7 +318,7 @@ TEST(GpuTiles, TilesOfAnUnresolvedInputCheckThemselves) {
     for (uint64_t tp : {16, 100, 500, 100000}) {
       TileStats ts;
       TileOptions opt = device_tiles(tp, tiles);
-      opt.in_runs = tp == 100 || tp == 500;  // the order left in the tiles' runs, then gathered
+      opt.in_runs = tp == 100 || tp == 500;  // slabs' order left in the tiles' runs, then gathered; tiles' copied
       std::optional<OrderedRuns> t = tiled_cdt_unresolved(p, opt, tiles.triangulate, &ts);
       const bool one_piece = p.vertices.size() <= tp;
       EXPECT_EQ(t.has_value(), !crosses && !one_piece) << name << ", tiles of " << tp;

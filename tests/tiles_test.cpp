@@ -382,7 +382,9 @@ TEST(Tiles, TilesDoneComesBetweenTheTilesAndTheMerge) {
     EXPECT_EQ(std::count(calls.begin(), done, "later tile"), 0) << "retile share " << share;
     EXPECT_EQ(std::count(calls.begin(), done, "merge"), 0) << "retile share " << share;
     EXPECT_GE(std::count(done, calls.end(), "merge"), 1) << "retile share " << share;
-    if (share > 0) EXPECT_GT(std::count(done, calls.end(), "later tile"), 0) << "the merge was to be tiled again";
+    if (share > 0) {
+      EXPECT_GT(std::count(done, calls.end(), "later tile"), 0) << "the merge was to be tiled again";
+    }
   }
 }
 

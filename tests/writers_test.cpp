@@ -17,6 +17,7 @@
 
 #include "core/error.hpp"
 #include "core/projection.hpp"
+#include "core/triangle_spans.hpp"
 #include "io/writers.hpp"
 
 namespace cdtgpu {
@@ -175,6 +176,33 @@ TEST_F(WritersTest, EveryFormatTheSameBytesOnOneThreadAndOnAll) {
           << c.file << ": " << e.what();
     }
     EXPECT_FALSE(fs::exists(path(c.file))) << c.file;
+  }
+}
+
+// A tiled run's triangles written where they lie (TriangleSpans over its tiles' runs, io/writers'
+// write_mesh_file of spans): the bytes of the one array in OBJ and both PLYs, to a file and to stdout's writer,
+// whatever the spans (one triangle, thousands, empty ones between, a span across the writer's blocks).
+TEST_F(WritersTest, TrianglesInSpansGiveTheOneArraysBytes) {
+  const Mesh mesh = random_mesh(120000, 11);
+  std::mt19937_64 rng(5);
+  std::vector<std::span<const Triangle>> spans;
+  const std::span<const Triangle> all(mesh.triangles);
+  for (size_t at = 0; at < all.size();) {
+    const size_t k = rng() % 4 == 0 ? 0 : rng() % 512 == 0 ? rng() % 30000 : 1 + rng() % 3;
+    spans.push_back(all.subspan(at, std::min(k, all.size() - at)));
+    at += spans.back().size();
+  }
+  std::erase_if(spans, [](std::span<const Triangle> s) { return s.empty(); });  // TriangleSpans holds none empty
+  const TriangleSpans in_spans(spans);
+  ASSERT_GT(in_spans.span_count(), 1000u);
+  for (const Case& c : all_formats()) {
+    if (!vertices_first(c.options)) continue;
+    write_mesh_file(mesh, named_crs("GDA2020 / MGA zone 56"), c.options, path(c.file));
+    write_mesh_file(mesh.vertices, in_spans, named_crs("GDA2020 / MGA zone 56"), c.options, path(c.file) + ".spans");
+    EXPECT_TRUE(slurp(path(c.file)) == slurp(path(c.file) + ".spans")) << c.file;
+    std::ostringstream faces;
+    write_mesh_faces(in_spans, mesh.vertices.size(), c.options, faces);
+    EXPECT_NE(slurp(path(c.file)).find(faces.str()), std::string::npos) << c.file << ": the faces alone";
   }
 }
 
