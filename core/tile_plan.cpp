@@ -24,8 +24,12 @@ using Clock = std::chrono::steady_clock;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 using Rect = TileRect;
 constexpr uint64_t kSlabTilePoints = uint64_t(1) << 24;
-constexpr double kMaxSlabAspect = 16;
+constexpr double kMaxSlabAspect = 64;
 }  // namespace
+
+bool auto_slabs(uint64_t tiles, uint64_t max_points, double w, double h) {
+  return max_points >= kSlabTilePoints && (h <= 0 || double(tiles) * h <= kMaxSlabAspect * w);
+}
 
 // Two-level k-d splits by count: columns of equal counts (vertex ids are in (x, y) order already), then each
 // column, by median splits in (y, x) order on its own core, cut into cells of equal counts; as many columns
@@ -64,9 +68,7 @@ TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape, unsig
   // Slabs: at 1B points in 8 tiles of 2 x 4, the columns' selections took 1.4-2.0 s of the plan, before any tile,
   // and each tile's gather marked its whole column (500M ids); 8 slabs' longer border adds a few hundred
   // thousand vertices to a merge that the GPU takes in ~100 ms.
-  const bool slabs = shape == TileShape::slabs ||
-                     (shape == TileShape::automatic && max_points >= kSlabTilePoints &&
-                      (h <= 0 || double(tiles) * h <= kMaxSlabAspect * w));
+  const bool slabs = shape == TileShape::slabs || (shape == TileShape::automatic && auto_slabs(tiles, max_points, w, h));
   // Columns of equal counts; with a ramp, the first and the last slab cut into `ramp` each.
   std::vector<uint32_t> starts;
   if (slabs && ramp > 1 && tiles >= 2 && n / tiles >= ramp) {

@@ -33,10 +33,16 @@ struct TilePlan {
 
 // TileShape: about square tiles (the shortest border, so the smallest merge), or slabs: columns of the (x, y)
 // order, which need no selection, each tile a range of ids. `automatic`: slabs for tiles of 2^24 points or more
-// (a GPU's) unless they would be over 16 times as tall as wide, else squares.
+// (a GPU's) unless they would be over 64 times as tall as wide (auto_slabs), else squares.
 // ramp (slabs only; 0 or 1: none): the first and the last slab each cut into `ramp` thinner ones, so that the
 // devices start on small tiles (each device's first waits for the plan and the tiles gathered before it) and
 // end on small ones (the last tile's copies and bookkeeping come before the merge).
 TilePlan plan_tiles(const Points& v, uint64_t max_points, TileShape shape = TileShape::squares, unsigned ramp = 0);
+
+// The automatic shape: slabs for `tiles` tiles of at most max_points points over an input w wide and h tall? Up to
+// 64 times as tall as wide, since 32 slabs of 39M points beat 35 squares at 1B points + 250M contour vertices on
+// two H200s (whole runs 17.7 against 34.3 s: the squares' selections took 4.0 s of the plan, slabs' 54 ms; their
+// merge 10.7M vertices against 3.8M; docs/tiles.md, session 64). The limit was 16 until then.
+bool auto_slabs(uint64_t tiles, uint64_t max_points, double w, double h);
 
 }  // namespace cdtgpu

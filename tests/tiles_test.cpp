@@ -3,6 +3,7 @@
 // the tiles' counts say the path really tiled.
 #include "core/tile_workers.hpp"
 #include "core/tiles.hpp"
+#include "core/tile_plan.hpp"
 
 #include <CGAL/Exact_rational.h>
 #include <gtest/gtest.h>
@@ -315,12 +316,24 @@ TEST(Tiles, AutoTileSizeForTheCpu) {
 // tiles for 8 devices).
 TEST(Tiles, AutoTileSizeForGpus) {
   const uint64_t h200 = 134'217'726;
+  const uint64_t least = uint64_t(1) << 25;
   EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 1), h200);
-  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 2), h200);
-  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 4), 78'125'001u);
-  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 8), 39'062'501u);
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 2), 39'062'501u);  // 32 slabs: n / 32
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 4), least);         // n / 64 would be under 2^25
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 8), least);
+  EXPECT_EQ(auto_gpu_tile_points(10'000'000'000, h200, 8), h200);         // at most the device's
+  EXPECT_EQ(auto_gpu_tile_points(5'000'000'000, h200, 8), 78'125'001u);   // n / 64: at most 64 slabs
   EXPECT_EQ(auto_gpu_tile_points(200'000'000, h200, 1), 50'000'001u);
+  EXPECT_EQ(auto_gpu_tile_points(400'000'000, h200, 2), least);           // under a quarter a device (50M)
+  EXPECT_EQ(auto_gpu_tile_points(100'000'000, h200, 2), 12'500'001u);     // a quarter a device is less than 2^25
   EXPECT_EQ(auto_gpu_tile_points(1'000, 100, 0), 100u);  // no device counted: as one
+  // The shape such tiles take on a square input: slabs up to 64 of them, squares beyond, and for small tiles.
+  EXPECT_TRUE(auto_slabs(32, 39'062'501, 1000, 1000));
+  EXPECT_TRUE(auto_slabs(64, least, 1000, 1000));
+  EXPECT_FALSE(auto_slabs(65, least, 1000, 1000));
+  EXPECT_TRUE(auto_slabs(16, least, 1000, 4000));   // four times as tall as wide: 16 slabs, each 64 times
+  EXPECT_FALSE(auto_slabs(17, least, 1000, 4000));
+  EXPECT_FALSE(auto_slabs(32, 1'000'000, 1000, 1000));  // a CPU-sized tile
 }
 
 // Under MPI rank 0 sizes GPU tiles for every rank's GPUs (their GPU slots, two a device); other ranks and a run
@@ -334,7 +347,7 @@ TEST(Tiles, GpuTilesAreSizedForEveryRanksDevices) {
     return w;
   };
   EXPECT_EQ(run_gpu_devices(1, &ranks), 4u);  // its own, one on the second rank, two on the third, none on the fourth
-  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, 134'217'726, run_gpu_devices(1, &ranks)), 78'125'001u);
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, 134'217'726, run_gpu_devices(1, &ranks)), uint64_t(1) << 25);
   ranks.rank = 2;
   EXPECT_EQ(run_gpu_devices(1, &ranks), 1u);
   EXPECT_EQ(run_gpu_devices(2, nullptr), 2u);
