@@ -650,7 +650,9 @@ std::shared_ptr<TilesAhead> open_tile_devices(const Job& job, gpu::GpuCdt& cdt, 
   auto ahead = std::make_shared<TilesAhead>();
   ahead->devices = std::make_shared<gpu::TileDevices>(tile_devices(job.options, cdt.context(), cdt));
   uint64_t tile = gpu_tile_points(cdt.context(), n, m);
-  if (m < 0) tile = std::min(tile, auto_gpu_tile_points(n, ahead->devices->max_tile_points(), ahead->devices->cdts().size()));
+  if (m < 0)
+    tile = std::min(tile, auto_gpu_tile_points(n, ahead->devices->max_tile_points(),
+                                               expected_gpu_devices(ahead->devices->cdts().size(), job.options.ranks)));
   ahead->tiles = std::make_shared<gpu::GpuTiles>(
       gpu::gpu_tiles(ahead->devices->cdts(), nullptr, tile_pools(job.options, cdt.context())));
   if (tiled_on_any_device(n, m)) ahead->tiles->reserve(tile_staging_points(n, tile));

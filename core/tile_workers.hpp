@@ -12,6 +12,7 @@
 //   TileWork work = ...received...;
 //   TileFinal f = finalize(work.job());
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <numeric>
@@ -71,6 +72,14 @@ struct RankTiles {
 inline size_t run_gpu_devices(size_t local, const RankTiles* ranks) {
   if (!ranks || ranks->rank != 0 || !ranks->workers) return local;
   return local + ranks->workers(true).total_slots() / 2;
+}
+
+// The same before the other ranks have said what they take (every rank's devices, staging and pools are made
+// while rank 0 reads and prepares): each rank counted with this process's `local` GPUs, as ranks bound one to a
+// GPU, or one to a host of like GPUs, have them. Since tiles shrink with the devices (a sixteenth of the input a
+// device), a rank that counted its own alone made pools and staging for tiles ~8 times too large on two ranks.
+inline size_t expected_gpu_devices(size_t local, const RankTiles* ranks) {
+  return ranks ? local * size_t(std::max(ranks->ranks, 1)) : local;
 }
 
 // A finalizer that runs each tile here (`local`, at most `local_slots` at once) or at a free worker slot, a

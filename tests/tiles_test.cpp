@@ -351,6 +351,19 @@ TEST(Tiles, GpuTilesAreSizedForEveryRanksDevices) {
   ranks.rank = 2;
   EXPECT_EQ(run_gpu_devices(1, &ranks), 1u);
   EXPECT_EQ(run_gpu_devices(2, nullptr), 2u);
+  // Before the workers' slots are known (the devices opened while rank 0 prepares), at every rank: each rank
+  // counted as this one, so ranks bound one to a GPU size their pools for the tiles rank 0 will plan.
+  EXPECT_EQ(expected_gpu_devices(1, &ranks), 4u);
+  EXPECT_EQ(expected_gpu_devices(2, &ranks), 8u);
+  EXPECT_EQ(expected_gpu_devices(2, nullptr), 2u);
+  ranks.ranks = 2, ranks.rank = 0;
+  ranks.workers = [](bool gpu) {
+    TileWorkers w;
+    w.slots = {gpu ? 2u : 16u};
+    return w;
+  };
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, 134'217'726, expected_gpu_devices(1, &ranks)),
+            auto_gpu_tile_points(1'250'000'000, 134'217'726, run_gpu_devices(1, &ranks)));
 }
 
 // TileOptions::tiles_done: called once, after every first-level tile and before any merge (a GPU run frees its
