@@ -85,8 +85,9 @@ void add_triangulate_options(CLI::App* t, TriangulateArgs& args) {
   t->add_option("--max-tile-points", tri.max_tile_points,
                 "triangulate in tiles of at most N input points, merged exactly (the same output); 0: never. "
                 "Default: tiles on every core for the CPU backend at 100K points or more, and for the GPU when "
-                "the input exceeds what the device holds (then a quarter of the input on one device, a sixteenth a "
-                "device on several but at least 2^25 and at most 64 tiles, never more than the device holds)")
+                "the input exceeds what the device holds (then a quarter of the input on one device; on several a "
+                "sixteenth a device, but at least 2^25 points and a 64th of the input and at most a quarter a "
+                "device; never more than a device holds)")
       ->check(non_negative);
   t->add_option("--devices", tri.devices,
                 "GPUs for tiled runs: all, or indices 0,2,3 as `cdtgpu devices` lists them; default: all hardware "

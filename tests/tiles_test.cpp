@@ -311,9 +311,9 @@ TEST(Tiles, AutoTileSizeForTheCpu) {
   EXPECT_EQ(auto_cpu_tile_points(1'000'000'000, 16), 1'000'000u);  // at most 1M: faster, and less in flight
 }
 
-// GPU tiles: a quarter of the input a device, at most what the smallest device holds (1B LAS points + 250M
-// contour vertices on one or two H200s: its 134M; on 4 devices 78M, on 8 39M, where the device maximum gave 12
-// tiles for 8 devices).
+// GPU tiles: a quarter of the input on one device; on several a sixteenth a device, but at least 2^25 points and a
+// 64th of the input, at most a quarter a device; at most what the smallest device holds (1B LAS points + 250M
+// contour vertices: 134M on one H200, 39M on two, 2^25 on four and eight).
 TEST(Tiles, AutoTileSizeForGpus) {
   const uint64_t h200 = 134'217'726;
   const uint64_t least = uint64_t(1) << 25;
