@@ -5,6 +5,7 @@
 // (docs/performance.md). Inside a bucket the order is the comparator's, so the result is the same whatever the
 // split.
 #include "core/prepare.hpp"
+#include "core/timing.hpp"
 #include "core/touched.hpp"
 
 #include <tbb/blocked_range.h>
@@ -370,10 +371,10 @@ MergedInput merge_input(const InputSet& in, const std::function<void()>& scatter
           if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
             throw std::invalid_argument("prepare: vertex " + std::to_string(i) + " is not finite");
         });
-    scatter_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+    scatter_ms = ms_since(t);
     t = Clock::now();
     if (scattered) scattered();
-    freed_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+    freed_ms = ms_since(t);
     t = Clock::now();
   });
   out.vertices.resize(vertices);
@@ -382,7 +383,7 @@ MergedInput merge_input(const InputSet& in, const std::function<void()>& scatter
     out.z_conflicts += c.vertices;
   }
   spdlog::debug("prepare: merge: scatter {:.1f} ms, the input's points freed {:.1f} ms, sort and vertices {:.1f} ms",
-                scatter_ms, freed_ms, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+                scatter_ms, freed_ms, ms_since(t));
   return out;
 }
 

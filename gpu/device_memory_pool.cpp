@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 
+#include "core/timing.hpp"
 #include "gpu/context.hpp"
 
 namespace cdtgpu::gpu {
@@ -76,7 +77,7 @@ DeviceMemoryPool::DeviceMemoryPool(const Context& ctx, uint64_t bytes, uint64_t 
   const auto t0 = std::chrono::steady_clock::now();
   while (bytes_.load() < bytes && block_bytes && add_block(std::min(block_bytes, bytes - bytes_.load()))) {
   }
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const double ms = ms_since(t0);
   spdlog::debug("device memory pool: {:.0f} MB in {} block(s) made in {:.1f} ms", bytes_.load() / 1e6,
                 blocks_.size(), ms);
 }
@@ -127,7 +128,7 @@ std::optional<DeviceMemoryPool::Range> DeviceMemoryPool::take(const VkMemoryRequ
   if (!add_block(grow) && !(grow > req.size && add_block(req.size))) return std::nullopt;
   spdlog::debug("device memory pool: grown by {:.0f} MB to {:.0f} MB in {:.1f} ms, for a buffer of {:.0f} MB",
                 (bytes_.load() - before) / 1e6, bytes_.load() / 1e6,
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(),
+                ms_since(t0),
                 req.size / 1e6);
   const auto at = free_.back().take(req.size, alignment);
   if (!at) return std::nullopt;
@@ -173,7 +174,7 @@ void DeviceMemoryPool::free_blocks() {
   // driver makes and frees like the rest (~25 ms a GB; scripts/memory_probe.cpp).
   spdlog::debug("device memory pool: {:.0f} MB in {} block(s) freed in {:.1f} ms; at most {:.0f} MB of it in use",
                 bytes_.load() / 1e6, blocks_.size(),
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count(),
+                ms_since(t0),
                 most_in_use_ / 1e6);
   blocks_.clear();
   free_.clear();
