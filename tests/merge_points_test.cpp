@@ -1,6 +1,6 @@
 // core's duplicate merge (a bucket sort on all cores) against a plain stable sort, on inputs that push the
 // buckets to their edges: one x for every point, signed zeros, coordinates near the double limit, a crowd in
-// one bucket, sizes around the thresholds.
+// one bucket, many points on few x, sizes around the thresholds.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -29,7 +29,7 @@ void expect_reference(const std::vector<double>& xy, const char* what) {
 TEST(MergePoints, EqualsAStableSort) {
   std::mt19937_64 rng(7);
   for (size_t n : {0, 1, 2, 63, 64, 65, 1000, 40000, 300000}) {
-    std::vector<double> uniform(2 * n), lattice(2 * n), one_x(2 * n), huge(2 * n), crowd(2 * n);
+    std::vector<double> uniform(2 * n), lattice(2 * n), one_x(2 * n), huge(2 * n), crowd(2 * n), columns(2 * n);
     std::uniform_real_distribution<double> u(0, 1e4);
     for (size_t i = 0; i < n; ++i) {
       uniform[2 * i] = 500000 + std::floor(u(rng) * 1000) / 1000;  // UTM metres, millimetre grid
@@ -43,12 +43,22 @@ TEST(MergePoints, EqualsAStableSort) {
       const bool in_crowd = rng() % 4 != 0;  // three quarters on x = 5: one crowded bucket
       crowd[2 * i] = in_crowd ? 5.0 : u(rng);
       crowd[2 * i + 1] = in_crowd ? double(rng() % 100000) : u(rng);
+      // Few x, each with many points (a grid DEM's columns): the small sort's buckets by y, with long runs of one
+      // (x, y), y spread over powers of two (ranges the buckets hardly split) and y at the double limit.
+      columns[2 * i] = 100 + double(rng() % 50);
+      const uint64_t r = rng() % 10;
+      const double top = std::numeric_limits<double>::max();
+      columns[2 * i + 1] = r < 6   ? double(rng() % 100)
+                           : r < 8 ? std::ldexp(1.0, int(rng() % 900))
+                           : r < 9 ? double(rng() % 100000) / 7
+                                   : ((rng() & 1) ? top : -top);
     }
     expect_reference(uniform, "uniform");
     expect_reference(lattice, "lattice with duplicates");
     expect_reference(one_x, "one x");
     expect_reference(huge, "near the double limit");
     expect_reference(crowd, "a crowd on one x");
+    expect_reference(columns, "columns of many points on one x");
   }
 }
 
