@@ -11,6 +11,7 @@
 #include "core/uninit.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
@@ -75,8 +76,30 @@ void sort_segments(RawVector<SegmentKey>& segs, uint64_t vertices) {
       out[start[k] + at[k]++] = segs[i];
     }
   });
+  // Each bucket by a counting sort of its first vertices (2^shift of them, their counts in cache), then each
+  // vertex's few by (b, line): std::sort of the buckets' ~4096 took ~0.5 s of the 0.9 at 1B points on 32 threads.
+  struct Scratch {
+    std::vector<uint32_t> count;
+    std::vector<SegmentKey> sorted;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
   tbb::parallel_for(size_t(0), buckets, [&](size_t k) {
-    std::sort(out.begin() + start[k], out.begin() + start[k + 1], key_less);
+    SegmentKey* const first = out.data() + start[k];
+    const size_t m = start[k + 1] - start[k];
+    if (m < 64) return std::sort(first, first + m, key_less);
+    Scratch& local = scratch.local();
+    std::vector<uint32_t>& count = local.count;
+    auto low = [&](const SegmentKey& s) { return size_t(s.ab >> 32) - (k << shift); };
+    count.assign((size_t(1) << shift) + 1, 0);
+    for (size_t i = 0; i < m; ++i) ++count[low(first[i]) + 1];
+    for (size_t j = 1; j < count.size(); ++j) count[j] += count[j - 1];
+    local.sorted.resize(std::max(local.sorted.size(), m));
+    for (size_t i = 0; i < m; ++i) local.sorted[count[low(first[i])]++] = first[i];
+    std::copy(local.sorted.begin(), local.sorted.begin() + m, first);
+    for (size_t i = 0, j; i < m; i = j) {
+      for (j = i + 1; j < m && first[j].ab >> 32 == first[i].ab >> 32;) ++j;
+      if (j - i > 1) std::sort(first + i, first + j, key_less);
+    }
   });
   segs.swap(out);
 }
