@@ -86,7 +86,8 @@ void sort_segments(RawVector<SegmentKey>& segs, uint64_t vertices) {
   tbb::parallel_for(size_t(0), buckets, [&](size_t k) {
     SegmentKey* const first = out.data() + start[k];
     const size_t m = start[k + 1] - start[k];
-    if (m < 64) return std::sort(first, first + m, key_less);
+    // Few segments over many first vertices (a sparse bucket): the counts would outweigh them.
+    if (m < 64 || (size_t(1) << shift) > 16 * m) return std::sort(first, first + m, key_less);
     Scratch& local = scratch.local();
     std::vector<uint32_t>& count = local.count;
     auto low = [&](const SegmentKey& s) { return size_t(s.ab >> 32) - (k << shift); };

@@ -430,10 +430,6 @@ TileFinalizer host_finalizer(TileTriangulator triangulate) {
 
 namespace {
 
-// What the merge triangulates (tiling.md): the vertices not inside the final region with the border's, the
-// segments between them (a segment with an end inside the final region lies inside it; split ones as their
-// pieces) and the border edges, in the merge's own ids. `in_final` is read, then freed. For slabs the merge's
-// vertices are found already (`slab_ids`: each slab's unmarked_ids as it finished, in id order).
 // Ranks in a sorted list of ids without an array as long as the whole: where each block of 256 whole ids starts in
 // the list, and a search inside the block. An array of every vertex's local id (5 GB at 1B points) cost 130-210
 // ms of page faults and ~0.2 s to free on one core, serial work after the tiles.
@@ -461,6 +457,10 @@ class SortedRanks {
   RawVector<uint32_t> start_;
 };
 
+// What the merge triangulates (tiling.md): the vertices not inside the final region with the border's, the
+// segments between them (a segment with an end inside the final region lies inside it; split ones as their
+// pieces) and the border edges, in the merge's own ids. `in_final` is read, then freed. For slabs the merge's
+// vertices are found already (`slab_ids`: each slab's unmarked_ids as it finished, in id order).
 struct MergeJob {
   std::vector<uint32_t> ids;  // the merge's vertex i is the level's ids[i]
   Points vertices;
