@@ -11,7 +11,6 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include <spdlog/spdlog.h>
@@ -22,13 +21,11 @@
 #include <chrono>
 #include <cmath>
 #include <execution>
-#include <limits>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
-#include <thread>
 #include <utility>
 
 namespace cdtgpu {
@@ -163,8 +160,8 @@ void sort_range(Occ* first, Occ* last, size_t n, std::vector<Occ>& tmp, std::vec
     sort_small(first, last, tmp, counts);
 }
 
-// Every point's occurrence sorted by (x, y, occ), a bucket at a time, each bucket handed to `emit(bucket,
-// sorted, first_vertex)` (on all cores, in no order) with the number of its first vertex: vertices are numbered
+// Every point's occurrence sorted by (x, y, occ), a bucket at a time, each bucket handed to `emit(sorted,
+// first_vertex)` (on all cores, in no order) with the number of its first vertex: vertices are numbered
 // in (x, y) order, a new one where (x, y) changes. Returns the vertex count. A bucket sort by x: `make(x, y, z, i)`
 // makes an occurrence; `scattered`, if given, is called once `each` is read no more.
 template <class Occ, class Each, class Make, class Emit>
@@ -261,7 +258,7 @@ uint32_t sort_occurrences(const Each& each, size_t n, const Make& make, const Em
       const uint32_t size = size_of(h.bucket);
       if (const std::optional<uint64_t> before = prefix(h.bucket)) {
         state[h.bucket].store(kPrefixed | (*before + count[h.bucket]), std::memory_order_release);
-        emit(h.bucket, std::span<const Occ>(h.sorted->data(), size), uint32_t(*before));
+        emit(std::span<const Occ>(h.sorted->data(), size), uint32_t(*before));
         tbb::this_task_arena::isolate(
             [&] { release_pages(&occ[coarse_start[h.bucket]], size_t(size) * sizeof(Occ)); });
         return true;
@@ -313,7 +310,7 @@ uint32_t sort_occurrences(const Each& each, size_t n, const Make& make, const Em
     spdlog::debug("merge: {} of {} buckets emitted after the sort, {} points a bucket", std::count(later.begin(), later.end(), 1),
                   bk.coarse, n / bk.coarse);
   tbb::parallel_for(uint32_t(0), bk.coarse, [&](uint32_t c) {
-    if (later[c]) emit(c, std::span<const Occ>(&occ[coarse_start[c]], coarse_start[c + 1] - coarse_start[c]), first[c]);
+    if (later[c]) emit(std::span<const Occ>(&occ[coarse_start[c]], coarse_start[c + 1] - coarse_start[c]), first[c]);
   });
   return first.back();
 }
@@ -331,7 +328,7 @@ PointMerge merge_points(std::span<const double> xy) {
   resize_unwritten(m.first, n);      // at most n vertices; cut to their count below
   const uint32_t vertices = sort_occurrences<Occurrence>(
       each, n, [](double x, double y, double, uint32_t i) { return Occurrence{x, y, i, 0}; },
-      [&](uint32_t, std::span<const Occurrence> s, uint32_t v) {
+      [&](std::span<const Occurrence> s, uint32_t v) {
         for (size_t i = 0; i < s.size(); ++i) {
           if (i == 0 || !same_xy(s[i], s[i - 1])) m.first[v++] = s[i].occ;
           m.vertex_of[s[i].occ] = v - 1;
@@ -385,7 +382,7 @@ MergedInput merge_input(const InputSet& in, const std::function<void()>& scatter
   };
   tbb::enumerable_thread_specific<Conflicts> conflicts;
   const auto make = [](double x, double y, double z, uint32_t i) { return OccurrenceZ{x, y, z, i, 0}; };
-  const auto emit = [&](uint32_t, std::span<const OccurrenceZ> s, uint32_t v) {
+  const auto emit = [&](std::span<const OccurrenceZ> s, uint32_t v) {
     Conflicts& c = conflicts.local();
     double hz = 0;
     bool conflicted = false;
