@@ -1,5 +1,6 @@
 // canonicalize: one byte-exact order for a mesh, whatever backend or run produced it. Two sorts, O(n log n).
 #include "core/canonical.hpp"
+#include "core/counting_sort.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -40,21 +41,14 @@ void canonicalize_triangles(Triangles& triangles) {
 }
 
 void canonicalize_triangles_one_core(Triangles& triangles, size_t vertices) {
-  std::vector<uint32_t> at(vertices + 1, 0);
-  for (Triangle& t : triangles) {
-    rotate_to_smallest(t);
-    ++at[t[0] + 1];
-  }
-  std::partial_sum(at.begin(), at.end(), at.begin());
+  for (Triangle& t : triangles) rotate_to_smallest(t);
   Triangles sorted(triangles.size());
-  for (const Triangle& t : triangles) sorted[at[t[0]]++] = t;
+  std::vector<uint32_t> at;
+  counting_sort(triangles.data(), triangles.size(), sorted.data(), vertices, [](const Triangle& t) { return t[0]; },
+                at);
   // A vertex is the first of a few triangles: each group sorted by its other two.
-  for (size_t i = 0; i < sorted.size();) {
-    size_t j = i + 1;
-    while (j < sorted.size() && sorted[j][0] == sorted[i][0]) ++j;
-    if (j - i > 1) std::sort(sorted.begin() + i, sorted.begin() + j);
-    i = j;
-  }
+  for (size_t v = 0; v < vertices; ++v)
+    if (at[v + 1] - at[v] > 1) std::sort(sorted.begin() + at[v], sorted.begin() + at[v + 1]);
   triangles = std::move(sorted);
 }
 

@@ -4,6 +4,7 @@
 // and 230 ms on 2; a bucket pass plus small sorts that stay in cache take 31-44 ms and 77 ms
 // (docs/performance.md). Inside a bucket the order is the comparator's, so the result is the same whatever the
 // split.
+#include "core/counting_sort.hpp"
 #include "core/prepare.hpp"
 #include "core/timing.hpp"
 #include "core/touched.hpp"
@@ -115,11 +116,14 @@ bool same_xy(const Occ& a, const Occ& b) {
 // where every x is equal), a quarter as many buckets as points, as the fine buckets were made, down to 16 or
 // fewer, which std::sort takes. Quantized LiDAR, a grid DEM or contours cut at common x put tens to thousands of
 // points on one x, where std::sort took 60-130 ns a point (28-34 with buckets; 100 and 8000 points on one x).
-// A range the buckets do not split (far outliers, say) ends in std::sort after 8 levels.
+// A range the buckets do not split (far outliers, say) ends in std::sort after kLevels levels.
+constexpr int kLevels = 8;
+using LevelStarts = std::array<std::vector<uint32_t>, kLevels>;  // each level's bucket starts
+
 template <class Occ>
-void sort_small(Occ* first, Occ* last, std::vector<Occ>& tmp, std::vector<uint32_t>& counts, int depth = 0) {
+void sort_small(Occ* first, Occ* last, std::vector<Occ>& tmp, LevelStarts& starts, int depth = 0) {
   const size_t g = size_t(last - first);
-  if (g <= 16 || depth == 8) return std::sort(first, last, xy_less<Occ>);
+  if (g <= 16 || depth == kLevels) return std::sort(first, last, xy_less<Occ>);
   double x0 = first->x, x1 = x0, y0 = first->y, y1 = y0;
   for (const Occ* p = first + 1; p != last; ++p) {
     x0 = std::min(x0, p->x), x1 = std::max(x1, p->x);
@@ -135,29 +139,21 @@ void sort_small(Occ* first, Occ* last, std::vector<Occ>& tmp, std::vector<uint32
     const double b = ((by_x ? o.x : o.y) - lo) * scale;
     return b >= double(buckets - 1) ? buckets - 1 : uint32_t(b);
   };
-  // Bucket b's starts at c[b]; after the scatter, c[b] is its end (the next one's start).
-  const size_t base = counts.size();
-  counts.resize(base + buckets + 1, 0);
-  uint32_t* c = counts.data() + base;
-  for (const Occ* p = first; p != last; ++p) ++c[bucket_of(*p) + 1];
-  for (uint32_t b = 1; b <= buckets; ++b) c[b] += c[b - 1];
   if (tmp.size() < g) tmp.resize(g);
-  for (const Occ* p = first; p != last; ++p) tmp[c[bucket_of(*p)]++] = *p;
+  std::vector<uint32_t>& s = starts[depth];
+  counting_sort(first, g, tmp.data(), buckets, bucket_of, s);
   std::copy(tmp.begin(), tmp.begin() + g, first);
-  for (uint32_t b = 0; b < buckets; ++b) {  // `counts` may grow below: indices, not `c`
-    const uint32_t from = b == 0 ? 0 : counts[base + b - 1], to = counts[base + b];
-    if (to - from > 1) sort_small(first + from, first + to, tmp, counts, depth + 1);
-  }
-  counts.resize(base);
+  for (uint32_t b = 0; b < buckets; ++b)
+    if (s[b + 1] - s[b] > 1) sort_small(first + s[b], first + s[b + 1], tmp, starts, depth + 1);
 }
 
 // Sorts [first, last) by xy_less; a crowded range (all x equal, say) on all cores.
 template <class Occ>
-void sort_range(Occ* first, Occ* last, size_t n, std::vector<Occ>& tmp, std::vector<uint32_t>& counts) {
+void sort_range(Occ* first, Occ* last, size_t n, std::vector<Occ>& tmp, LevelStarts& starts) {
   if (size_t(last - first) > std::max<size_t>(n / 64, kBlock))
     std::sort(std::execution::par, first, last, xy_less<Occ>);
   else
-    sort_small(first, last, tmp, counts);
+    sort_small(first, last, tmp, starts);
 }
 
 // Every point's occurrence sorted by (x, y, occ), a bucket at a time, each bucket handed to `emit(sorted,
@@ -230,7 +226,8 @@ uint32_t sort_occurrences(const Each& each, size_t n, const Make& make, const Em
   struct Scratch {
     std::array<std::vector<Occ>, kHeld> buffers;
     std::vector<Held> held;  // by bucket
-    std::vector<uint32_t> fine_start, at, counts;
+    std::vector<uint32_t> fine_start;
+    LevelStarts starts;    // sort_small's
     std::vector<Occ> tmp;  // sort_small's
   };
   tbb::enumerable_thread_specific<Scratch> scratch;
@@ -286,15 +283,11 @@ uint32_t sort_occurrences(const Each& each, size_t n, const Make& make, const Em
       std::vector<Occ>& sorted = *free;
       sorted.resize(std::max<size_t>(sorted.size(), size));
       std::vector<uint32_t>& fine_start = local.fine_start;
-      fine_start.assign((size_t(1) << bk.shift) + 1, 0);
-      for (uint32_t i = begin; i < end; ++i) ++fine_start[occ[i].fine + 1];
-      for (size_t f = 1; f < fine_start.size(); ++f) fine_start[f] += fine_start[f - 1];
-      std::vector<uint32_t>& at = local.at;
-      at.assign(fine_start.begin(), fine_start.end() - 1);
-      for (uint32_t i = begin; i < end; ++i) sorted[at[occ[i].fine]++] = occ[i];
+      counting_sort(&occ[begin], size, sorted.data(), size_t(1) << bk.shift, [](const Occ& o) { return o.fine; },
+                    fine_start);
       for (size_t f = 0; f + 1 < fine_start.size(); ++f)
         if (fine_start[f + 1] - fine_start[f] > 1)
-          sort_range(&sorted[fine_start[f]], &sorted[fine_start[f + 1]], n, local.tmp, local.counts);
+          sort_range(&sorted[fine_start[f]], &sorted[fine_start[f + 1]], n, local.tmp, local.starts);
       uint64_t heads = 1;
       for (uint32_t i = 1; i < size; ++i) heads += !same_xy(sorted[i], sorted[i - 1]);
       count[c] = uint32_t(heads);

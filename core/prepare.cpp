@@ -6,6 +6,7 @@
 #include "core/prepare.hpp"
 
 #include "core/compact.hpp"
+#include "core/counting_sort.hpp"
 #include "core/parallel.hpp"
 #include "core/touched.hpp"
 #include "core/uninit.hpp"
@@ -91,16 +92,11 @@ void sort_segments(RawVector<SegmentKey>& segs, uint64_t vertices) {
     Scratch& local = scratch.local();
     std::vector<uint32_t>& count = local.count;
     auto low = [&](const SegmentKey& s) { return size_t(s.ab >> 32) - (k << shift); };
-    count.assign((size_t(1) << shift) + 1, 0);
-    for (size_t i = 0; i < m; ++i) ++count[low(first[i]) + 1];
-    for (size_t j = 1; j < count.size(); ++j) count[j] += count[j - 1];
     local.sorted.resize(std::max(local.sorted.size(), m));
-    for (size_t i = 0; i < m; ++i) local.sorted[count[low(first[i])]++] = first[i];
+    counting_sort(first, m, local.sorted.data(), size_t(1) << shift, low, count);
     std::copy(local.sorted.begin(), local.sorted.begin() + m, first);
-    for (size_t i = 0, j; i < m; i = j) {
-      for (j = i + 1; j < m && first[j].ab >> 32 == first[i].ab >> 32;) ++j;
-      if (j - i > 1) std::sort(first + i, first + j, key_less);
-    }
+    for (size_t j = 0; j + 1 < count.size(); ++j)
+      if (count[j + 1] - count[j] > 1) std::sort(first + count[j], first + count[j + 1], key_less);
   });
   segs.swap(out);
 }
