@@ -14,6 +14,7 @@
 
 #include "core/parallel.hpp"
 #include "gpu/check.hpp"
+#include "gpu/recorder.hpp"
 
 namespace cdtgpu::gpu {
 namespace {
@@ -172,8 +173,10 @@ void run_once(const Context& ctx, const std::function<void(VkCommandBuffer)>& re
     si.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cmd;
+    const auto t = std::chrono::steady_clock::now();
     VK_CHECK(vkQueueSubmit(queue, 1, &si, fence));
     VK_CHECK(vkWaitForFences(ctx.device, 1, &fence, VK_TRUE, UINT64_MAX));
+    count_submit(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count());
   } catch (...) {
     if (fence) vkDestroyFence(ctx.device, fence, nullptr);
     vkFreeCommandBuffers(ctx.device, pool, 1, &cmd);

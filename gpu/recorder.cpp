@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <chrono>
 #include <memory>
 #include <vector>
 
@@ -25,7 +26,16 @@ TempPool& pool_of(const Context& ctx) {
   return *static_cast<TempPool*>(ctx.temp_pool.get());
 }
 
+thread_local SubmitTally tally;
+
 }  // namespace
+
+SubmitTally submit_tally() { return tally; }
+
+void count_submit(double wait_ms) {
+  ++tally.submits;
+  tally.wait_ms += wait_ms;
+}
 
 void drop_temps(const Context& ctx) {
   if (ctx.temp_pool) pool_of(ctx).free.clear();
@@ -218,8 +228,10 @@ void Recorder::submit() {
   si.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
   si.commandBufferCount = 1;
   si.pCommandBuffers = &cmd_;
+  const auto t = std::chrono::steady_clock::now();
   VK_CHECK(vkQueueSubmit(ctx_.queue, 1, &si, fence_));
   VK_CHECK(vkWaitForFences(ctx_.device, 1, &fence_, VK_TRUE, UINT64_MAX));
+  count_submit(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count());
   // The work is done: small temps go back to the pool, large ones are freed.
   for (Buffer& b : temps_)
     if (b.size <= kPooledTempBytes) pool_of(ctx_).free.push_back(std::move(b));

@@ -35,6 +35,15 @@ struct Binding {
 // done, so that its memory pool can go (gpu/tile_triangulator). Nothing may be recording on it.
 void drop_temps(const Context& ctx);
 
+// This thread's submits so far (Recorder::submit): their count and the ms from each submit to its fence, for
+// the -v lines that split a device's held time into host work and waits.
+struct SubmitTally {
+  uint64_t submits = 0;
+  double wait_ms = 0;
+};
+SubmitTally submit_tally();
+void count_submit(double wait_ms);
+
 class Recorder {
  public:
   explicit Recorder(const Context& ctx);

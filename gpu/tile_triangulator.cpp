@@ -246,6 +246,7 @@ class OnDevice {
         Buffer sorted;
         uint32_t count = 0;
         std::chrono::steady_clock::time_point t4;
+        SubmitTally before, after;
         {
           pool_.take(d);
           const DevicePool::Held held_device{pool_, d};
@@ -253,14 +254,18 @@ class OnDevice {
           spdlog::debug("{}: waited {:.0f} ms for its staging memory, {:.0f} ms for a slot, staged in {:.0f} ms, "
                         "uploaded in {:.0f} ms, waited {:.0f} ms for the device",
                         job.what, ms(t1 - slot_taken), ms(slot_taken - t0), ms(t2 - t1), ms(t3 - t2), ms(t4 - t3));
+          before = submit_tally();
           count = cdt.compute_tile(job, std::move(up), staging, f, sorted, one);
+          after = submit_tally();
         }
         const auto t5 = std::chrono::steady_clock::now();
         on_copy_queue(d, [&] { cdt.download_tile(std::move(sorted), count, staging, one); });
         const auto t6 = std::chrono::steady_clock::now();
         GpuCdt::unstage_triangles(staging, count, job.ids, f);
-        spdlog::debug("{}: device {} held from {:.0f} to {:.0f} ms, downloaded in {:.0f} ms, unstaged in {:.0f} ms",
-                      job.what, d, ms(t4 - epoch_), ms(t5 - epoch_), ms(t6 - t5), ms_since(t6));
+        spdlog::debug("{}: device {} held from {:.0f} to {:.0f} ms ({} submits, {:.1f} ms waiting for them, GPU {:.1f} "
+                      "ms), downloaded in {:.0f} ms, unstaged in {:.0f} ms",
+                      job.what, d, ms(t4 - epoch_), ms(t5 - epoch_), after.submits - before.submits,
+                      after.wait_ms - before.wait_ms, one.gpu_total_ms, ms(t6 - t5), ms_since(t6));
         if (sum_) add_up(one);
         return f;
       } catch (const DeviceError& e) {
