@@ -37,6 +37,9 @@ struct InputPart {
   size_t points_begin = 0, points_end = 0, lines_begin = 0, lines_end = 0;
   Role role = Role::breakline;
   ZRule z;
+  // Every vertex read with a z (LAS points, grid cells): apply_z_rules need not look for missing ones (a pass
+  // over 1B LAS points took ~0.16 s on 32 threads).
+  bool z_complete = false;
 };
 
 }  // namespace cdtgpu

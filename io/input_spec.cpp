@@ -225,6 +225,7 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
                        " needs polygons (rings), and this input has only points");
     part.role = spec.role;
     part.z = spec.z;
+    part.z_complete = ext == ".las" || ext == ".asc" || ext == ".tif" || ext == ".tiff";
     parts.push_back(part);
   }
   global.finish();

@@ -17,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/drape.hpp"
 #include "core/error.hpp"
 #include "core/projection.hpp"
 #include "io/input_spec.hpp"
@@ -155,6 +156,27 @@ TEST_F(Las, CoordinatesAreIntegerTimesScalePlusOffset) {
   // In double, not float and not fused: the same bits as the expression written out.
   EXPECT_EQ(in.points[1].x, -2147483648.0 * 0.01 + 334000);
   EXPECT_EQ(in.points[1].y, 2147483647.0 * 0.001 + 6250000.5);
+}
+
+// LAS points and grid cells always come with a z (InputPart::z_complete): apply_z_rules looks for missing z
+// only in the other parts, where a 2D WKT line's vertices still get 0 and are counted.
+TEST_F(Las, PartsOfLasAndGridsHaveEveryZ) {
+  LasFile f;
+  f.points = {{.X = 1, .Y = 2, .Z = 3}, {.X = 4, .Y = 5, .Z = 6}, {.X = 7, .Y = 1, .Z = 9}};
+  const std::string las = write("t.las", test::las_bytes(f));
+  const std::string asc = write("g.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 4\n");
+  const std::string xy = write("flat.wkt", "LINESTRING (10 10, 11 12)\n");
+  InputSet in;
+  const std::vector<InputPart> parts =
+      read_inputs({parse_input_spec(las), parse_input_spec(asc), parse_input_spec(xy)}, ReadOptions{}, in);
+  ASSERT_EQ(parts.size(), 3u);
+  EXPECT_TRUE(parts[0].z_complete);
+  EXPECT_TRUE(parts[1].z_complete);
+  EXPECT_FALSE(parts[2].z_complete);
+  const DrapeStats stats = apply_z_rules(in, parts);
+  EXPECT_EQ(stats.zero_z, (std::vector<uint64_t>{0, 0, 2}));
+  for (const Point3& p : in.lines.at(parts[2].lines_begin).points) EXPECT_EQ(p.z, 0.0);
+  EXPECT_EQ(in.points[0].z, 3 * f.scale[2] + f.offset[2]);
 }
 
 TEST_F(Las, ExtraBytesPerRecordAreSkipped) {
