@@ -86,7 +86,7 @@ void add_triangulate_options(CLI::App* t, TriangulateArgs& args) {
                 "triangulate in tiles of at most N input points, merged exactly (the same output); 0: never. "
                 "Default: tiles on every core for the CPU backend at 100K points or more, and for the GPU when "
                 "the input exceeds what the device holds (then a quarter of the input on one device; on several a "
-                "sixteenth a device, but at least 2^25 points and a 64th of the input and at most a quarter a "
+                "twelfth a device, but at least 2^25 points and a 64th of the input and at most a quarter a "
                 "device; never more than a device holds)")
       ->check(non_negative);
   t->add_option("--devices", tri.devices,

@@ -76,8 +76,9 @@ inline size_t run_gpu_devices(size_t local, const RankTiles* ranks) {
 
 // The same before the other ranks have said what they take (every rank's devices, staging and pools are made
 // while rank 0 reads and prepares): each rank counted with this process's `local` GPUs, as ranks bound one to a
-// GPU, or one to a host of like GPUs, have them. Since tiles shrink with the devices (a sixteenth of the input a
-// device), a rank that counted its own alone made pools and staging for tiles ~8 times too large on two ranks.
+// GPU, or one to a host of like GPUs, have them. Since tiles shrink with the devices (a twelfth of the input a
+// device; a sixteenth then), a rank that counted its own alone made pools and staging for tiles ~8 times too
+// large on two ranks.
 inline size_t expected_gpu_devices(size_t local, const RankTiles* ranks) {
   return ranks ? local * size_t(std::max(ranks->ranks, 1)) : local;
 }

@@ -896,7 +896,7 @@ uint64_t auto_gpu_tile_points(uint64_t vertices, uint64_t device_max, size_t dev
   const uint64_t quarter = std::min(device_max, vertices / (4 * d) + 1);
   if (d == 1) return quarter;
   constexpr uint64_t kLeast = uint64_t(1) << 25;  // the smallest measured to pay (39M at 1B on two H200s)
-  return std::min(quarter, std::max({vertices / (16 * d) + 1, kLeast, vertices / 64 + 1}));
+  return std::min(quarter, std::max({vertices / (12 * d) + 1, kLeast, vertices / 64 + 1}));
 }
 
 }  // namespace cdtgpu

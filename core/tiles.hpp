@@ -195,13 +195,16 @@ bool circumdisk_inside(const Point3& a, const Point3& b, const Point3& c, double
 uint64_t auto_cpu_tile_points(uint64_t vertices, unsigned cores);
 // The tile size `--max-tile-points` auto picks for GPU tiles on `devices` devices that take at most device_max
 // points each: on one device vertices / 4, so that it has a few tiles (two in flight), as `bench --table tiles`
-// has measured since session 45; on several, vertices / (16 x devices), but at least 2^25 and vertices / 64 (at
+// has measured since session 45; on several, vertices / (12 x devices), but at least 2^25 and vertices / 64 (at
 // most 64 slabs) and at most vertices / (4 x devices); at most device_max. Several devices' memory and pinned
 // staging are made and freed by the driver one device after another (~25 ms and ~250 ms a GB; docs/tiles.md,
 // session 63), and what the tiles hold when they are done is freed after them: at 1B + 250M on two H200s, 32
 // slabs of 39M ended the whole run in 17.8-18.1 s against 20.4-20.9 s for 12 of 134M (the tiles and merge the
-// same, 5.3 s; the pools 14.6 GB a device against 46-50), 16 of 78M 19.2-19.5 s. On one device, 32 slabs gave
-// 21.9 s against 22.0 (the tiles 8.7 s against 7.4; session 64).
+// same, 5.3 s; the pools 14.6 GB a device against 46-50), 16 of 78M 19.2-19.5 s (session 64). Each tile costs
+// the device ~20 ms besides its GPU work (host work between its ~35 submits, their latency), and small tiles'
+// rounds more GPU time: 24 slabs of 52M ended the run in 13.7-14.0 s against 14.1-15.2 for 32 of 39M, the tiles
+// and merge 4.34-4.41 s against 4.75-4.93 (session 66). On one device, 32 slabs gave 21.9 s against 22.0 (the
+// tiles 8.7 s against 7.4; session 64).
 uint64_t auto_gpu_tile_points(uint64_t vertices, uint64_t device_max, size_t devices);
 // The points a tile's staging (TileOptions::reserve) is sized for before the plan: tiles of about n / ceil(n /
 // max) points (the plan's cells are no larger, but for rounding), with room for segments' far endpoints.

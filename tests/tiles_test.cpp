@@ -311,14 +311,14 @@ TEST(Tiles, AutoTileSizeForTheCpu) {
   EXPECT_EQ(auto_cpu_tile_points(1'000'000'000, 16), 1'000'000u);  // at most 1M: faster, and less in flight
 }
 
-// GPU tiles: a quarter of the input on one device; on several a sixteenth a device, but at least 2^25 points and a
+// GPU tiles: a quarter of the input on one device; on several a twelfth a device, but at least 2^25 points and a
 // 64th of the input, at most a quarter a device; at most what the smallest device holds (1B LAS points + 250M
-// contour vertices: 134M on one H200, 39M on two, 2^25 on four and eight).
+// contour vertices: 134M on one H200, 52M on two, 2^25 on four and eight).
 TEST(Tiles, AutoTileSizeForGpus) {
   const uint64_t h200 = 134'217'726;
   const uint64_t least = uint64_t(1) << 25;
   EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 1), h200);
-  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 2), 39'062'501u);  // 32 slabs: n / 32
+  EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 2), 52'083'334u);  // 24 slabs: n / 24
   EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 4), least);         // n / 64 would be under 2^25
   EXPECT_EQ(auto_gpu_tile_points(1'250'000'000, h200, 8), least);
   EXPECT_EQ(auto_gpu_tile_points(10'000'000'000, h200, 8), h200);         // at most the device's
