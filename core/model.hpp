@@ -69,6 +69,14 @@ struct InputSet {
   // Set by io/input_spec's read_inputs: readers give vertices without z (2D geometry, no z field) the z
   // missing_z() instead of 0, and core/drape's apply_z_rules resolves every one before prepare. Off: z = 0.
   bool nan_for_missing_z = false;
+  // Ranges of `points` whose x and y bounds their reader found as it wrote them (LAS): choose_crs reads those
+  // points no more (0.21 s at 1B points on 32 threads). Appending keeps them true; whatever moves or drops points
+  // of such a range must clear them (choose_crs checks that they lie inside `points` and do not overlap).
+  struct Extent {
+    size_t begin = 0, end = 0;
+    double min_x = 0, max_x = 0, min_y = 0, max_y = 0;
+  };
+  std::vector<Extent> point_extents;
 };
 
 // A NaN with its own payload: "this vertex was read without z". Any other NaN is still bad input.

@@ -158,17 +158,36 @@ struct Bounds {
   }
 };
 
-// On all cores: 1.25B points took 6.7 s on one (H100 machine).
+// The points' ranges whose bounds a reader gave (InputSet::point_extents), in order; none if any is out of place.
+std::vector<InputSet::Extent> known_extents(const InputSet& in) {
+  std::vector<InputSet::Extent> e = in.point_extents;
+  std::sort(e.begin(), e.end(), [](const auto& a, const auto& b) { return a.begin < b.begin; });
+  for (size_t i = 0; i < e.size(); ++i)
+    if (e[i].begin > e[i].end || e[i].end > in.points.size() || (i && e[i].begin < e[i - 1].end)) return {};
+  return e;
+}
+
+// On all cores: 1.25B points took 6.7 s on one (H100 machine). Points whose reader gave their bounds are not read.
 Bounds bounds_of(const InputSet& in) {
   using Range = tbb::blocked_range<size_t>;
   auto join = [](Bounds a, const Bounds& b) {
     a.add(b);
     return a;
   };
-  Bounds b = tbb::parallel_reduce(Range(0, in.points.size(), 1 << 16), Bounds{}, [&](const Range& r, Bounds acc) {
-    for (size_t i = r.begin(); i < r.end(); ++i) acc.add(in.points[i]);
-    return acc;
-  }, join);
+  auto points_in = [&](size_t from, size_t to) {
+    return tbb::parallel_reduce(Range(from, to, 1 << 16), Bounds{}, [&](const Range& r, Bounds acc) {
+      for (size_t i = r.begin(); i < r.end(); ++i) acc.add(in.points[i]);
+      return acc;
+    }, join);
+  };
+  Bounds b;
+  size_t at = 0;
+  for (const InputSet::Extent& e : known_extents(in)) {
+    if (e.begin > at) b.add(points_in(at, e.begin));
+    if (e.end > e.begin) b.add(Bounds{e.min_x, e.min_y, e.max_x, e.max_y});
+    at = e.end;
+  }
+  if (in.points.size() > at) b.add(points_in(at, in.points.size()));
   b.add(tbb::parallel_reduce(Range(0, in.lines.size()), Bounds{}, [&](const Range& r, Bounds acc) {
     for (size_t i = r.begin(); i < r.end(); ++i)
       for (const Point3& p : in.lines[i].points) acc.add(p);
@@ -375,6 +394,7 @@ Crs choose_crs(const InputSet& in, const CrsRequest& request) {
 
 void project(InputSet& in, const Crs& crs) {
   if (!crs.from_geographic) return;
+  in.point_extents.clear();  // the readers' bounds were of the coordinates read
   const double a = GeographicLib::Constants::WGS84_a();  // GRS80 has the same equatorial radius
   const double f = datum_of(crs) == Datum::Wgs84 ? 1 / kWgs84InverseFlattening : 1 / kGrs80InverseFlattening;
   const GeographicLib::TransverseMercator tm(a, f, GeographicLib::Constants::UTM_k0());

@@ -369,12 +369,14 @@ void read_las(const std::string& path, const LasFilter& filter, InputSet& in, co
       *out++ = q;
     }
   });
+  Extent all;
+  for (const Extent& e : extents) {
+    all.min_x = std::min(all.min_x, e.min_x), all.max_x = std::max(all.max_x, e.max_x);
+    all.min_y = std::min(all.min_y, e.min_y), all.max_y = std::max(all.max_y, e.max_y);
+  }
+  if (at.back() > at.front())
+    in.point_extents.push_back({at.front(), at.back(), all.min_x, all.max_x, all.min_y, all.max_y});
   if (geographic) {
-    Extent all;
-    for (const Extent& e : extents) {
-      all.min_x = std::min(all.min_x, e.min_x), all.max_x = std::max(all.max_x, e.max_x);
-      all.min_y = std::min(all.min_y, e.min_y), all.max_y = std::max(all.max_y, e.max_y);
-    }
     if (!(all.min_x >= -180 && all.max_x <= 180 && all.min_y >= -90 && all.max_y <= 90))
       throw InputError(path, 0,
                        "its CRS is geographic (longitude/latitude) but the points span x " + number_text(all.min_x) +

@@ -179,6 +179,38 @@ TEST_F(Las, PartsOfLasAndGridsHaveEveryZ) {
   EXPECT_EQ(in.points[0].z, 3 * f.scale[2] + f.offset[2]);
 }
 
+// A LAS file's reader gives its points' bounds (InputSet::point_extents), which choose_crs takes instead of
+// reading them again; the points of other inputs are still read: lon/lat LAS points at 145-145.2 E with a text
+// point at 157 E are centred on 151 E (UTM zone 56), the LAS points alone on 145.1 E (zone 55).
+TEST_F(Las, ChoosingTheCrsTakesTheReadersBounds) {
+  LasFile f;
+  f.scale[0] = f.scale[1] = 1e-7;
+  f.offset[0] = 145, f.offset[1] = -33, f.offset[2] = 0;
+  f.points = {{.X = 0, .Y = 0, .Z = 1}, {.X = 2'000'000, .Y = 1'000'000, .Z = 2}, {.X = 1'000'000, .Y = -500'000, .Z = 3}};
+  const std::string las = write("lonlat.las", test::las_bytes(f));
+  const std::string xyz = write("far.xyz", "157 -33 5\n");
+  InputSet in;
+  read_inputs({parse_input_spec(las), parse_input_spec(xyz)}, ReadOptions{}, in);
+  ASSERT_EQ(in.point_extents.size(), 1u);
+  const InputSet::Extent& e = in.point_extents[0];
+  EXPECT_EQ(e.begin, 0u);
+  EXPECT_EQ(e.end, 3u);
+  EXPECT_EQ(e.min_x, 145.0);
+  EXPECT_EQ(e.max_x, 2'000'000 * 1e-7 + 145);
+  EXPECT_EQ(e.min_y, -500'000 * 1e-7 - 33);
+  EXPECT_EQ(e.max_y, 1'000'000 * 1e-7 - 33);
+  const Crs both = choose_crs(in, CrsRequest{});
+  EXPECT_EQ(both.zone, 56);
+  InputSet scanned = in;
+  scanned.point_extents.clear();
+  EXPECT_EQ(choose_crs(scanned, CrsRequest{}).name, both.name);
+  InputSet alone;
+  read_inputs({parse_input_spec(las)}, ReadOptions{}, alone);
+  EXPECT_EQ(choose_crs(alone, CrsRequest{}).zone, 55);
+  project(in, both);
+  EXPECT_TRUE(in.point_extents.empty()) << "projected: the bounds read are not the points' any more";
+}
+
 TEST_F(Las, ExtraBytesPerRecordAreSkipped) {
   for (int format : {1, 3, 6, 10}) {
     LasFile f;
