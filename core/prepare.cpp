@@ -262,7 +262,7 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
   // Both lists from one count and one pass (two compactions read the 4 GB of keys at 1B points four times).
   const std::vector<size_t> first = compact_starts(segs.size(), kept);
   resize_touched(out.constraints, first.back());
-  resize_touched(out.constraint_line, first.back());
+  resize_unwritten(out.constraint_line, first.back());  // every element written below
   tbb::parallel_for(size_t(0), first.size() - 1, [&](size_t b) {
     size_t at = first[b];
     for (size_t i = b * kCompactBlock; i < std::min(segs.size(), (b + 1) * kCompactBlock); ++i)

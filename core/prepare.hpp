@@ -15,8 +15,9 @@ struct PreparedInput {
   Points vertices;
   // Constraint segments (a < b), unique, no zero-length ones, sorted. Crossings are not resolved here.
   std::vector<Edge> constraints;
-  // For each constraint, the index of the input polyline it came from (first one if shared).
-  std::vector<uint32_t> constraint_line;
+  // For each constraint, the index of the input polyline it came from (first one if shared). Unzeroed storage:
+  // prepare writes every element on all cores (1 GB at 250M segments, which std::vector zeroed on one core first).
+  RawVector<uint32_t> constraint_line;
 
   uint64_t input_points = 0;        // every vertex read (loose points and polyline vertices)
   uint64_t merged_duplicates = 0;   // input_points - vertices.size()

@@ -212,5 +212,5 @@ TEST(PrepareSegments, SameAsAPlainSortOfTheSegments) {
       want_line.push_back(keys[i].line);
     }
   EXPECT_EQ(p.constraints, want);
-  EXPECT_EQ(p.constraint_line, want_line);
+  EXPECT_EQ(std::vector<uint32_t>(p.constraint_line.begin(), p.constraint_line.end()), want_line);
 }
