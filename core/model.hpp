@@ -1,8 +1,10 @@
 // The data model shared by readers, backends, writers and verify.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -18,6 +20,23 @@ struct Point3 {
 
 // Vertices (as read, prepared, resolved, a mesh's): resize() leaves the new ones for their writer.
 using Points = RawVector<Point3>;
+
+// The x and y range of some points; empty until one is added.
+struct Bounds {
+  double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
+  double max_x = -min_x, max_y = -min_x;
+  bool empty() const { return !(min_x <= max_x); }
+  void add(const Point3& p) {
+    min_x = std::min(min_x, p.x);
+    max_x = std::max(max_x, p.x);
+    min_y = std::min(min_y, p.y);
+    max_y = std::max(max_y, p.y);
+  }
+  void add(const Bounds& o) {
+    min_x = std::min(min_x, o.min_x), max_x = std::max(max_x, o.max_x);
+    min_y = std::min(min_y, o.min_y), max_y = std::max(max_y, o.max_y);
+  }
+};
 
 // A constraint polyline as read: a contour (open) or a ring such as a building footprint (closed; the
 // closing edge from the last point back to the first is implied, the first point is not repeated).
@@ -74,7 +93,7 @@ struct InputSet {
   // of such a range must clear them (choose_crs checks that they lie inside `points` and do not overlap).
   struct Extent {
     size_t begin = 0, end = 0;
-    double min_x = 0, max_x = 0, min_y = 0, max_y = 0;
+    Bounds bounds;
   };
   std::vector<Extent> point_extents;
 };

@@ -142,22 +142,6 @@ Datum datum_of(const Crs& crs) {
   return Datum::Wgs84;
 }
 
-struct Bounds {
-  double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
-  double max_x = -min_x, max_y = -min_x;
-  bool empty() const { return !(min_x <= max_x); }
-  void add(const Point3& p) {
-    min_x = std::min(min_x, p.x);
-    max_x = std::max(max_x, p.x);
-    min_y = std::min(min_y, p.y);
-    max_y = std::max(max_y, p.y);
-  }
-  void add(const Bounds& o) {
-    min_x = std::min(min_x, o.min_x), max_x = std::max(max_x, o.max_x);
-    min_y = std::min(min_y, o.min_y), max_y = std::max(max_y, o.max_y);
-  }
-};
-
 // The points' ranges whose bounds a reader gave (InputSet::point_extents), in order; none if any is out of place.
 std::vector<InputSet::Extent> known_extents(const InputSet& in) {
   std::vector<InputSet::Extent> e = in.point_extents;
@@ -184,7 +168,7 @@ Bounds bounds_of(const InputSet& in) {
   size_t at = 0;
   for (const InputSet::Extent& e : known_extents(in)) {
     if (e.begin > at) b.add(points_in(at, e.begin));
-    if (e.end > e.begin) b.add(Bounds{e.min_x, e.min_y, e.max_x, e.max_y});
+    b.add(e.bounds);
     at = e.end;
   }
   if (in.points.size() > at) b.add(points_in(at, in.points.size()));

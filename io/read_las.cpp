@@ -344,13 +344,10 @@ void read_las(const std::string& path, const LasFilter& filter, InputSet& in, co
 
   // Pass 2: the kept points, in file order, each range into its own slice.
   resize_unwritten(in.points, at.back());  // written on all cores, the earlier inputs kept
-  struct Extent {
-    double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x, min_y = min_x, max_y = -min_x;
-  };
-  std::vector<Extent> extents(ranges.size());
+  std::vector<Bounds> extents(ranges.size());
   parse_chunks(ranges, [&](size_t k, const Chunk& r) {
     Point3* out = in.points.data() + at[k];
-    Extent& e = extents[k];
+    Bounds& e = extents[k];
     for (uint64_t i = r.begin; i < r.end; ++i) {
       const char* p = points + i * h.record_length;
       if (judge(fields(p, h.point_format), filter) != Verdict::keep) continue;
@@ -362,20 +359,13 @@ void read_las(const std::string& path, const LasFilter& filter, InputSet& in, co
                          "point record " + std::to_string(i + 1) + ": X*scale+offset gives (" + number_text(q.x) +
                              " " + number_text(q.y) + " " + number_text(q.z) +
                              "), not finite or beyond ±1e15: check the header's scale factors and offsets");
-      e.min_x = std::min(e.min_x, q.x);
-      e.max_x = std::max(e.max_x, q.x);
-      e.min_y = std::min(e.min_y, q.y);
-      e.max_y = std::max(e.max_y, q.y);
+      e.add(q);
       *out++ = q;
     }
   });
-  Extent all;
-  for (const Extent& e : extents) {
-    all.min_x = std::min(all.min_x, e.min_x), all.max_x = std::max(all.max_x, e.max_x);
-    all.min_y = std::min(all.min_y, e.min_y), all.max_y = std::max(all.max_y, e.max_y);
-  }
-  if (at.back() > at.front())
-    in.point_extents.push_back({at.front(), at.back(), all.min_x, all.max_x, all.min_y, all.max_y});
+  Bounds all;
+  for (const Bounds& e : extents) all.add(e);
+  if (at.back() > at.front()) in.point_extents.push_back({at.front(), at.back(), all});
   if (geographic) {
     if (!(all.min_x >= -180 && all.max_x <= 180 && all.min_y >= -90 && all.max_y <= 90))
       throw InputError(path, 0,

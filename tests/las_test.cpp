@@ -195,10 +195,10 @@ TEST_F(Las, ChoosingTheCrsTakesTheReadersBounds) {
   const InputSet::Extent& e = in.point_extents[0];
   EXPECT_EQ(e.begin, 0u);
   EXPECT_EQ(e.end, 3u);
-  EXPECT_EQ(e.min_x, 145.0);
-  EXPECT_EQ(e.max_x, 2'000'000 * 1e-7 + 145);
-  EXPECT_EQ(e.min_y, -500'000 * 1e-7 - 33);
-  EXPECT_EQ(e.max_y, 1'000'000 * 1e-7 - 33);
+  EXPECT_EQ(e.bounds.min_x, 145.0);
+  EXPECT_EQ(e.bounds.max_x, 2'000'000 * 1e-7 + 145);
+  EXPECT_EQ(e.bounds.min_y, -500'000 * 1e-7 - 33);
+  EXPECT_EQ(e.bounds.max_y, 1'000'000 * 1e-7 - 33);
   const Crs both = choose_crs(in, CrsRequest{});
   EXPECT_EQ(both.zone, 56);
   InputSet scanned = in;
