@@ -118,6 +118,7 @@ class BufferCache {
   void give(const std::string& key, Buffer b);
   // Device bytes the cache holds.
   uint64_t bytes() const;
+  bool holds(const std::string& key) const { return buffers_.count(key) > 0; }
   // Frees every buffer.
   void clear() { buffers_.clear(); }
   // A buffer regrown gets this share more than the old one if that is more than asked: tiles come in sizes a

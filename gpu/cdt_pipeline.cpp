@@ -378,10 +378,16 @@ void GpuCdt::warm_up_tiles(uint64_t vertices, HostStaging& staging) const {
     xy[2 * i] = c + 0.5 * r / side;
     xy[2 * i + 1] = r + 0.5 * double(h >> 11) * 0x1p-53;
   }
+  // A fifth as many segments, each between two neighbours of a column (none crosses another or meets a third
+  // point), so that the constraint inserter's buffers are made too: real tiles carry about as many.
+  std::vector<Edge> segments;
+  segments.reserve(n / 5 + 1);
+  for (uint32_t i = 0; i + 1 < n; i += 5)
+    if ((i + 1) % side != 0) segments.push_back({i, i + 1});
   GpuCdtStats s;
   TileFinal f;
   Buffer sorted;
-  run_staged(TileUpload{upload_points(n, staging), {}}, n, {}, TileRect{}, staging, f, sorted, s);
+  run_staged(TileUpload{upload_points(n, staging), {}}, n, segments, TileRect{}, staging, f, sorted, s);
   // Two of each buffer the copies hold, made now too: while a tile computes, the next one's points go up and the
   // last one's triangles come down.
   const uint64_t sorted_bytes = sorted.size;

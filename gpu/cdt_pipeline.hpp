@@ -105,8 +105,11 @@ class GpuCdt {
   // Tiles of about `vertices` points to come (core/tiles' tile_staging_points, known before the plan): a tile of
   // made-up points that size run through `staging` and dropped, so that the device's buffers for tiles are
   // made while the host resolves and plans. At 1B points the first tile's device call took 1.1 s longer than
-  // the next ones on one device, and 4 s longer on each of two devices allocating at once. Its caller holds the
-  // device and its copy queue.
+  // the next ones on one device, and 4 s longer on each of two devices allocating at once. The tile carries a
+  // fifth as many segments as points, so that the constraint inserter's buffers (and the memory pool they grow)
+  // are made too: at 1B + 250M on two H200s, without them the pools grew by 4.3 GB in the first tiles (75-90 ms
+  // a device) and the tiles and merge took 4.67-4.72 s against 4.43-4.64. Its caller holds the device and its
+  // copy queue.
   void warm_up_tiles(uint64_t vertices, HostStaging& staging) const;
   // Duplicate merging on the GPU for prepare(in, cdt.merger()); the same answer as the CPU's merge_points.
   PointMerger merger() const;
@@ -127,6 +130,8 @@ class GpuCdt {
   // The scan and sort passes, for other GPU work of the same run (gpu/raster, gpu/contours).
   const Primitives& primitives() const { return prims_; }
 
+  // Whether the caches keep a buffer under `key` (gpu/buffers.hpp BufferCache) for the next tile or run.
+  bool keeps(const std::string& key) const { return cache_.holds(key) || kept_.holds(key); }
   // Frees what the caches keep between tiles and runs (a tiling given up for smaller tiles).
   void drop_kept() const {
     cache_.clear();

@@ -371,14 +371,19 @@ class OnDevice {
 
 }  // namespace
 
+namespace {
+constexpr uint64_t kWarmUpOne = 100'000'000;  // tiles of one device
+constexpr uint64_t kWarmUpSeveral = 50'000'000;  // of each of several
+}  // namespace
+
 uint64_t warm_up_from(const std::vector<const GpuCdt*>& cdts) {
   for (const GpuCdt* c : cdts)
     if (c->context().info.type == "cpu") return UINT64_MAX;
-  return 100'000'000;
+  return cdts.size() > 1 ? kWarmUpSeveral : kWarmUpOne;
 }
 
 unsigned tile_ramp(const std::vector<const GpuCdt*>& cdts, uint64_t tile_points) {
-  return tile_points >= warm_up_from(cdts) ? 2 : 0;
+  return tile_points >= std::max(kWarmUpOne, warm_up_from(cdts)) ? 2 : 0;
 }
 
 uint64_t device_pools_from(const std::vector<const GpuCdt*>& cdts) {

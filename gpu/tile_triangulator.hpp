@@ -33,13 +33,17 @@ struct GpuTiles {
   // every staging slot but the first) freed beside the merge. Later calls run on what is left, one at a time.
   std::function<void()> tiles_done;
 };
-// Tiles from which a warm-up pays on these devices: 100M points on hardware GPUs. At 1B points (tiles of 134M)
-// the resolve and plan take 6-14 s, the warm-up 1-2 s; at 256M (tiles of 64M) they take ~0.6 s, less than
-// the warm-up, which the first tile would then wait for. Never on a CPU device (lavapipe), whose buffers cost
-// nothing to make and whose compute is slow.
+// Tiles from which a warm-up pays on these devices: 100M points on one hardware GPU, 50M on each of several (their
+// tiles shrink with the devices, the host's work before them does not). At 1B points (tiles of 134M) the resolve
+// and plan take 6-14 s, the warm-up 1-2 s; at 256M (tiles of 64M) they take ~0.6 s, less than the warm-up, which
+// the first tile would then wait for. At 1B + 250M on two H200s (tiles of 52M) the tiles and merge took 4.43-4.64
+// s against 4.70-4.81 without it (session 67). Never on a CPU device (lavapipe), whose buffers cost nothing to
+// make and whose compute is slow.
 uint64_t warm_up_from(const std::vector<const GpuCdt*>& cdts);
 // TileOptions::ramp for tiles of `tile_points` on these devices: 2 where the devices are warmed up for them
-// (their buffers made for the largest tile, which thin first tiles would otherwise size), else none. At 1B points
+// (their buffers made for the largest tile, which thin first tiles would otherwise size) and the tiles are of
+// 100M points or more (at 1B + 250M on two H200s, tiles of 52M took 4.53-4.80 s with it against 4.42-4.48
+// without; session 67), else none. At 1B points
 // on 2 x H200 a run took 3315 ms with it against 3585 without (the devices start on half a tile's copies
 // and end on half a tile's bookkeeping); on one, 5388 against 5428.
 unsigned tile_ramp(const std::vector<const GpuCdt*>& cdts, uint64_t tile_points);

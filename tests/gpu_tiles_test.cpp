@@ -97,6 +97,18 @@ TEST(GpuTiles, TilesDoneFreesWhatTheMergeDoesNotNeed) {
 // Devices warmed up for the tiles before the resolve (as cdtgpu triangulate reserves them), each with a device
 // memory pool, both forced here on the test's device: every device warmed up once, its buffers taken from its
 // pool, the single run's bytes, and a second run (buffers kept, no second warm-up or pool) the same.
+// A warm-up makes the constraint inserter's buffers too (its tile carries segments): without them the first real
+// tiles grew the device's memory pool while they held the device.
+TEST(GpuTiles, AWarmUpMakesTheConstraintInsertersBuffers) {
+  const auto ctxs = gpu::create_contexts({test_device()}, gpu::ContextOptions{});
+  const gpu::GpuCdt cdt(*ctxs[0]);
+  EXPECT_FALSE(cdt.keeps("cdt constrained bits"));
+  gpu::HostStaging staging;
+  cdt.warm_up_tiles(20000, staging);
+  EXPECT_TRUE(cdt.keeps("cdt constrained bits"));
+  EXPECT_TRUE(cdt.keeps("tri_verts"));
+}
+
 TEST(GpuTiles, WarmedUpDevicesGiveTheSingleRunsBytes) {
   InputSet in = uniform_points(12000, 5);
   add_dt_edge_constraints(in, 3000, 0.5, 5);
@@ -131,6 +143,8 @@ TEST(GpuTiles, WarmedUpDevicesGiveTheSingleRunsBytes) {
   // The default: never on a CPU device, 100M points on hardware GPUs (pools from 8M); the ramp where they warm up.
   const bool cpu = a.context().info.type == "cpu";
   EXPECT_EQ(gpu::warm_up_from({&a}), cpu ? UINT64_MAX : uint64_t(100'000'000));
+  EXPECT_EQ(gpu::warm_up_from({&a, &a}), cpu ? UINT64_MAX : uint64_t(50'000'000));  // several: tiles shrink with them
+  EXPECT_EQ(gpu::tile_ramp({&a, &a}, 60'000'000), 0u);  // warmed up, but the ramp is for tiles of 100M or more
   EXPECT_EQ(gpu::device_pools_from({&a}), cpu ? UINT64_MAX : uint64_t(8'000'000));
   EXPECT_EQ(gpu::tile_ramp({&a}, 134'000'000), cpu ? 0u : 2u);
   EXPECT_EQ(gpu::tile_ramp({&a}, 20'000'000), 0u);
