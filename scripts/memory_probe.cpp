@@ -5,6 +5,9 @@
 // Not part of the build (docs/tiles.md has its figures):
 //   g++ -O2 -std=c++20 scripts/memory_probe.cpp -o memory_probe -lvulkan -lpthread
 // PROBE_ANY_DEVICE=1 lets it run on lavapipe too (memory_probe 1 1), to check the path, not its speed.
+// memory_probe DEVICE_GB STAGING_GB free|exit: instead, that much made on every device at once and then freed
+// (free) or left to the process's exit (exit: _exit(0) with every block still made); time the process from
+// outside: does leaving the memory to the exit spare the frees' time, or does the exit pay it?
 #include <vulkan/vulkan.h>
 
 #include <chrono>
@@ -14,6 +17,8 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <unistd.h>
 
 #define CK(x)                                                                  \
   do {                                                                         \
@@ -159,6 +164,47 @@ int main(int argc, char** argv) {
     return 1;
   }
   const uint64_t mb = 1000000;
+  if (argc > 3) {
+    const bool leave = std::string(argv[3]) == "exit";
+    std::vector<std::thread> threads;
+    std::vector<std::vector<VkDeviceMemory>> made(devs.size());
+    const auto t = Clock::now();
+    for (size_t i = 0; i < devs.size(); ++i)
+      threads.emplace_back([&, i] {
+        auto make = [&](uint32_t type, uint64_t bytes, uint64_t block, bool mapped) {
+          for (uint64_t done = 0; done < bytes; done += block) {
+            VkMemoryAllocateInfo ai{};
+            ai.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO;
+            ai.allocationSize = std::min(block, bytes - done);
+            ai.memoryTypeIndex = type;
+            VkDeviceMemory m{};
+            CK(vkAllocateMemory(devs[i].dev, &ai, nullptr, &m));
+            void* p = nullptr;
+            if (mapped) CK(vkMapMemory(devs[i].dev, m, 0, VK_WHOLE_SIZE, 0, &p));
+            made[i].push_back(m);
+          }
+        };
+        make(devs[i].local, device_bytes, 4290 * mb, false);
+        make(devs[i].staging, staging_bytes, 3047 * mb, true);
+      });
+    for (auto& th : threads) th.join();
+    threads.clear();
+    std::printf("made %.1f + %.1f GB on each of %zu devices in %.0f ms\n", device_bytes / 1e9, staging_bytes / 1e9,
+                devs.size(), ms_since(t));
+    std::fflush(stdout);
+    if (leave) _exit(0);
+    const auto f = Clock::now();
+    for (size_t i = 0; i < devs.size(); ++i)
+      threads.emplace_back([&, i] {
+        for (VkDeviceMemory m : made[i]) vkFreeMemory(devs[i].dev, m, nullptr);
+        vkDestroyDevice(devs[i].dev, nullptr);
+      });
+    for (auto& th : threads) th.join();
+    std::printf("freed, devices destroyed in %.0f ms\n", ms_since(f));
+    std::fflush(stdout);
+    vkDestroyInstance(inst, nullptr);
+    return 0;
+  }
   std::printf("device-local %.1f GB a device, staging %.1f GB a device\n", device_bytes / 1e9, staging_bytes / 1e9);
   for (int round = 0; round < 2; ++round) {
     std::printf("-- round %d\n", round + 1);
