@@ -169,14 +169,7 @@ void run_once(const Context& ctx, const std::function<void(VkCommandBuffer)>& re
     VkFenceCreateInfo fi{};
     fi.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO;
     VK_CHECK(vkCreateFence(ctx.device, &fi, nullptr, &fence));
-    VkSubmitInfo si{};
-    si.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
-    si.commandBufferCount = 1;
-    si.pCommandBuffers = &cmd;
-    const auto t = std::chrono::steady_clock::now();
-    VK_CHECK(vkQueueSubmit(queue, 1, &si, fence));
-    VK_CHECK(vkWaitForFences(ctx.device, 1, &fence, VK_TRUE, UINT64_MAX));
-    count_submit(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count());
+    submit_and_wait(ctx.device, queue, cmd, fence);
   } catch (...) {
     if (fence) vkDestroyFence(ctx.device, fence, nullptr);
     vkFreeCommandBuffers(ctx.device, pool, 1, &cmd);

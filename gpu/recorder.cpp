@@ -32,9 +32,16 @@ thread_local SubmitTally tally;
 
 SubmitTally submit_tally() { return tally; }
 
-void count_submit(double wait_ms) {
+void submit_and_wait(VkDevice device, VkQueue queue, VkCommandBuffer cmd, VkFence fence) {
+  VkSubmitInfo si{};
+  si.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cmd;
+  const auto t = std::chrono::steady_clock::now();
+  VK_CHECK(vkQueueSubmit(queue, 1, &si, fence));
+  VK_CHECK(vkWaitForFences(device, 1, &fence, VK_TRUE, UINT64_MAX));
   ++tally.submits;
-  tally.wait_ms += wait_ms;
+  tally.wait_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
 void drop_temps(const Context& ctx) {
@@ -224,14 +231,7 @@ void Recorder::submit() {
   recording_ = false;
   VK_CHECK(vkEndCommandBuffer(cmd_));
   VK_CHECK(vkResetFences(ctx_.device, 1, &fence_));
-  VkSubmitInfo si{};
-  si.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO;
-  si.commandBufferCount = 1;
-  si.pCommandBuffers = &cmd_;
-  const auto t = std::chrono::steady_clock::now();
-  VK_CHECK(vkQueueSubmit(ctx_.queue, 1, &si, fence_));
-  VK_CHECK(vkWaitForFences(ctx_.device, 1, &fence_, VK_TRUE, UINT64_MAX));
-  count_submit(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count());
+  submit_and_wait(ctx_.device, ctx_.queue, cmd_, fence_);
   // The work is done: small temps go back to the pool, large ones are freed.
   for (Buffer& b : temps_)
     if (b.size <= kPooledTempBytes) pool_of(ctx_).free.push_back(std::move(b));

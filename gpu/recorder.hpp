@@ -42,7 +42,8 @@ struct SubmitTally {
   double wait_ms = 0;
 };
 SubmitTally submit_tally();
-void count_submit(double wait_ms);
+// Submits `cmd` to `queue` and waits for `fence`, counted in this thread's tally.
+void submit_and_wait(VkDevice device, VkQueue queue, VkCommandBuffer cmd, VkFence fence);
 
 class Recorder {
  public:

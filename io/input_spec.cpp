@@ -225,7 +225,9 @@ std::vector<InputPart> read_inputs(const std::vector<InputSpec>& specs, const Re
                        " needs polygons (rings), and this input has only points");
     part.role = spec.role;
     part.z = spec.z;
-    part.z_complete = ext == ".las" || ext == ".asc" || ext == ".tif" || ext == ".tiff";
+    // Every vertex read with a z: drape does not look for missing ones (250M contour vertices: ~40 ms at 1B).
+    part.z_complete = ext == ".las" || ext == ".asc" || ext == ".tif" || ext == ".tiff" ||
+                      (shapefile && options.z_field.empty() && shapefile_has_z(spec.path));
     parts.push_back(part);
   }
   global.finish();

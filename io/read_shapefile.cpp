@@ -360,6 +360,14 @@ void check_lon_lat(const SHPObject& o, const std::string& prj, const std::string
 
 }  // namespace
 
+bool shapefile_has_z(const std::string& path) {
+  const files::Open f(files::open(path));
+  if (!f || f->size < 100) return false;  // the read itself says what is wrong
+  unsigned char t[4];
+  std::memcpy(t, f->data + 32, 4);  // the shape type, little-endian
+  return has_z(int(uint32_t(t[0]) | uint32_t(t[1]) << 8 | uint32_t(t[2]) << 16 | uint32_t(t[3]) << 24));
+}
+
 void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in) {
   ZFieldLookup lookup;
   read_shapefile(path, options, in, &lookup);

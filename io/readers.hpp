@@ -49,6 +49,9 @@ struct ZFieldLookup {
   std::string why_not;  // no .dbf, or "no field F in X.dbf (fields: ...)"
 };
 void read_shapefile(const std::string& path, const ReadOptions& options, InputSet& in, ZFieldLookup* lookup);
+// Whether a shapefile's header gives a Z shape type: read without a z field, every vertex then has a finite z
+// from its geometry (the reader refuses any other).
+bool shapefile_has_z(const std::string& path);
 void read_wkt(std::istream& text, const std::string& name, InputSet& in);
 void read_xyz(std::istream& text, const std::string& name, InputSet& in);
 // The same on a whole text (a mapped file): parsed on all cores, with the same results and messages.

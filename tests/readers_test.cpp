@@ -18,7 +18,9 @@
 #include <string>
 #include <vector>
 
+#include "core/drape.hpp"
 #include "core/error.hpp"
+#include "io/input_spec.hpp"
 
 using namespace cdtgpu;
 namespace fs = std::filesystem;
@@ -399,6 +401,30 @@ TEST_F(Shapefile, ArcZTakesZFromGeometryOrFromTheZField) {
   InputSet neither;
   expect_input_error([&] { read_inputs({path("contours.shp"), path("roofz.shp")}, {.z_field = "HEIGHT"}, neither); },
                      "no input shapefile has the z field HEIGHT", 0);
+}
+
+// A Z shapefile read without a z field has every vertex's z (InputPart::z_complete): drape skips it. A 2D one,
+// or one under a z field (whose attribute may be null), does not.
+TEST_F(Shapefile, ZShapefilesHaveEveryZ) {
+  const std::vector<double> elev = {10};
+  write_shapefile(path("roofz"), SHPT_ARCZ, {Shape{{0}, {20, 21}, {0, 0}, {7, 8}}}, &elev);
+  write_shapefile(path("flat"), SHPT_ARC, {Shape{{0}, {0, 1}, {0, 0}, {}}}, &elev);
+  EXPECT_TRUE(shapefile_has_z(path("roofz.shp")));
+  EXPECT_FALSE(shapefile_has_z(path("flat.shp")));
+  InputSet in;
+  const std::vector<InputPart> parts =
+      read_inputs({parse_input_spec(path("roofz.shp")), parse_input_spec(path("flat.shp"))}, ReadOptions{}, in);
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_TRUE(parts[0].z_complete);
+  EXPECT_FALSE(parts[1].z_complete);
+  const DrapeStats stats = apply_z_rules(in, parts);
+  EXPECT_EQ(stats.zero_z, (std::vector<uint64_t>{0, 2}));
+  EXPECT_EQ(in.lines[0].points[1].z, 8.0);
+  InputSet field;
+  const std::vector<InputPart> under_field =
+      read_inputs({parse_input_spec(path("roofz.shp"))}, ReadOptions{.z_field = "ELEV"}, field);
+  EXPECT_FALSE(under_field.at(0).z_complete);
+  EXPECT_EQ(field.lines[0].points[1].z, 10.0);
 }
 
 TEST_F(Shapefile, MissingZFieldListsTheFields) {
