@@ -42,8 +42,8 @@ struct GpuTiles {
 uint64_t warm_up_from(const std::vector<const GpuCdt*>& cdts);
 // TileOptions::ramp for tiles of `tile_points` on these devices: 2 where the devices are warmed up for them
 // (their buffers made for the largest tile, which thin first tiles would otherwise size) and the tiles are of
-// 100M points or more (at 1B + 250M on two H200s, tiles of 52M took 4.53-4.80 s with it against 4.42-4.48
-// without; session 67), else none. At 1B points
+// 100M points or more (at 1B + 250M on two H200s, tiles of 52M not warmed up took 4.53-4.80 s with it against
+// 4.42-4.48 without; session 67), else none. At 1B points
 // on 2 x H200 a run took 3315 ms with it against 3585 without (the devices start on half a tile's copies
 // and end on half a tile's bookkeeping); on one, 5388 against 5428.
 unsigned tile_ramp(const std::vector<const GpuCdt*>& cdts, uint64_t tile_points);
