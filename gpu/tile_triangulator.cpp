@@ -369,11 +369,9 @@ class OnDevice {
   std::vector<std::jthread> allocating_;  // last: joined before the slots it fills are freed
 };
 
-}  // namespace
-
-namespace {
-constexpr uint64_t kWarmUpOne = 100'000'000;  // tiles of one device
+constexpr uint64_t kWarmUpOne = 100'000'000;     // warm_up_from: tiles of one device
 constexpr uint64_t kWarmUpSeveral = 50'000'000;  // of each of several
+
 }  // namespace
 
 uint64_t warm_up_from(const std::vector<const GpuCdt*>& cdts) {
