@@ -56,6 +56,14 @@ class DevicePool {
     freed_.wait(lock, [&] { return std::find(free_.begin(), free_.end(), i) != free_.end(); });
     free_.erase(std::find(free_.begin(), free_.end(), i));
   }
+  // Takes i if it is free now.
+  bool try_take(size_t i) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto at = std::find(free_.begin(), free_.end(), i);
+    if (at == free_.end()) return false;
+    free_.erase(at);
+    return true;
+  }
   // Gives i back when it goes out of scope.
   struct Held {
     DevicePool& pool;

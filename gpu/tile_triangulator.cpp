@@ -15,6 +15,7 @@
 
 #include "core/timing.hpp"
 #include "gpu/check.hpp"
+#include "gpu/clock_hold.hpp"
 #include "gpu/device_memory_pool.hpp"
 #include "gpu/device_pool.hpp"
 #include "gpu/devices.hpp"
@@ -60,6 +61,7 @@ class OnDevice {
     for (size_t d = 0; d < cdts_.size(); ++d) copying_.push_back(std::make_unique<std::mutex>());
     reserved_.resize(staging_.size());
     pools_made_.resize(cdts_.size());
+    holding_.resize(cdts_.size());
   }
 
   // Every slot's staging buffer for tiles of `vertices`, each device's slots in turn on a thread of the
@@ -77,6 +79,9 @@ class OnDevice {
   void reserve(uint64_t vertices) {
     if (vertices <= reserved_vertices_ || released_) return;  // released: a tile's own fit() sizes slot 0
     const bool warm = reserved_vertices_ == 0 && vertices >= warm_up_from_;  // the first reserve
+    // Devices that warm up for large enough tiles (hardware GPUs) hold their clocks up from the first reserve
+    // (after the warm-up, if any) to the first tile.
+    const bool hold = reserved_vertices_ == 0 && warm_up_from_ != UINT64_MAX;
     const bool pools = vertices >= pools_from_;
     reserved_vertices_ = vertices;
     allocating_.clear();  // joins an earlier reserve's threads
@@ -88,12 +93,17 @@ class OnDevice {
       pools_made_[d] = {};
       if (pools)  // make_pool throws nothing
         pools_made_[d] = std::async(std::launch::async, [this, d, vertices] { make_pool(d, vertices); }).share();
-      allocating_.emplace_back([this, d, devices, bytes, vertices, warm] {
+      allocating_.emplace_back([this, d, devices, bytes, vertices, warm, hold] {
+        const auto hold_clock_of_d = [&] {
+          holding_[d] = std::jthread([this, d](std::stop_token stop) { hold_clock(d, stop); });
+        };
+        if (hold && !warm) hold_clock_of_d();
         for (size_t slot = d; slot < staging_.size(); slot += devices) try {
             staging_[slot]->fit(cdts_[d]->context(), bytes);
             if (warm && slot == d) {
               if (pools_made_[d].valid()) pools_made_[d].wait();
               warm_up(d, *staging_[slot], vertices);
+              if (hold) hold_clock_of_d();
             }
             filled_[slot].set_value();
           } catch (...) {
@@ -123,6 +133,32 @@ class OnDevice {
     } catch (const std::exception& e) {
       cdts_[d]->drop_kept();
       spdlog::debug("device {}: no warm-up for tiles of {} points: {}", d, vertices, e.what());
+    }
+  }
+
+  // From the first reserve (or device d's warm-up) to the first tile, spins that keep its clock up
+  // (gpu/clock_hold), each holding the device for ~2 ms while nothing else does: the host's prepare takes
+  // seconds, and a tile waits at most one spin. At most kHoldMs; a failure only logged.
+  void hold_clock(size_t d, const std::stop_token& stop) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto holding = [&] { return !stop.stop_requested() && !tiles_begun_.load() && ms_since(t0) < kHoldMs; };
+    size_t spins = 0;
+    try {
+      ClockHold hold(cdts_[d]->context());
+      while (holding()) {
+        if (!pool_.try_take(d)) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(1));
+          continue;
+        }
+        const DevicePool::Held held{pool_, d};
+        if (!holding()) break;
+        hold.spin(kSpinMs);
+        ++spins;
+      }
+      spdlog::debug("device {}: clock held for {:.0f} ms ({} spins, the last of {} steps)", d, ms_since(t0), spins,
+                    hold.steps());
+    } catch (const std::exception& e) {
+      spdlog::debug("device {}: clock held for {:.0f} ms ({} spins), then: {}", d, ms_since(t0), spins, e.what());
     }
   }
 
@@ -321,6 +357,7 @@ class OnDevice {
   // 41.6 GB in use for tiles of 127M (~330 bytes a point, the pool's -v line); made at 400 ahead, they were no
   // faster and took longer to free (docs/tiles.md, session 63).
   static constexpr uint64_t kTileBytesPerPoint = 260;
+  static constexpr double kHoldMs = 30'000, kSpinMs = 2;  // hold_clock's
 
   // e again, named by its tile (and device); still TooLarge where smaller tiles may fit.
   [[noreturn]] void rethrow_named(const DeviceError& e, std::string_view what, size_t vertices, size_t segments,
@@ -366,7 +403,8 @@ class OnDevice {
   int calls_ = 0;                          // device calls running (Call)
   std::atomic<bool> released_{false};     // tiles_done() ran
   std::jthread releasing_;                 // its frees, joined first by the destructor
-  std::vector<std::jthread> allocating_;  // last: joined before the slots it fills are freed
+  std::vector<std::jthread> allocating_;  // joined before the slots it fills are freed
+  std::vector<std::jthread> holding_;     // hold_clock's, a device each; last: stopped and joined first
 };
 
 constexpr uint64_t kWarmUpOne = 100'000'000;     // warm_up_from: tiles of one device

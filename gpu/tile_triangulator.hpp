@@ -26,7 +26,10 @@ struct GpuTiles {
   TileTriangulator triangulate;
   TileFinalizer finalize;
   // TileOptions::reserve: every slot's staging, on a thread a device; the first call for tiles of at least
-  // `warm_up_from` points also warms each device up (GpuCdt::warm_up_tiles) unless a tile has begun.
+  // `warm_up_from` points also warms each device up (GpuCdt::warm_up_tiles) unless a tile has begun. On devices
+  // that warm up at all (warm_up_from not UINT64_MAX: hardware GPUs) the first call also holds each device's
+  // clock up (gpu/clock_hold), after its warm-up, until the first tile: left idle through the host's prepare, an
+  // H200's first tile ran at about half clock.
   std::function<void(uint64_t vertices)> reserve;
   std::function<size_t()> warm_ups;  // devices warmed up so far
   // TileOptions::tiles_done, for a run that tiles once: what only the tiles need (every device but the first,

@@ -126,6 +126,14 @@ struct TileFinalPush {
   uint pad;
 };
 
+// A spin that keeps a waiting device's clock up (gpu/clock_hold): one workgroup steps a chain of numbers.
+#define CLOCK_HOLD_WG 64
+#define CLOCK_HOLD_MAX (65535u * 64u)  // steps a spin: see clock_hold.comp
+struct ClockHoldPush {
+  uint steps;
+  uint seed;
+};
+
 #ifdef __cplusplus
 }  // namespace cdtgpu::gpu::layout
 #endif

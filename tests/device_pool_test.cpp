@@ -58,5 +58,15 @@ TEST(DevicePool, WaitsUntilOneIsGivenBack) {
   slots.give(a);
 }
 
+TEST(DevicePool, TryTakeTakesOnlyAFreeOne) {
+  DevicePool devices(2);
+  devices.take(1);
+  EXPECT_FALSE(devices.try_take(1));
+  EXPECT_TRUE(devices.try_take(0));
+  EXPECT_FALSE(devices.try_take(0));
+  devices.give(1);
+  EXPECT_TRUE(devices.try_take(1));
+}
+
 }  // namespace
 }  // namespace cdtgpu::gpu

@@ -11,9 +11,11 @@
 #include <vector>
 
 #include "gpu/buffers.hpp"
+#include "gpu/clock_hold.hpp"
 #include "gpu/context.hpp"
 #include "gpu/primitives.hpp"
 #include "gpu/recorder.hpp"
+#include "shaders/layout.h"
 
 using namespace cdtgpu::gpu;
 
@@ -182,6 +184,28 @@ TEST(GpuPrimitives, SortedAndReversedInputs) {
     }
   }
   no_validation_messages();
+}
+
+// The spins that keep a waiting device's clock up run every step asked for: the first invocation ends where the
+// host's chain from the same seed ends. The steps are scaled from each spin's time, so they differ between spins;
+// spins asked for a second reach the most a spin takes (lavapipe ends a loop after 65535 turns).
+TEST(GpuPrimitives, ClockHoldRunsEveryStep) {
+  ClockHold hold(ctx());
+  const auto check = [&](int spin) {
+    ASSERT_GE(hold.steps(), 1u << 10);
+    uint32_t x = hold.seed();
+    for (uint32_t i = 0; i < hold.steps(); ++i) x = (x ^ (x >> 15)) * 2246822519u;  // shaders/clock_hold.comp
+    EXPECT_EQ(hold.ended_on(), x) << "spin " << spin << " of " << hold.steps() << " steps";
+  };
+  for (int spin = 0; spin < 3; ++spin) {
+    hold.spin(0.5);
+    check(spin);
+  }
+  for (int spin = 3; spin < 20 && hold.steps() < CLOCK_HOLD_MAX; ++spin) {
+    hold.spin(1000);
+    check(spin);
+  }
+  EXPECT_EQ(hold.steps(), CLOCK_HOLD_MAX);
 }
 
 TEST(GpuPrimitives, LargeInputs) {
