@@ -94,16 +94,13 @@ class OnDevice {
       if (pools)  // make_pool throws nothing
         pools_made_[d] = std::async(std::launch::async, [this, d, vertices] { make_pool(d, vertices); }).share();
       allocating_.emplace_back([this, d, devices, bytes, vertices, warm, hold] {
-        const auto hold_clock_of_d = [&] {
-          holding_[d] = std::jthread([this, d](std::stop_token stop) { hold_clock(d, stop); });
-        };
-        if (hold && !warm) hold_clock_of_d();
+        if (hold && !warm && tiles_begun_.load() == 0) hold_clock(d);
         for (size_t slot = d; slot < staging_.size(); slot += devices) try {
             staging_[slot]->fit(cdts_[d]->context(), bytes);
             if (warm && slot == d) {
               if (pools_made_[d].valid()) pools_made_[d].wait();
               warm_up(d, *staging_[slot], vertices);
-              if (hold) hold_clock_of_d();
+              if (hold && tiles_begun_.load() == 0) hold_clock(d);
             }
             filled_[slot].set_value();
           } catch (...) {
@@ -121,7 +118,7 @@ class OnDevice {
 
   // Device d's warm-up, holding the device; a failure only logged (the tiles meet it again, with their names).
   void warm_up(size_t d, HostStaging& staging, uint64_t vertices) {
-    if (tiles_begun_.load()) return;
+    if (tiles_begun_.load() > 0) return;
     pool_.take(d);
     const DevicePool::Held held{pool_, d};
     const std::lock_guard<std::mutex> lock(*copying_[d]);  // and its copy queue
@@ -136,12 +133,28 @@ class OnDevice {
     }
   }
 
+  // Every device's clock held up until the next tile (GpuTiles::hold_clocks).
+  void hold_clocks() {
+    if (warm_up_from_ == UINT64_MAX || released_) return;  // CPU devices; devices taken for good by tiles_done
+    for (size_t d = 0; d < cdts_.size(); ++d) hold_clock(d);
+  }
+
+  // Device d's clock held up until the next tile, on a thread of its own (an earlier hold of d stopped first).
+  void hold_clock(size_t d) {
+    const std::lock_guard<std::mutex> lock(holding_mutex_);
+    holding_[d] = std::jthread(
+        [this, d, tiles = tiles_begun_.load()](std::stop_token stop) { hold_clock(d, tiles, stop); });
+  }
+
   // From the first reserve (or device d's warm-up) to the first tile, spins that keep its clock up
   // (gpu/clock_hold), each holding the device for ~2 ms while nothing else does: the host's prepare takes
-  // seconds, and a tile waits at most one spin. At most kHoldMs; a failure only logged.
-  void hold_clock(size_t d, const std::stop_token& stop) {
+  // seconds, and a tile waits at most one spin. At most kHoldMs; a failure only logged. `tiles`: the tiles
+  // begun when it was asked for.
+  void hold_clock(size_t d, uint64_t tiles, const std::stop_token& stop) {
     const auto t0 = std::chrono::steady_clock::now();
-    const auto holding = [&] { return !stop.stop_requested() && !tiles_begun_.load() && ms_since(t0) < kHoldMs; };
+    const auto holding = [&] {
+      return !stop.stop_requested() && tiles_begun_.load() == tiles && ms_since(t0) < kHoldMs;
+    };
     size_t spins = 0;
     try {
       ClockHold hold(cdts_[d]->context());
@@ -259,7 +272,7 @@ class OnDevice {
   // written there and its final triangles copied out without the device, which is held only for the GPU part,
   // so those host copies overlap another tile's GPU work; so do the device's copies of them, on its copy queue.
   TileFinal staged(const TileJob& job) {
-    tiles_begun_.store(true);
+    tiles_begun_.fetch_add(1);
     return tbb::this_task_arena::isolate([&] {
       const auto t0 = std::chrono::steady_clock::now();
       const size_t slot = slots_.take_spread(cdts_.size());
@@ -393,7 +406,7 @@ class OnDevice {
   std::vector<std::unique_ptr<std::mutex>> copying_;  // a device's copy queue in use
   std::vector<std::unique_ptr<HostStaging>> staging_;
   uint64_t reserved_vertices_ = 0;                  // the largest reserve() so far
-  std::atomic<bool> tiles_begun_{false};             // a tile has asked for a slot: no warm-up from now on
+  std::atomic<uint64_t> tiles_begun_{0};  // tiles that asked for a slot: no warm-up after one; a clock hold ends
   std::vector<std::promise<void>> filled_;          // reserve()'s allocations, a slot each
   std::vector<std::shared_future<void>> reserved_;  // their futures, which a tile waits on
   std::vector<std::shared_future<void>> pools_made_;  // a device's memory pool, made by reserve() (if valid)
@@ -404,7 +417,8 @@ class OnDevice {
   std::atomic<bool> released_{false};     // tiles_done() ran
   std::jthread releasing_;                 // its frees, joined first by the destructor
   std::vector<std::jthread> allocating_;  // joined before the slots it fills are freed
-  std::vector<std::jthread> holding_;     // hold_clock's, a device each; last: stopped and joined first
+  std::mutex holding_mutex_;
+  std::vector<std::jthread> holding_;  // hold_clock's, a device each; last: stopped and joined first
 };
 
 constexpr uint64_t kWarmUpOne = 100'000'000;     // warm_up_from: tiles of one device
@@ -447,6 +461,7 @@ GpuTiles gpu_tiles(std::vector<const GpuCdt*> cdts, GpuCdtStats* sum, uint64_t w
   g.reserve = [on](uint64_t vertices) { on->reserve(vertices); };
   g.warm_ups = [on] { return on->warm_ups(); };
   g.tiles_done = [on] { on->tiles_done(); };
+  g.hold_clocks = [on] { on->hold_clocks(); };
   return g;
 }
 

@@ -35,6 +35,10 @@ struct GpuTiles {
   // TileOptions::tiles_done, for a run that tiles once: what only the tiles need (every device but the first,
   // every staging slot but the first) freed beside the merge. Later calls run on what is left, one at a time.
   std::function<void()> tiles_done;
+  // Each device's clock held up until the next tile begins, as the first reserve holds it (at most 30 s): for a
+  // caller that runs tiles again after host work of its own (the tiles bench between its runs). Nothing on a CPU
+  // device.
+  std::function<void()> hold_clocks;
 };
 // Tiles from which a warm-up pays on these devices: 100M points on one hardware GPU, 50M on each of several (their
 // tiles shrink with the devices, the host's work before them does not). At 1B points (tiles of 134M) the resolve
