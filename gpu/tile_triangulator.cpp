@@ -143,14 +143,14 @@ class OnDevice {
   void hold_clock(size_t d) {
     const std::lock_guard<std::mutex> lock(holding_mutex_);
     holding_[d] = std::jthread(
-        [this, d, tiles = tiles_begun_.load()](std::stop_token stop) { hold_clock(d, tiles, stop); });
+        [this, d, tiles = tiles_begun_.load()](std::stop_token stop) { spin_until_a_tile(d, tiles, stop); });
   }
 
   // From the first reserve (or device d's warm-up) to the first tile, spins that keep its clock up
   // (gpu/clock_hold), each holding the device for ~2 ms while nothing else does: the host's prepare takes
   // seconds, and a tile waits at most one spin. At most kHoldMs; a failure only logged. `tiles`: the tiles
   // begun when it was asked for.
-  void hold_clock(size_t d, uint64_t tiles, const std::stop_token& stop) {
+  void spin_until_a_tile(size_t d, uint64_t tiles, const std::stop_token& stop) {
     const auto t0 = std::chrono::steady_clock::now();
     const auto holding = [&] {
       return !stop.stop_requested() && tiles_begun_.load() == tiles && ms_since(t0) < kHoldMs;
@@ -370,7 +370,7 @@ class OnDevice {
   // 41.6 GB in use for tiles of 127M (~330 bytes a point, the pool's -v line); made at 400 ahead, they were no
   // faster and took longer to free (docs/tiles.md, session 63).
   static constexpr uint64_t kTileBytesPerPoint = 260;
-  static constexpr double kHoldMs = 30'000, kSpinMs = 2;  // hold_clock's
+  static constexpr double kHoldMs = 30'000, kSpinMs = 2;  // spin_until_a_tile's
 
   // e again, named by its tile (and device); still TooLarge where smaller tiles may fit.
   [[noreturn]] void rethrow_named(const DeviceError& e, std::string_view what, size_t vertices, size_t segments,
@@ -418,7 +418,7 @@ class OnDevice {
   std::jthread releasing_;                 // its frees, joined first by the destructor
   std::vector<std::jthread> allocating_;  // joined before the slots it fills are freed
   std::mutex holding_mutex_;
-  std::vector<std::jthread> holding_;  // hold_clock's, a device each; last: stopped and joined first
+  std::vector<std::jthread> holding_;  // spin_until_a_tile's, a device each; last: stopped and joined first
 };
 
 constexpr uint64_t kWarmUpOne = 100'000'000;     // warm_up_from: tiles of one device
