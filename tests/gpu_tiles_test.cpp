@@ -94,9 +94,6 @@ TEST(GpuTiles, TilesDoneFreesWhatTheMergeDoesNotNeed) {
   }
 }
 
-// Devices warmed up for the tiles before the resolve (as cdtgpu triangulate reserves them), each with a device
-// memory pool, both forced here on the test's device: every device warmed up once, its buffers taken from its
-// pool, the single run's bytes, and a second run (buffers kept, no second warm-up or pool) the same.
 // A warm-up makes the constraint inserter's buffers too (its tile carries segments): without them the first real
 // tiles grew the device's memory pool while they held the device.
 TEST(GpuTiles, AWarmUpMakesTheConstraintInsertersBuffers) {
@@ -109,6 +106,9 @@ TEST(GpuTiles, AWarmUpMakesTheConstraintInsertersBuffers) {
   EXPECT_TRUE(cdt.keeps("tri_verts"));
 }
 
+// Devices warmed up for the tiles before the resolve (as cdtgpu triangulate reserves them), each with a device
+// memory pool, both forced here on the test's device: every device warmed up once, its buffers taken from its
+// pool, the single run's bytes, and a second run (buffers kept, no second warm-up or pool) the same.
 TEST(GpuTiles, WarmedUpDevicesGiveTheSingleRunsBytes) {
   InputSet in = uniform_points(12000, 5);
   add_dt_edge_constraints(in, 3000, 0.5, 5);
