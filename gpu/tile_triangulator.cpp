@@ -79,9 +79,8 @@ class OnDevice {
   void reserve(uint64_t vertices) {
     if (vertices <= reserved_vertices_ || released_) return;  // released: a tile's own fit() sizes slot 0
     const bool warm = reserved_vertices_ == 0 && vertices >= warm_up_from_;  // the first reserve
-    // Devices that warm up for large enough tiles (hardware GPUs) hold their clocks up from the first reserve
-    // (after the warm-up, if any) to the first tile.
-    const bool hold = reserved_vertices_ == 0 && warm_up_from_ != UINT64_MAX;
+    // Their clocks held up from the first reserve (after the warm-up, if any) to the first tile.
+    const bool hold = reserved_vertices_ == 0 && holds_clocks();
     const bool pools = vertices >= pools_from_;
     reserved_vertices_ = vertices;
     allocating_.clear();  // joins an earlier reserve's threads
@@ -133,9 +132,12 @@ class OnDevice {
     }
   }
 
+  // Devices that warm up for large enough tiles (hardware GPUs, not lavapipe) have clocks worth holding up.
+  bool holds_clocks() const { return warm_up_from_ != UINT64_MAX; }
+
   // Every device's clock held up until the next tile (GpuTiles::hold_clocks).
   void hold_clocks() {
-    if (warm_up_from_ == UINT64_MAX || released_) return;  // CPU devices; devices taken for good by tiles_done
+    if (!holds_clocks() || released_) return;  // released: devices taken for good by tiles_done
     for (size_t d = 0; d < cdts_.size(); ++d) hold_clock(d);
   }
 
