@@ -83,6 +83,10 @@ files::Open open_file(const std::string& path) {
 
 uint64_t file_size(const std::string& path) { return open_file(path)->size; }
 
+uint32_t be32(const unsigned char* p) {
+  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
+
 // Checks the 100-byte header shared by .shp and .shx (file code 9994, big-endian length in 16-bit words)
 // against the file's real size.
 void check_main_header(const std::string& path) {
@@ -93,11 +97,8 @@ void check_main_header(const std::string& path) {
   if (size < 100)
     throw InputError(path, 0,
                      "truncated: " + std::to_string(size) + " bytes, shorter than the 100-byte header");
-  auto be32 = [&](int at) {
-    return uint32_t(h[at]) << 24 | uint32_t(h[at + 1]) << 16 | uint32_t(h[at + 2]) << 8 | h[at + 3];
-  };
-  if (be32(0) != 9994) throw InputError(path, 0, "not a shapefile (bad file code in the header)");
-  const uint64_t declared = uint64_t(be32(24)) * 2;
+  if (be32(h) != 9994) throw InputError(path, 0, "not a shapefile (bad file code in the header)");
+  const uint64_t declared = uint64_t(be32(h + 24)) * 2;
   if (size < declared)
     throw InputError(path, 0,
                      "truncated: the header gives " + std::to_string(declared) + " bytes, the file has " +
@@ -204,10 +205,6 @@ void check_parts(const SHPObject& o, const std::string& path, uint64_t record) {
       throw InputError(path, record,
                        "corrupt record: part " + std::to_string(j + 1) + " has a bad vertex range");
   }
-}
-
-uint32_t be32(const unsigned char* p) {
-  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
 }
 
 // The .shx, read directly: (offset, content length) of each record in 16-bit words, which shapelib trusts.
