@@ -1,5 +1,8 @@
 // Readers hand every polyline to add_polyline, which repairs degenerate geometry and counts what it did.
 #pragma once
+#include <cfloat>
+#include <cmath>
+
 #include "core/model.hpp"
 
 namespace cdtgpu {
@@ -8,8 +11,13 @@ namespace cdtgpu {
 constexpr double kMaxCoordinate = 1e15;
 
 // Throws InputError naming the source and record for a NaN or infinite coordinate (a z read as missing is fine)
-// and for an x or y beyond ±kMaxCoordinate.
-void check_finite(const InputSet& in, uint32_t source, uint64_t record, const Point3& p);
+// and for an x or y beyond ±kMaxCoordinate. Inline: every point of every reader passes here, and a plain one
+// takes three comparisons (NaN fails |v| <= kMaxCoordinate too).
+void check_unusual(const InputSet& in, uint32_t source, uint64_t record, const Point3& p);
+inline void check_finite(const InputSet& in, uint32_t source, uint64_t record, const Point3& p) {
+  if (!(std::abs(p.x) <= kMaxCoordinate && std::abs(p.y) <= kMaxCoordinate && std::abs(p.z) <= DBL_MAX))
+    check_unusual(in, source, record, p);
+}
 
 // Appends a point after check_finite.
 void add_point(InputSet& in, uint32_t source, uint64_t record, const Point3& p);
