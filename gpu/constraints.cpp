@@ -10,7 +10,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <chrono>
 #include <execution>
+#include <future>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -34,6 +37,8 @@ using namespace layout;
 namespace {
 
 constexpr const char* kFlagsKey = "cdt constrained bits";  // the result's flags, in the cache (recycle)
+constexpr const char* kConstraintsKey = "cdt constraints";     // the list, when not uploaded by the caller
+constexpr const char* kSplitKey = "cdt constraints split";     // a split list made from that one
 constexpr uint32_t kMaxBatch = 64;  // rounds per command buffer once the first batches did not finish
 
 uint64_t groups(uint64_t items) { return (items + CDT_WG - 1) / CDT_WG; }
@@ -264,6 +269,51 @@ struct ConstraintInserter::Scratch {
   void* mapped = nullptr;
 };
 
+// The constraints of one insert_once: a list held elsewhere, or one held here, or a held list with some entries
+// replaced and pieces appended, made on the host only when asked for (a split pass's list, whose device copy is
+// patched on the device: the host's serves only an error's message, the host fallback and a further split).
+class ConstraintInserter::EdgeList {
+ public:
+  explicit EdgeList(std::span<const Edge> held) : list_(held) {}
+  explicit EdgeList(RawVector<Edge>&& own) : own_(std::move(own)), list_(own_) {}
+  EdgeList(std::span<const Edge> base, std::vector<std::pair<uint32_t, Edge>> replaced, std::vector<Edge> appended)
+      : list_(base), replaced_(std::move(replaced)), appended_(std::move(appended)), pending_(true) {}
+
+  size_t size() const { return list_.size() + (pending_ ? appended_.size() : 0); }
+  const std::vector<std::pair<uint32_t, Edge>>& replaced() const { return replaced_; }
+  const std::vector<Edge>& appended() const { return appended_; }
+
+  // The list itself, made on first use (copied on all cores: ~20 ms for a tile's 31M at 1B points).
+  std::span<const Edge> span() const {
+    if (pending_) {
+      own_ = take();
+      list_ = own_;
+      pending_ = false;
+    }
+    return list_;
+  }
+  // The list as a vector of its own.
+  RawVector<Edge> take() const {
+    if (!pending_ && list_.data() == own_.data()) return std::move(own_);
+    RawVector<Edge> out;  // unwritten: zeroing 250 MB on one core took longer than the copy
+    out.reserve(size());
+    resize_unwritten(out, list_.size());
+    copy_on_all_cores(list_.data(), list_.size(), out.data());
+    if (pending_) {
+      for (const auto& [c, e] : replaced_) out[c] = e;
+      out.insert(out.end(), appended_.begin(), appended_.end());
+    }
+    return out;
+  }
+
+ private:
+  mutable RawVector<Edge> own_;
+  mutable std::span<const Edge> list_;
+  std::vector<std::pair<uint32_t, Edge>> replaced_;
+  std::vector<Edge> appended_;
+  mutable bool pending_ = false;
+};
+
 ConstraintInserter::~ConstraintInserter() = default;
 
 void ConstraintInserter::recycle(ConstrainedEdges&& edges) const {
@@ -290,68 +340,94 @@ void check_constraint_ids(std::span<const Edge> constraints, uint64_t num_points
 ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<const Edge> constraints,
                                             ConstraintStats* stats, const ConstraintOptions& options,
                                             const Buffer* uploaded) const {
-  if (!options.unresolved) return insert_once(tri, constraints, stats, options, false, uploaded);
+  if (!options.unresolved) return insert_once(tri, EdgeList(constraints), stats, options, false, uploaded);
   // A constraint through vertices is split at them and the whole is inserted again: the walks that find them
   // are the first submission's, before anything flips, so the triangulation is still the one given. One pass
   // finds them all unless there are more than CDT_THROUGH_CAP; after kPasses the resolve splits them instead.
   constexpr int kPasses = 16;
+  // The first split's list is the given one patched on the device (the split constraints' first pieces in
+  // their places, the other pieces after the end) when it replaces at most this many: in a CLI run at 1B points
+  // a tile's few splits (1-5) took 16-141 ms of host work and ~40 ms of upload while the tile held its device,
+  // a copy of its 31M constraints made on cores busy staging other tiles, then sent whole.
+  constexpr size_t kPatchedAtMost = 1024;
   ConstraintOptions checked = options;
   checked.unresolved = false;
-  RawVector<Edge> pieces;
-  std::span<const Edge> list = constraints;
+  // Whether the given list is sorted (a split's pieces are looked up in it), read beside the first pass.
+  std::future<bool> given_sorted = std::async(std::launch::async, [constraints] {
+    return std::is_sorted(constraints.begin(), constraints.end());
+  });
+  std::optional<EdgeList> list;
+  list.emplace(constraints);
+  const Buffer* on_device = uploaded;  // the list's copy on the device, when there is one
   std::vector<std::array<uint32_t, 3>> split;
   for (int pass = 0;; ++pass) {
     const auto t_pass = std::chrono::steady_clock::now();
     try {
-      // The uploaded list is the first pass's only.
-      ConstrainedEdges r = insert_once(tri, list, stats, checked, pass < kPasses, pass == 0 ? uploaded : nullptr);
+      ConstrainedEdges r = insert_once(tri, *list, stats, checked, pass < kPasses, on_device);
       r.split = std::move(split);
       return r;
     } catch (ThroughVertices& t) {
       const double walked_ms = ms_since(t_pass);
       const auto t_split = std::chrono::steady_clock::now();
-      // Per constraint, its vertices in (x, y) order, which is their order along it from a (a < b). The list is
-      // copied on all cores (~20 ms for a tile's 31M constraints at 1B points) and a split constraint's first
-      // piece takes its place: order does not matter here, and a sort of the list took ~0.45 s of the device's
-      // time, a copy zeroed first on one core ~0.25 s.
+      // Per constraint, its vertices in (x, y) order, which is their order along it from a (a < b). A split
+      // constraint's first piece takes its place and the others go after the end: order does not matter here,
+      // and a sort of the list took ~0.45 s of the device's time.
       std::sort(t.pairs.begin(), t.pairs.end());
-      RawVector<Edge> next;  // unwritten: zeroing 250 MB on one core took longer than the copy
-      next.reserve(list.size() + 2 * t.pairs.size());
-      resize_unwritten(next, list.size());
-      copy_on_all_cores(list.data(), list.size(), next.data());
-      std::vector<Edge> made;
+      const std::span<const Edge> was = pass == 0 ? constraints : list->span();
+      std::vector<std::pair<uint32_t, Edge>> replaced;
+      std::vector<Edge> appended, made;
       for (size_t i = 0; i < t.pairs.size();) {
         const uint32_t c = t.pairs[i][0];
-        const auto [a, b] = list[c];
+        const auto [a, b] = was[c];
         uint32_t from = a;
         for (; i < t.pairs.size() && t.pairs[i][0] == c; ++i) {
           const uint32_t v = t.pairs[i][1];
           split.push_back({from, b, v});
           made.push_back({from, v});
           if (from == a)
-            next[c] = made.back();
+            replaced.push_back({c, made.back()});
           else
-            next.push_back(made.back());
+            appended.push_back(made.back());
           from = v;
         }
         made.push_back({from, b});
-        next.push_back(made.back());
+        appended.push_back(made.back());
       }
       // Equal pieces (collinear overlaps) merge, and only then is the whole list sorted.
       std::sort(made.begin(), made.end());
-      bool sort_all = std::adjacent_find(made.begin(), made.end()) != made.end() ||
-                      !std::is_sorted(std::execution::par, list.begin(), list.end());
-      for (size_t k = 0; k < made.size() && !sort_all; ++k)
-        sort_all = std::binary_search(list.begin(), list.end(), made[k]);
+      const bool sorted = pass == 0 ? given_sorted.get() : std::is_sorted(std::execution::par, was.begin(), was.end());
+      bool sort_all = !sorted || std::adjacent_find(made.begin(), made.end()) != made.end();
+      for (size_t k = 0; k < made.size() && !sort_all; ++k) sort_all = std::binary_search(was.begin(), was.end(), made[k]);
+      const uint64_t m = was.size();
+      EdgeList next(was, std::move(replaced), std::move(appended));
+      const Buffer* next_on_device = nullptr;
       if (sort_all) {
-        tbb::parallel_sort(next.begin(), next.end());
-        next.erase(std::unique(next.begin(), next.end()), next.end());
+        RawVector<Edge> all = next.take();
+        tbb::parallel_sort(all.begin(), all.end());
+        all.erase(std::unique(all.begin(), all.end()), all.end());
+        list.emplace(std::move(all));
+      } else if (pass == 0 && next.replaced().size() <= kPatchedAtMost) {
+        if (!scratch_) scratch_ = std::make_unique<Scratch>();
+        BufferCache& buffers = cache ? *cache : scratch_->buffers;
+        const Buffer& from = on_device ? *on_device : buffers.get(ctx_, kConstraintsKey, m * 8);
+        const Buffer& to = buffers.get(ctx_, on_device ? kConstraintsKey : kSplitKey, next.size() * 8);
+        Recorder rec(ctx_);
+        rec.copy(from, to, m * 8);
+        for (const auto& [c, e] : next.replaced()) rec.update(to, uint64_t(c) * 8, &e, 8);
+        const std::vector<Edge>& tail = next.appended();
+        for (size_t k = 0; k < tail.size(); k += 8192)
+          rec.update(to, (m + k) * 8, &tail[k], std::min<size_t>(8192, tail.size() - k) * 8);
+        rec.submit();
+        next_on_device = &to;
+        list.emplace(std::move(next));
+      } else {
+        RawVector<Edge> all = next.take();  // `was` may be the list's own: taken before it is replaced
+        list.emplace(std::move(all));
       }
-      pieces = std::move(next);
-      list = pieces;
+      on_device = next_on_device;
       spdlog::debug("constraints: pass {}: {} constraints through {} vertices split in {:.0f} ms, after {:.0f} ms{}",
                     pass + 1, made.size() - t.pairs.size(), t.pairs.size(), ms_since(t_split), walked_ms,
-                    sort_all ? " (sorted, equal pieces merged)" : "");
+                    sort_all ? " (sorted, equal pieces merged)" : on_device ? " (patched on the device)" : "");
     } catch (const TooLarge&) {
       throw;
     } catch (const VulkanError&) {
@@ -362,7 +438,7 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   }
 }
 
-ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::span<const Edge> constraints,
+ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, const EdgeList& constraints,
                                                  ConstraintStats* stats, const ConstraintOptions& options,
                                                  bool split_through, const Buffer* uploaded) const {
   const uint32_t m = static_cast<uint32_t>(constraints.size());
@@ -374,7 +450,7 @@ ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::spa
   const uint32_t max_groups = ctx_.props.limits.maxComputeWorkGroupCount[0];
   const uint32_t max_steps = 3 * slots + 64;
   if (constraints.size() >= CDT_NEVER) throw std::invalid_argument("insert_constraints: too many constraints");
-  if (!uploaded) check_constraint_ids(constraints, tri.num_points);  // an uploaded list was checked as it was staged
+  if (!uploaded) check_constraint_ids(constraints.span(), tri.num_points);  // an uploaded list was checked as staged
 
   if (!scratch_) scratch_ = std::make_unique<Scratch>();
   Scratch& sc = *scratch_;
@@ -399,8 +475,8 @@ ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::spa
   if (uploaded && uploaded->size < uint64_t(m) * 8)
     throw std::invalid_argument("insert_constraints: the uploaded constraints' buffer is too small");
   if (uploaded) needed += uploaded->size;
-  const Buffer& cons = uploaded ? *uploaded : get("cdt constraints", uint64_t(m) * 8);
-  if (m && !uploaded) upload(ctx_, cons, constraints.data(), uint64_t(m) * 8);
+  const Buffer& cons = uploaded ? *uploaded : get(kConstraintsKey, uint64_t(m) * 8);
+  if (m && !uploaded) upload(ctx_, cons, constraints.span().data(), uint64_t(m) * 8);
   const Buffer& start = get("cdt start slots", uint64_t(m) * 4);
   const Buffer& counts = get("cdt crossing counts", uint64_t(m) * 4);
   const Buffer& offsets = get("cdt row offsets", uint64_t(m) * 4);
@@ -445,7 +521,7 @@ ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::spa
   // After the submission: the counters, or the error a pass reported.
   auto read_ctl = [&] {
     std::vector<uint32_t> c(rb, rb + CDT_CTL_WORDS);
-    if (c[CDT_CTL_ERROR]) throw DeviceError(describe_error(c[CDT_CTL_ERROR], c[CDT_CTL_ERROR_CONS], constraints));
+    if (c[CDT_CTL_ERROR]) throw DeviceError(describe_error(c[CDT_CTL_ERROR], c[CDT_CTL_ERROR_CONS], constraints.span()));
     return c;
   };
   auto read_stats = [&](uint32_t rounds) { return std::vector<uint32_t>(rb + CDT_CTL_WORDS, rb + CDT_CTL_WORDS + 2 * rounds); };
@@ -627,7 +703,7 @@ ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, std::spa
       round += batch;
       if (!done && (stalled >= options.stall_rounds || st.flip_rounds >= options.flip_round_limit)) {
         HostTriangulation host = download_host(ctx_, tri);
-        st.fallback_constraints = insert_on_host(host, constraints);
+        st.fallback_constraints = insert_on_host(host, constraints.span());
         upload(ctx_, tri.verts, host.verts.data(), host.verts.size() * 4);
         upload(ctx_, tri.nbrs, host.nbrs.data(), host.nbrs.size() * 4);
         legalise_all = true;

@@ -134,9 +134,10 @@ class ConstraintInserter {
 
  private:
   struct Scratch;
+  class EdgeList;
   // insert() of resolved constraints. split_through: walks that meet vertices on their constraints hand the
   // pairs back (as ThroughVertices, gpu/constraints.cpp) instead of an error.
-  ConstrainedEdges insert_once(GpuTriangulation& tri, std::span<const Edge> constraints, ConstraintStats* stats,
+  ConstrainedEdges insert_once(GpuTriangulation& tri, const EdgeList& constraints, ConstraintStats* stats,
                                const ConstraintOptions& options, bool split_through,
                                const Buffer* uploaded = nullptr) const;
   const Context& ctx_;

@@ -200,6 +200,15 @@ void Recorder::copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, Vk
   vkCmdCopyBuffer(cmd_, src.buffer, dst.buffer, 1, &region);
 }
 
+void Recorder::update(const Buffer& dst, VkDeviceSize offset, const void* data, VkDeviceSize bytes) {
+  if (!bytes) return;
+  if (bytes % 4 || offset % 4 || bytes > 65536 || offset + bytes > dst.size)
+    throw DeviceError("update of " + std::to_string(bytes) + " bytes at " + std::to_string(offset) + " of '" +
+                      dst.name + "': not a multiple of 4, over 65536 bytes or out of range");
+  barrier();
+  vkCmdUpdateBuffer(cmd_, dst.buffer, offset, bytes, data);
+}
+
 const Buffer& Recorder::temp(VkDeviceSize bytes, const std::string& name) {
   if (bytes > kPooledTempBytes) {
     temps_.push_back(create_buffer(ctx_, bytes, name));

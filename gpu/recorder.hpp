@@ -77,6 +77,8 @@ class Recorder {
   void fill(const Buffer& dst, uint32_t value);
   void copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, VkDeviceSize src_offset = 0,
             VkDeviceSize dst_offset = 0);
+  // Writes `bytes` of `data` (a multiple of 4, at most 65536) at `offset` of dst from the command buffer itself.
+  void update(const Buffer& dst, VkDeviceSize offset, const void* data, VkDeviceSize bytes);
   // A scratch buffer owned by the recorder until submit() returns.
   const Buffer& temp(VkDeviceSize bytes, const std::string& name = "temp");
 
