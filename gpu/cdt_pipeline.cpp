@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <execution>
 #include <future>
 #include <memory>
 #include <utility>
@@ -174,7 +175,7 @@ void GpuCdt::keep(GpuTriangulation& tri) const {
 
 void GpuCdt::constrain(GpuTriangulation& tri, std::span<const Edge> constraints, GpuCdtStats& s,
                        bool recycle, bool unresolved, std::vector<std::array<uint32_t, 3>>* split,
-                       const Buffer* uploaded) const {
+                       const Buffer* uploaded, bool sorted) const {
   // 3. GPU: every constraint becomes an edge by flips, then the constrained Delaunay property by flips.
   //    No slots: fewer than 3 vertices or all collinear, so no triangles for the constraints to change; no
   //    constraints: the Delaunay triangulation is the answer.
@@ -182,6 +183,7 @@ void GpuCdt::constrain(GpuTriangulation& tri, std::span<const Edge> constraints,
   if (tri.num_slots > 0 && !constraints.empty()) {
     ConstraintOptions options = constraint_options;
     options.unresolved = unresolved;
+    options.sorted = sorted;
     ConstrainedEdges edges = inserter_.insert(tri, constraints, &s.constraints, options, uploaded);
     if (split) *split = std::move(edges.split);
     if (recycle) inserter_.recycle(std::move(edges));  // its flags, for the next tile or run
@@ -229,10 +231,12 @@ TileFinal GpuCdt::finalize_tile(const TileJob& job, GpuCdtStats* stats) const {
   s = GpuCdtStats{};
   HostStaging staging;  // the parts below, with a staging buffer of the call's own
   staging.fit(ctx_, staging_bytes(job.ids.size()));
-  stage_points(job, staging);
+  const bool segments_sorted = stage_points(job, staging);
   TileFinal f;
   Buffer sorted;
-  const uint32_t count = compute_tile(job, upload_tile(job, staging, s), staging, f, sorted, s);
+  TileUpload up = upload_tile(job, staging, s);
+  up.segments_sorted = segments_sorted;
+  const uint32_t count = compute_tile(job, std::move(up), staging, f, sorted, s);
   download_tile(std::move(sorted), count, staging, s);
   unstage_triangles(staging, count, f);
   return f;
@@ -248,16 +252,23 @@ bool segments_staged(uint64_t n, uint64_t m) { return m > 0 && m <= n; }
 uint64_t segments_offset(uint64_t n) { return n * 16; }
 }  // namespace
 
-void GpuCdt::stage_points(const TileJob& job, HostStaging& staging) {
+bool GpuCdt::stage_points(const TileJob& job, HostStaging& staging) {
   const uint64_t n = job.ids.size(), m = job.segments.size();
-  if (!segments_staged(n, m)) return write_points(job.all, job.ids, staging.mapped);
-  // Beside the points: the inserter's check, which an uploaded list skips, then the copy.
+  if (!segments_staged(n, m)) {
+    write_points(job.all, job.ids, staging.mapped);
+    return false;
+  }
+  // Beside the points: the inserter's check, which an uploaded list skips, then the copy, and whether the list
+  // is sorted (the inserter's split looks its pieces up: read there, on one core, it held the device 20-40 ms).
   Edge* to = reinterpret_cast<Edge*>(static_cast<char*>(staging.mapped) + segments_offset(n));
+  bool sorted = false;
   tbb::parallel_invoke([&] { write_points(job.all, job.ids, staging.mapped); },
                        [&] {
                          check_constraint_ids(job.segments, n);
                          copy_on_all_cores(job.segments.data(), m, to);
-                       });
+                       },
+                       [&] { sorted = std::is_sorted(std::execution::par, job.segments.begin(), job.segments.end()); });
+  return sorted;
 }
 
 Buffer GpuCdt::from_shelf(std::vector<Buffer>& list, uint64_t bytes, const char* name, bool addressed) const {
@@ -339,7 +350,8 @@ uint32_t GpuCdt::run_staged(TileUpload up, uint32_t n, std::span<const Edge> seg
     }
   }
   GpuTriangulation tri = build(std::move(up.points), n, s, &kept_);
-  constrain(tri, segments, s, /*recycle=*/true, unresolved, &f.split, up.segments.buffer ? &up.segments : nullptr);
+  constrain(tri, segments, s, /*recycle=*/true, unresolved, &f.split, up.segments.buffer ? &up.segments : nullptr,
+            up.segments.buffer && up.segments_sorted);
   if (up.segments.buffer) {
     std::lock_guard<std::mutex> lock(shelf_->mutex);
     shelf_->segments.push_back(std::move(up.segments));

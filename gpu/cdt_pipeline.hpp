@@ -87,10 +87,12 @@ class GpuCdt {
   // than points): uploaded inside the device's hold, they took 20 ms of a 1B-point tile's call on one device and
   // 50 ms on each of two, the copy on all cores meeting the other tile's host copies.
   static uint64_t staging_bytes(uint64_t vertices);  // a tile of this many vertices
-  static void stage_points(const TileJob& job, HostStaging& staging);
+  // Returns whether the staged segments are sorted (read as they are copied; ConstraintOptions::sorted).
+  static bool stage_points(const TileJob& job, HostStaging& staging);
   struct TileUpload {
     Buffer points;
     Buffer segments;  // none where they did not fit (compute_tile uploads them itself)
+    bool segments_sorted = false;  // stage_points' answer
   };
   TileUpload upload_tile(const TileJob& job, const HostStaging& staging, GpuCdtStats& s) const;
   uint32_t compute_tile(const TileJob& job, TileUpload up, HostStaging& staging, TileFinal& f, Buffer& sorted,
@@ -162,10 +164,11 @@ class GpuCdt {
   // Stage 3: the constraints inserted.
   // recycle: the inserter's flags stay in the cache for the next tile or run. unresolved:
   // ConstraintOptions::unresolved, its splits into `split` (ConstrainedEdges::split). uploaded: the constraints
-  // on the device already (ConstraintInserter::insert).
+  // on the device already (ConstraintInserter::insert). sorted: ConstraintOptions::sorted.
   void constrain(GpuTriangulation& tri, std::span<const Edge> constraints, GpuCdtStats& s,
                  bool recycle = false, bool unresolved = false,
-                 std::vector<std::array<uint32_t, 3>>* split = nullptr, const Buffer* uploaded = nullptr) const;
+                 std::vector<std::array<uint32_t, 3>>* split = nullptr, const Buffer* uploaded = nullptr,
+                 bool sorted = false) const;
   // The triangulation's buffers into kept_ (and the shared cache) for the next tile or run.
   void keep(GpuTriangulation& tri) const;
   // Stage 4: the triangles downloaded in canonical order into `storage`.

@@ -352,8 +352,9 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   constexpr size_t kPatchedAtMost = 1024;
   ConstraintOptions checked = options;
   checked.unresolved = false;
-  // Whether the given list is sorted (a split's pieces are looked up in it), read beside the first pass.
-  std::future<bool> given_sorted = std::async(std::launch::async, [constraints] {
+  // Whether the given list is sorted (a split's pieces are looked up in it): the caller's word, else read
+  // beside the first pass.
+  std::future<bool> given_sorted = options.sorted ? std::future<bool>() : std::async(std::launch::async, [constraints] {
     return std::is_sorted(constraints.begin(), constraints.end());
   });
   std::optional<EdgeList> list;
@@ -395,7 +396,9 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
       }
       // Equal pieces (collinear overlaps) merge, and only then is the whole list sorted.
       std::sort(made.begin(), made.end());
-      const bool sorted = pass == 0 ? given_sorted.get() : std::is_sorted(std::execution::par, was.begin(), was.end());
+      const bool sorted = pass > 0            ? std::is_sorted(std::execution::par, was.begin(), was.end())
+                          : options.sorted ? true
+                                           : given_sorted.get();
       bool sort_all = !sorted || std::adjacent_find(made.begin(), made.end()) != made.end();
       for (size_t k = 0; k < made.size() && !sort_all; ++k) sort_all = std::binary_search(was.begin(), was.end(), made[k]);
       const uint64_t m = was.size();

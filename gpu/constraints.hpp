@@ -79,6 +79,8 @@ struct ConstraintOptions {
   // marking after the safety net finds a constraint gone) or a round stall; any such failure is thrown as
   // UnresolvedTile (core/tiles.hpp). TooLarge and Vulkan errors stay.
   bool unresolved = false;
+  // The caller knows the list is sorted (unresolved: a split's pieces are looked up in it; else it is read).
+  bool sorted = false;
 };
 
 struct ConstraintStats {

@@ -288,11 +288,12 @@ class OnDevice {
       HostStaging& staging = *staging_[slot];
       try {
         staging.fit(cdt.context(), GpuCdt::staging_bytes(job.ids.size()));
-        GpuCdt::stage_points(job, staging);
+        const bool segments_sorted = GpuCdt::stage_points(job, staging);
         TileFinal f;
         GpuCdtStats one;
         const auto t2 = std::chrono::steady_clock::now();
         GpuCdt::TileUpload up = on_copy_queue(d, [&] { return cdt.upload_tile(job, staging, one); });
+        up.segments_sorted = segments_sorted;
         const auto t3 = std::chrono::steady_clock::now();
         Buffer sorted;
         uint32_t count = 0;
