@@ -354,9 +354,11 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
   checked.unresolved = false;
   // Whether the given list is sorted (a split's pieces are looked up in it): the caller's word, else read
   // beside the first pass.
-  std::future<bool> given_sorted = options.sorted ? std::future<bool>() : std::async(std::launch::async, [constraints] {
-    return std::is_sorted(constraints.begin(), constraints.end());
-  });
+  std::future<bool> given_sorted;
+  if (!options.sorted)
+    given_sorted = std::async(std::launch::async, [constraints] {
+      return std::is_sorted(constraints.begin(), constraints.end());
+    });
   std::optional<EdgeList> list;
   list.emplace(constraints);
   const Buffer* on_device = uploaded;  // the list's copy on the device, when there is one
@@ -400,7 +402,8 @@ ConstrainedEdges ConstraintInserter::insert(GpuTriangulation& tri, std::span<con
                           : options.sorted ? true
                                            : given_sorted.get();
       bool sort_all = !sorted || std::adjacent_find(made.begin(), made.end()) != made.end();
-      for (size_t k = 0; k < made.size() && !sort_all; ++k) sort_all = std::binary_search(was.begin(), was.end(), made[k]);
+      for (size_t k = 0; k < made.size() && !sort_all; ++k)
+        sort_all = std::binary_search(was.begin(), was.end(), made[k]);
       const uint64_t m = was.size();
       EdgeList next(was, std::move(replaced), std::move(appended));
       const Buffer* next_on_device = nullptr;
@@ -524,7 +527,8 @@ ConstrainedEdges ConstraintInserter::insert_once(GpuTriangulation& tri, const Ed
   // After the submission: the counters, or the error a pass reported.
   auto read_ctl = [&] {
     std::vector<uint32_t> c(rb, rb + CDT_CTL_WORDS);
-    if (c[CDT_CTL_ERROR]) throw DeviceError(describe_error(c[CDT_CTL_ERROR], c[CDT_CTL_ERROR_CONS], constraints.span()));
+    if (c[CDT_CTL_ERROR])
+      throw DeviceError(describe_error(c[CDT_CTL_ERROR], c[CDT_CTL_ERROR_CONS], constraints.span()));
     return c;
   };
   auto read_stats = [&](uint32_t rounds) { return std::vector<uint32_t>(rb + CDT_CTL_WORDS, rb + CDT_CTL_WORDS + 2 * rounds); };
