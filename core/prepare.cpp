@@ -40,13 +40,27 @@ struct SegmentKey {
 
 bool key_less(const SegmentKey& s, const SegmentKey& t) { return s.ab != t.ab ? s.ab < t.ab : s.line < t.line; }
 
-// Sorts segments by (ab, line) on all cores: a bucket pass by a (a vertex id below `vertices`), then each bucket
-// sorted in cache. std::sort(par) of 250M segments (4 GB) took 1.5-1.8 s on 16 threads at 1B points.
-void sort_segments(RawVector<SegmentKey>& segs, uint64_t vertices) {
-  const size_t n = segs.size();
+// The n segments sorted by (ab, line) on all cores: `each(begin, end, f)` calls f(segment) for the segments [begin,
+// end) in order, made on the fly from the lines. A bucket pass by a (a vertex id below `vertices`) writes each
+// segment once to its bucket's place, then each bucket is sorted in cache. std::sort(par) of 250M segments (4 GB)
+// took 1.5-1.8 s on 16 threads at 1B points; written in line order first and then bucketed, each segment was
+// written twice and read three times (0.99-1.15 s for both at 1B points on one H200, the segments' pass alone
+// 0.13-0.15 s).
+// `zero_length`: how many have a == b.
+template <class Each>
+RawVector<SegmentKey> sorted_segments(size_t n, uint64_t vertices, const Each& each, uint64_t& zero_length) {
+  auto zero = [](const SegmentKey& k) { return (k.ab >> 32) == (k.ab & 0xffffffffu); };
+  RawVector<SegmentKey> out;
+  resize_unwritten(out, n);
+  zero_length = 0;
   if (n < (size_t(1) << 20)) {
-    std::sort(std::execution::par, segs.begin(), segs.end(), key_less);
-    return;
+    size_t at = 0;
+    each(0, n, [&](const SegmentKey& k) {
+      zero_length += zero(k);
+      out[at++] = k;
+    });
+    std::sort(std::execution::par, out.begin(), out.end(), key_less);
+    return out;
   }
   // About 4096 segments a bucket (64 KB), at most 2^16 buckets; blocks of the input count their buckets.
   const uint64_t last = std::max<uint64_t>(vertices, 1) - 1;  // the largest first vertex
@@ -57,10 +71,17 @@ void sort_segments(RawVector<SegmentKey>& segs, uint64_t vertices) {
   const size_t blocks = 256, block = (n + blocks - 1) / blocks;
   std::vector<uint32_t> place(blocks * buckets, 0);
   auto bucket = [&](const SegmentKey& k) { return size_t(k.ab >> 32 >> shift); };
+  std::atomic<uint64_t> zeros{0};
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     uint32_t* h = &place[b * buckets];
-    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) ++h[bucket(segs[i])];
+    uint64_t z = 0;
+    each(std::min(n, b * block), std::min(n, (b + 1) * block), [&](const SegmentKey& k) {
+      ++h[bucket(k)];
+      z += zero(k);
+    });
+    zeros += z;
   });
+  zero_length = zeros;
   std::vector<size_t> start(buckets + 1, 0);  // bucket starts; then each block's places, bucket by bucket
   for (size_t b = 0; b < blocks; ++b)
     for (size_t k = 0; k < buckets; ++k) start[k + 1] += place[b * buckets + k];
@@ -69,14 +90,12 @@ void sort_segments(RawVector<SegmentKey>& segs, uint64_t vertices) {
     size_t at = start[k];
     for (size_t b = 0; b < blocks; ++b) at += std::exchange(place[b * buckets + k], uint32_t(at - start[k]));
   });
-  RawVector<SegmentKey> out;
-  resize_unwritten(out, n);
   tbb::parallel_for(size_t(0), blocks, [&](size_t b) {
     uint32_t* at = &place[b * buckets];
-    for (size_t i = b * block; i < std::min(n, (b + 1) * block); ++i) {
-      const size_t k = bucket(segs[i]);
-      out[start[k] + at[k]++] = segs[i];
-    }
+    each(std::min(n, b * block), std::min(n, (b + 1) * block), [&](const SegmentKey& s) {
+      const size_t k = bucket(s);
+      out[start[k] + at[k]++] = s;
+    });
   });
   // Each bucket by a counting sort of its first vertices (2^shift of them, their counts in cache), then each
   // vertex's few by (b, line): std::sort of the buckets' ~4096 took ~0.5 s of the 0.9 at 1B points on 32 threads.
@@ -99,7 +118,7 @@ void sort_segments(RawVector<SegmentKey>& segs, uint64_t vertices) {
     for (size_t j = 0; j + 1 < count.size(); ++j)
       if (count[j + 1] - count[j] > 1) std::sort(first + count[j], first + count[j + 1], key_less);
   });
-  segs.swap(out);
+  return out;
 }
 
 // prepare with a merger of coordinates (the GPU's): every occurrence's coordinates gathered in reading order on
@@ -197,7 +216,6 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
   };
   std::vector<uint64_t> seg_at(in.lines.size() + 1, 0);
   for (size_t li = 0; li < in.lines.size(); ++li) seg_at[li + 1] = seg_at[li] + segments_of(in.lines[li]);
-  const size_t lines = in.lines.size();
   // The vertex of every line point: line point i is occurrence line_at[0] + i.
   RawVector<uint32_t> vertex_of;
   const uint32_t* line_vertex_of = nullptr;
@@ -231,50 +249,44 @@ PreparedInput prepare(const InputSet& in, const PointMerger& merge, const std::f
     abandon.shown = true;
   }
 
-  // Segments of every polyline, the closing edge of every ring included (counted per line above), written on
-  // all cores (one thread took 7 s for 250M segments).
+  // Segments of every polyline, the closing edge of every ring included (counted per line above), made where
+  // the sort reads them: segment i of the whole is segment i - seg_at[li] of the line li holding it.
   out.input_segments = seg_at.back();
-  RawVector<SegmentKey> segs;
-  resize_unwritten(segs, seg_at.back());
-  std::atomic<uint64_t> zero_length{0};
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, lines), [&](const tbb::blocked_range<size_t>& r) {
-    uint64_t zero = 0;
-    for (size_t li = r.begin(); li < r.end(); ++li) {
+  auto each_segment = [&](size_t begin, size_t end, const auto& f) {
+    if (begin >= end) return;
+    size_t li = size_t(std::upper_bound(seg_at.begin(), seg_at.end(), begin) - seg_at.begin()) - 1;
+    for (size_t i = begin; i < end; ++li) {
       const uint64_t base = line_at[li] - line_at[0], n = line_at[li + 1] - line_at[li];
-      const uint64_t count = seg_at[li + 1] - seg_at[li];
-      for (uint64_t k = 0; k < count; ++k) {
+      for (uint64_t k = i - seg_at[li]; i < std::min<uint64_t>(end, seg_at[li + 1]); ++i, ++k) {
         uint32_t a = line_vertex_of[base + k], b = line_vertex_of[base + (k + 1) % n];
         if (a > b) std::swap(a, b);
-        zero += a == b;
-        segs[seg_at[li] + k] = {uint64_t(a) << 32 | b, uint32_t(li)};  // a == b: dropped after the sort
+        f(SegmentKey{uint64_t(a) << 32 | b, uint32_t(li)});  // a == b: dropped after the sort
       }
     }
-    zero_length += zero;
-  });
-  out.zero_length_segments = zero_length;
-  phase("segments");
+  };
   // The constraints' storage, for as many as there are segments (the kept ones are fewer), made on a thread of its
   // own beside the sort: a std::vector's resize zeroes it on one core whatever was done before (at 1B points
   // + 250M segments, 2 GB: ~0.2 s of the critical path after the sort).
   std::exception_ptr sizing_failed;
   std::thread sizing([&] {
     try {
-      out.constraints.reserve(segs.size());
-      advise_huge_pages(out.constraints.data(), segs.size() * sizeof(Edge));
-      out.constraints.resize(segs.size());
+      out.constraints.reserve(out.input_segments);
+      advise_huge_pages(out.constraints.data(), out.input_segments * sizeof(Edge));
+      out.constraints.resize(out.input_segments);
     } catch (...) {
       sizing_failed = std::current_exception();
     }
   });
+  RawVector<SegmentKey> segs;
   try {
-    sort_segments(segs, out.vertices.size());
+    segs = sorted_segments(out.input_segments, out.vertices.size(), each_segment, out.zero_length_segments);
   } catch (...) {
     sizing.join();
     throw;
   }
   sizing.join();
   if (sizing_failed) std::rethrow_exception(sizing_failed);
-  phase("segment sort");
+  phase("segments and their sort");
   // The first of each run of equal keys, zero-length ones left out; the kept ones in order, on all cores.
   auto kept = [&](size_t i) {
     const uint64_t ab = segs[i].ab;
